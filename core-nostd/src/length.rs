@@ -1,0 +1,305 @@
+//! Exact decimal lengths.
+//!
+//! A [`Length`] stores an integer number of ångström (1 Å = 10⁻⁷ mm). A value
+//! written with up to 6 decimals of a millimetre (1 nm) is a multiple of 10 Å,
+//! so it is held exactly, and so is half of it: a diameter word becomes an
+//! exact radius. Every operation that could leave the representable range is
+//! checked and returns `None` or an error; nothing wraps and nothing panics.
+
+use core::fmt;
+
+/// Ångström per millimetre.
+pub const ANGSTROM_PER_MM: i64 = 10_000_000;
+
+/// The largest magnitude a length may have: just under 100 000 mm.
+///
+/// Coordinates and words beyond it are refused (`ERR VALUE` for a word,
+/// `ERR RANGE` for a coordinate that an increment would carry beyond it).
+pub const LENGTH_LIMIT: Length = Length {
+    angstrom: 100_000 * ANGSTROM_PER_MM - 10,
+};
+
+/// Why a decimal length was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LengthError {
+    /// Not of the form `[+-]digits[.digits]`.
+    Malformed,
+    /// More than 6 decimals.
+    TooManyDecimals,
+    /// Magnitude not below 100 000 mm.
+    OutOfRange,
+}
+
+impl LengthError {
+    /// A short, fixed description for replies and logs.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            LengthError::Malformed => "not a length [+-]digits[.digits]",
+            LengthError::TooManyDecimals => "more than 6 decimals",
+            LengthError::OutOfRange => "beyond 99999.999999 mm",
+        }
+    }
+}
+
+impl fmt::Display for LengthError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// An exact length in ångström (10⁻⁷ mm), signed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Length {
+    angstrom: i64,
+}
+
+impl Length {
+    /// Zero length.
+    pub const ZERO: Length = Length { angstrom: 0 };
+
+    /// A length from a raw count of ångström (10⁻⁷ mm), if within
+    /// [`LENGTH_LIMIT`].
+    ///
+    /// ```
+    /// use core_nostd::length::Length;
+    /// assert_eq!(Length::from_angstrom(25_000).unwrap().to_string(), "0.0025");
+    /// assert!(Length::from_angstrom(i64::MAX).is_none());
+    /// ```
+    pub const fn from_angstrom(angstrom: i64) -> Option<Length> {
+        if angstrom.unsigned_abs() <= LENGTH_LIMIT.angstrom as u64 {
+            Some(Length { angstrom })
+        } else {
+            None
+        }
+    }
+
+    /// A whole number of micrometres (1 µm = 0.001 mm), if within the limit.
+    ///
+    /// ```
+    /// use core_nostd::length::Length;
+    /// assert_eq!(Length::from_um(5).unwrap(), Length::from_mm_str("0.005").unwrap());
+    /// ```
+    pub const fn from_um(um: i64) -> Option<Length> {
+        match um.checked_mul(10_000) {
+            Some(a) => Length::from_angstrom(a),
+            None => None,
+        }
+    }
+
+    /// Parses a decimal millimetre value `[+-]digits[.digits]` with at most 6
+    /// decimals and magnitude below 100 000 mm. No exponents, no spaces.
+    ///
+    /// ```
+    /// use core_nostd::length::{Length, LengthError};
+    /// assert_eq!(Length::from_mm_str("-12.5").unwrap().as_angstrom(), -125_000_000);
+    /// assert_eq!(Length::from_mm_str("+0.000001").unwrap().as_angstrom(), 10);
+    /// assert_eq!(Length::from_mm_str("1.0000001"), Err(LengthError::TooManyDecimals));
+    /// assert_eq!(Length::from_mm_str(".5"), Err(LengthError::Malformed));
+    /// assert_eq!(Length::from_mm_str("100000"), Err(LengthError::OutOfRange));
+    /// ```
+    pub fn from_mm_str(text: &str) -> Result<Length, LengthError> {
+        let bytes = text.as_bytes();
+        let (negative, rest) = match bytes.split_first() {
+            Some((b'-', rest)) => (true, rest),
+            Some((b'+', rest)) => (false, rest),
+            Some(_) => (false, bytes),
+            None => return Err(LengthError::Malformed),
+        };
+        let (int_part, frac_part) = match rest.iter().position(|&b| b == b'.') {
+            Some(dot) => {
+                let (i, f) = rest.split_at(dot);
+                let f = f.get(1..).unwrap_or(&[]);
+                if f.is_empty() {
+                    return Err(LengthError::Malformed);
+                }
+                (i, f)
+            }
+            None => (rest, &[][..]),
+        };
+        if int_part.is_empty() || !int_part.iter().all(u8::is_ascii_digit) {
+            return Err(LengthError::Malformed);
+        }
+        if !frac_part.iter().all(u8::is_ascii_digit) {
+            return Err(LengthError::Malformed);
+        }
+        if frac_part.len() > 6 {
+            return Err(LengthError::TooManyDecimals);
+        }
+        // Integer part: skip leading zeros, then at most 5 significant digits.
+        let mut mm: i64 = 0;
+        for &d in int_part {
+            mm = mm * 10 + i64::from(d - b'0');
+            if mm >= 100_000 {
+                return Err(LengthError::OutOfRange);
+            }
+        }
+        let mut nm: i64 = 0;
+        for i in 0..6 {
+            let digit = frac_part.get(i).map_or(0, |&d| i64::from(d - b'0'));
+            nm = nm * 10 + digit;
+        }
+        let angstrom = (mm * 1_000_000 + nm) * 10;
+        Ok(Length {
+            angstrom: if negative { -angstrom } else { angstrom },
+        })
+    }
+
+    /// The raw count of ångström (10⁻⁷ mm).
+    pub const fn as_angstrom(self) -> i64 {
+        self.angstrom
+    }
+
+    /// Sum, or `None` beyond [`LENGTH_LIMIT`].
+    pub const fn checked_add(self, other: Length) -> Option<Length> {
+        match self.angstrom.checked_add(other.angstrom) {
+            Some(a) => Length::from_angstrom(a),
+            None => None,
+        }
+    }
+
+    /// Difference, or `None` beyond [`LENGTH_LIMIT`].
+    pub const fn checked_sub(self, other: Length) -> Option<Length> {
+        match self.angstrom.checked_sub(other.angstrom) {
+            Some(a) => Length::from_angstrom(a),
+            None => None,
+        }
+    }
+
+    /// Twice the length (a radius written as a diameter), or `None` beyond
+    /// [`LENGTH_LIMIT`].
+    pub const fn checked_double(self) -> Option<Length> {
+        self.checked_add(self)
+    }
+
+    /// Exactly half the length (a diameter read as a radius), or `None` when
+    /// the half is not a whole number of ångström. Never `None` for a value
+    /// parsed from a decimal with up to 6 decimals.
+    ///
+    /// ```
+    /// use core_nostd::length::Length;
+    /// let d = Length::from_mm_str("0.000001").unwrap();
+    /// assert_eq!(d.exact_half().unwrap().as_angstrom(), 5);
+    /// ```
+    pub const fn exact_half(self) -> Option<Length> {
+        if self.angstrom % 2 == 0 {
+            Some(Length {
+                angstrom: self.angstrom / 2,
+            })
+        } else {
+            None
+        }
+    }
+
+    /// Negated length (always representable: the limit is symmetric).
+    pub const fn neg(self) -> Length {
+        Length {
+            angstrom: -self.angstrom,
+        }
+    }
+
+    /// The value in units of 0.0001 mm, rounded half away from zero: the
+    /// 4-decimal figure printed in replies.
+    pub const fn round_to_tenth_um(self) -> i64 {
+        div_round_half_away(self.angstrom, 1_000)
+    }
+}
+
+/// `n / d` rounded half away from zero, for `d > 0`. Exact integer arithmetic;
+/// `|n| ≤ i64::MAX` so nothing overflows.
+pub(crate) const fn div_round_half_away(n: i64, d: i64) -> i64 {
+    let q = n / d;
+    let r = n % d;
+    // |r| < d ≤ i64::MAX / 2 is not guaranteed, so compare |r| ≥ d − |r|.
+    let ar = r.unsigned_abs();
+    if ar >= d.unsigned_abs() - ar {
+        if n < 0 {
+            q - 1
+        } else {
+            q + 1
+        }
+    } else {
+        q
+    }
+}
+
+/// Prints millimetres with exactly 4 decimals, rounded half away from zero
+/// (the reply format of the line protocol). A value that rounds to zero is
+/// printed without a sign.
+///
+/// ```
+/// use core_nostd::length::Length;
+/// let l = |s| Length::from_mm_str(s).unwrap().to_string();
+/// assert_eq!(l("27.53125"), "27.5313");
+/// assert_eq!(l("-27.53125"), "-27.5313");
+/// assert_eq!(l("-0.00004"), "0.0000");
+/// assert_eq!(l("12"), "12.0000");
+/// ```
+impl fmt::Display for Length {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_mm4(f, self.round_to_tenth_um())
+    }
+}
+
+/// Writes a count of 0.0001 mm as `[-]int.dddd`.
+pub(crate) fn write_mm4<W: fmt::Write + ?Sized>(w: &mut W, tenth_um: i64) -> fmt::Result {
+    let sign = if tenth_um < 0 { "-" } else { "" };
+    let a = tenth_um.unsigned_abs();
+    write!(w, "{}{}.{:04}", sign, a / 10_000, a % 10_000)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::string::ToString;
+
+    #[test]
+    fn parses_every_form() {
+        let a = |s: &str| Length::from_mm_str(s).map(Length::as_angstrom);
+        assert_eq!(a("0"), Ok(0));
+        assert_eq!(a("-0"), Ok(0));
+        assert_eq!(a("007.5"), Ok(75_000_000));
+        assert_eq!(a("99999.999999"), Ok(999_999_999_990));
+        assert_eq!(a("-99999.999999"), Ok(-999_999_999_990));
+        assert_eq!(a("100000.0"), Err(LengthError::OutOfRange));
+        assert_eq!(a("0000000000000000000000012"), Ok(120_000_000));
+        assert_eq!(a("1."), Err(LengthError::Malformed));
+        assert_eq!(a("1e3"), Err(LengthError::Malformed));
+        assert_eq!(a("--1"), Err(LengthError::Malformed));
+        assert_eq!(a("+"), Err(LengthError::Malformed));
+        assert_eq!(a(""), Err(LengthError::Malformed));
+        assert_eq!(a("1.2.3"), Err(LengthError::Malformed));
+        assert_eq!(a(" 1"), Err(LengthError::Malformed));
+        assert_eq!(a("0.1234567"), Err(LengthError::TooManyDecimals));
+    }
+
+    #[test]
+    fn prints_four_decimals_half_away() {
+        let p = |a: i64| Length::from_angstrom(a).unwrap().to_string();
+        assert_eq!(p(500), "0.0001");
+        assert_eq!(p(499), "0.0000");
+        assert_eq!(p(-500), "-0.0001");
+        assert_eq!(p(-499), "0.0000");
+        assert_eq!(p(999_999_999_990), "100000.0000");
+    }
+
+    #[test]
+    fn limits_are_checked() {
+        assert!(LENGTH_LIMIT.checked_add(Length::from_angstrom(10).unwrap()).is_none());
+        assert!(LENGTH_LIMIT.neg().checked_sub(Length::from_angstrom(1).unwrap()).is_none());
+        assert!(LENGTH_LIMIT.checked_double().is_none());
+        assert_eq!(Length::from_angstrom(3).unwrap().exact_half(), None);
+    }
+
+    #[test]
+    fn rounding_division() {
+        assert_eq!(div_round_half_away(5, 10), 1);
+        assert_eq!(div_round_half_away(-5, 10), -1);
+        assert_eq!(div_round_half_away(4, 10), 0);
+        assert_eq!(div_round_half_away(-15, 10), -2);
+        assert_eq!(div_round_half_away(i64::MAX, 2), i64::MAX / 2 + 1);
+        assert_eq!(div_round_half_away(i64::MIN + 1, 3), (i64::MIN + 1) / 3);
+    }
+}

@@ -1,0 +1,38 @@
+//! Fixed-point core of a lathe retrofit controller.
+//!
+//! `#![no_std]`, no allocation, no floating point in the motion path. It runs
+//! unchanged on the STM32F405 firmware and inside the host simulator.
+//!
+//! # Layers
+//! - [`length`]: exact decimal lengths ([`length::Length`], integer ångström,
+//!   10⁻⁷ mm). Any value written with up to 6 decimals of a millimetre is held
+//!   exactly, and so is half of it (diameter words become exact radii).
+//! - [`impulse`]: impulse prices and the quantizer `Q(P/h)` that implements the
+//!   1977 residual-carry rule in closed form.
+//! - [`interleave`]: the step events of a linear block, produced one at a time
+//!   with integer additions only, for a timer interrupt to pull.
+//! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
+//! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
+//!
+//! # Numeric conventions
+//! | quantity | type | unit stored | overflow |
+//! |---|---|---|---|
+//! | length, coordinate | [`length::Length`] | i64 ångström (10⁻⁷ mm), `|v| < 100 000 mm` | `checked_*` → `None`; parse → `LengthError` |
+//! | impulse price | [`impulse::ImpulsePrice`] | i64 ångström, 0.000001…1 mm | constructor → `None` |
+//! | impulse position | [`impulse::Impulses`] | i32, `|n| ≤ 999 999 999` | [`impulse::quantize`] → `RangeError` |
+//! | impulses in one block | [`interleave::LinearBlock`] | ≤ 1 000 000 per axis | constructor → `RangeError` |
+//!
+//! Rounding: `Q` rounds half away from zero everywhere (impulses, the
+//! interleaver, and the 4-decimal millimetres printed in replies).
+//! Inner loops take validated values and cannot fail: once a
+//! [`interleave::LinearBlock`] exists, its events are produced without any
+//! check that could fail.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod crc32;
+pub mod impulse;
+pub mod interleave;
+pub mod length;
+pub mod protocol;

@@ -1,0 +1,128 @@
+//! The pendant line protocol (`PROTOCOL.md`): transport-agnostic, bytes in,
+//! reply lines out, bounded buffers.
+//!
+//! [`Device`] is what a transport owns: it frames received bytes into lines
+//! ([`framing`]), checks them and runs them on its [`Session`], and hands every
+//! reply line and every accepted motion block to an [`Io`].
+
+pub mod framing;
+pub mod reply;
+mod session;
+mod words;
+
+pub use session::{Config, Pass, Session, TipCode, NAME, VERSION};
+
+use crate::interleave::LinearBlock;
+use core::fmt;
+use framing::{Framed, LineAssembler};
+
+/// The error codes of the protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ErrorCode {
+    /// A request's `*HH` does not match, or is malformed.
+    Checksum,
+    /// A request longer than 120 bytes.
+    LineTooLong,
+    /// An empty request.
+    Empty,
+    /// An unknown command.
+    Unknown,
+    /// A request that is not of the command's form.
+    Syntax,
+    /// A malformed or out-of-range value; the text names the key.
+    Value,
+    /// A result or a position beyond what the machine can hold.
+    Range,
+    /// Impossible geometry.
+    Geometry,
+}
+
+impl ErrorCode {
+    /// The code as it appears after `ERR`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            ErrorCode::Checksum => "CHECKSUM",
+            ErrorCode::LineTooLong => "LINE_TOO_LONG",
+            ErrorCode::Empty => "EMPTY",
+            ErrorCode::Unknown => "UNKNOWN",
+            ErrorCode::Syntax => "SYNTAX",
+            ErrorCode::Value => "VALUE",
+            ErrorCode::Range => "RANGE",
+            ErrorCode::Geometry => "GEOMETRY",
+        }
+    }
+}
+
+impl fmt::Display for ErrorCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Where replies and motion go: the transport side of a [`Device`].
+pub trait Io {
+    /// Sends one complete reply line (it ends with `*HH` and CRLF).
+    fn send(&mut self, line: &[u8]);
+
+    /// Runs one accepted linear block. Called after the session has taken the
+    /// block (its position registers already hold the end point) and before
+    /// the reply that reports it. The default does nothing (a calculator).
+    fn run_block(&mut self, block: &LinearBlock) {
+        let _ = block;
+    }
+}
+
+/// One protocol endpoint: framing plus a session.
+#[derive(Clone, Debug, Default)]
+pub struct Device {
+    rx: LineAssembler,
+    session: Session,
+}
+
+impl Device {
+    /// A device at power-on: default configuration, at program zero.
+    pub const fn new() -> Self {
+        Device {
+            rx: LineAssembler::new(),
+            session: Session::new(),
+        }
+    }
+
+    /// Takes one received byte; answers through `io` when it completes a line.
+    pub fn receive<I: Io>(&mut self, byte: u8, io: &mut I) {
+        match self.rx.push(byte) {
+            Some(Framed::Line) => self.session.handle_line(self.rx.line(), io),
+            Some(Framed::TooLong) => session::send_error(
+                io,
+                ErrorCode::LineTooLong,
+                format_args!("longer than {} bytes", framing::MAX_LINE),
+            ),
+            None => {}
+        }
+    }
+
+    /// Takes received bytes in order.
+    ///
+    /// ```
+    /// use core_nostd::protocol::{Device, Io};
+    /// struct Lines(Vec<String>);
+    /// impl Io for Lines {
+    ///     fn send(&mut self, line: &[u8]) { self.0.push(String::from_utf8_lossy(line).into()) }
+    /// }
+    /// let mut dev = Device::new();
+    /// let mut out = Lines(Vec::new());
+    /// dev.receive_bytes(b"MOVE X=10 Z=-5\r\n", &mut out);
+    /// assert_eq!(out.0, ["OK NX=1000 NZ=-500 PX=1000 PZ=-500 SEQ=34F89895*2A\r\n"]);
+    /// ```
+    pub fn receive_bytes<I: Io>(&mut self, bytes: &[u8], io: &mut I) {
+        for &b in bytes {
+            self.receive(b, io);
+        }
+    }
+
+    /// The session's state.
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+}

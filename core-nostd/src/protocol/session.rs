@@ -1,0 +1,517 @@
+//! The session: configuration, commanded coordinates, position registers, and
+//! the commands that act on them.
+//!
+//! Every command first computes its whole outcome from the current state and
+//! only then commits it, so a refused request changes nothing.
+
+use super::reply::{checksum, hex_digits, ReplyLine};
+use super::words::{parse_args, ArgError, Words};
+use super::{ErrorCode, Io};
+use crate::crc32::Crc32;
+use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
+use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
+use crate::length::{div_round_half_away, write_mm4, Length};
+use core::fmt::{self, Write};
+
+/// The device name reported by `VER`.
+pub const NAME: &str = "lathe-retrofit";
+/// The firmware version reported by `VER`.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The largest nose radius `CFG RN` accepts: 25 mm.
+const MAX_NOSE_RADIUS_UM: i64 = 25_000;
+/// The chord tolerance range of `CFG TOL`: 0.000001 mm to 1 mm.
+const MAX_TOL_UM: i64 = 1_000;
+
+/// Pass kind for arcs by chords: finishing rounds the chord angle down,
+/// roughing up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Pass {
+    /// `FIN`: no chord deviates more than the tolerance.
+    Finish,
+    /// `ROUGH`: fewer, longer chords.
+    Rough,
+}
+
+impl Pass {
+    /// The protocol word.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Pass::Finish => "FIN",
+            Pass::Rough => "ROUGH",
+        }
+    }
+}
+
+/// Tool tip orientation code 0…9 (Fanuc/Haas convention, see PROTOCOL.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TipCode(u8);
+
+impl TipCode {
+    /// An external right-hand turning tool.
+    pub const EXTERNAL_RIGHT: TipCode = TipCode(3);
+
+    /// A code from its digit, if 0…9.
+    pub const fn new(code: u8) -> Option<TipCode> {
+        if code <= 9 {
+            Some(TipCode(code))
+        } else {
+            None
+        }
+    }
+
+    /// The digit.
+    pub const fn get(self) -> u8 {
+        self.0
+    }
+}
+
+/// The session's configuration (`CFG`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config {
+    /// X impulse price, on the radius.
+    pub hx: ImpulsePrice,
+    /// Z impulse price.
+    pub hz: ImpulsePrice,
+    /// X words are diameters.
+    pub diam: bool,
+    /// Nose radius.
+    pub rn: Length,
+    /// Tool tip orientation.
+    pub tip: TipCode,
+    /// Chord tolerance for arcs that do not name their own.
+    pub tol: Length,
+    /// Pass kind for arcs that do not name their own.
+    pub pass: Pass,
+}
+
+impl Config {
+    /// Power-on defaults: 0.005/0.01 mm impulses, diameters, r 0.4 mm, tip 3,
+    /// tolerance 0.01 mm, finishing.
+    pub const DEFAULT: Config = Config {
+        hx: ImpulsePrice::DEFAULT_X,
+        hz: ImpulsePrice::DEFAULT_Z,
+        diam: true,
+        rn: match Length::from_um(400) {
+            Some(l) => l,
+            None => Length::ZERO,
+        },
+        tip: TipCode::EXTERNAL_RIGHT,
+        tol: match Length::from_um(10) {
+            Some(l) => l,
+            None => Length::ZERO,
+        },
+        pass: Pass::Finish,
+    };
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config::DEFAULT
+    }
+}
+
+/// The protocol state of one device.
+#[derive(Clone, Debug)]
+pub struct Session {
+    cfg: Config,
+    /// Exact commanded X (radius) and Z since the program zero.
+    cmd: [Length; 2],
+    /// Position registers; always `Q(cmd / price)` per axis.
+    pos: ImpulsePoint,
+}
+
+impl Default for Session {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Why a request was refused, before it is written out.
+enum Refusal<'a> {
+    Checksum(u8),
+    ChecksumForm,
+    Control,
+    Empty,
+    Unknown(&'a str),
+    Args(ArgError<'a>),
+    NoArgs(&'static str),
+    Value(&'static str, &'static str),
+    Range(&'static str),
+}
+
+impl<'a> From<ArgError<'a>> for Refusal<'a> {
+    fn from(e: ArgError<'a>) -> Self {
+        Refusal::Args(e)
+    }
+}
+
+type Outcome<'a> = Result<(), Refusal<'a>>;
+
+impl Session {
+    /// Power-on state: defaults, at program zero.
+    pub const fn new() -> Self {
+        Session {
+            cfg: Config::DEFAULT,
+            cmd: [Length::ZERO; 2],
+            pos: ImpulsePoint {
+                x: Impulses(0),
+                z: Impulses(0),
+            },
+        }
+    }
+
+    /// The configuration.
+    pub const fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Position registers in impulses.
+    pub const fn position(&self) -> ImpulsePoint {
+        self.pos
+    }
+
+    /// Exact commanded coordinates `(X radius, Z)` since the program zero.
+    pub const fn commanded(&self) -> (Length, Length) {
+        (self.cmd[0], self.cmd[1])
+    }
+
+    /// Runs one request line (terminator excluded) and answers it through
+    /// `io`: exactly one final line, `OK …` or `ERR …`.
+    pub fn handle_line<I: Io>(&mut self, line: &[u8], io: &mut I) {
+        if let Err(refusal) = self.run(line, io) {
+            send_refusal(io, refusal);
+        }
+    }
+
+    fn run<'a, I: Io>(&mut self, line: &'a [u8], io: &mut I) -> Outcome<'a> {
+        let body = strip_checksum(line)?;
+        if !body.iter().all(|&b| b == b'\t' || (0x20..0x7F).contains(&b)) {
+            return Err(Refusal::Control);
+        }
+        // Printable ASCII only from here on, so this never fails.
+        let text = core::str::from_utf8(body).map_err(|_| Refusal::Control)?;
+        let mut words = Words::new(text);
+        let command = words.next().ok_or(Refusal::Empty)?;
+        if command.eq_ignore_ascii_case("VER") {
+            no_args(words, "VER")?;
+            send_ok(io, Some(format_args!("PROTO=1 NAME={NAME} VERSION={VERSION}")));
+            Ok(())
+        } else if command.eq_ignore_ascii_case("CFG") {
+            self.cfg_command(words, io)
+        } else if command.eq_ignore_ascii_case("ZERO") {
+            no_args(words, "ZERO")?;
+            self.cmd = [Length::ZERO; 2];
+            self.pos = ImpulsePoint::default();
+            send_ok(io, None);
+            Ok(())
+        } else if command.eq_ignore_ascii_case("MOVE") {
+            self.move_command(words, io)
+        } else if command.eq_ignore_ascii_case("POS") {
+            no_args(words, "POS")?;
+            self.pos_reply(io);
+            Ok(())
+        } else {
+            Err(Refusal::Unknown(command))
+        }
+    }
+
+    fn cfg_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [hx, hz, diam, rn, tip, tol, pass] =
+            parse_args(words, ["HX", "HZ", "DIAM", "RN", "TIP", "TOL", "PASS"])?;
+        let mut cfg = self.cfg;
+        if let Some(v) = hx {
+            cfg.hx = parse_price("HX", v)?;
+        }
+        if let Some(v) = hz {
+            cfg.hz = parse_price("HZ", v)?;
+        }
+        if let Some(v) = diam {
+            cfg.diam = parse_flag("DIAM", v)?;
+        }
+        if let Some(v) = rn {
+            cfg.rn = parse_bounded("RN", v, 0, MAX_NOSE_RADIUS_UM, "must be 0 to 25 mm")?;
+        }
+        if let Some(v) = tip {
+            cfg.tip = match v.as_bytes() {
+                [d @ b'0'..=b'9'] => TipCode(d - b'0'),
+                _ => return Err(Refusal::Value("TIP", "must be a digit 0 to 9")),
+            };
+        }
+        if let Some(v) = tol {
+            cfg.tol = parse_bounded("TOL", v, 0, MAX_TOL_UM, "must be over 0, at most 1 mm")?;
+            if cfg.tol == Length::ZERO {
+                return Err(Refusal::Value("TOL", "must be over 0, at most 1 mm"));
+            }
+        }
+        if let Some(v) = pass {
+            cfg.pass = if v.eq_ignore_ascii_case("FIN") {
+                Pass::Finish
+            } else if v.eq_ignore_ascii_case("ROUGH") {
+                Pass::Rough
+            } else {
+                return Err(Refusal::Value("PASS", "must be FIN or ROUGH"));
+            };
+        }
+        // A new price re-expresses the registers at the same commanded point.
+        let pos = ImpulsePoint {
+            x: quantize(self.cmd[0], cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
+            z: quantize(self.cmd[1], cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
+        };
+        self.cfg = cfg;
+        self.pos = pos;
+        let c = &self.cfg;
+        send_ok(
+            io,
+            Some(format_args!(
+                "HX={} HZ={} DIAM={} RN={} TIP={} TOL={} PASS={}",
+                c.hx.as_length(),
+                c.hz.as_length(),
+                u8::from(c.diam),
+                c.rn,
+                c.tip.0,
+                c.tol,
+                c.pass.as_str()
+            )),
+        );
+        Ok(())
+    }
+
+    fn move_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [x, z, inc] = parse_args(words, ["X", "Z", "INC"])?;
+        let inc = match inc {
+            None => false,
+            Some(v) => parse_flag("INC", v)?,
+        };
+        let mut target = self.cmd;
+        if let Some(v) = x {
+            let word = parse_length("X", v)?;
+            let radius = if self.cfg.diam {
+                word.exact_half().ok_or(Refusal::Value("X", "not an exact radius"))?
+            } else {
+                word
+            };
+            target[0] = self.target(0, radius, inc, "X beyond 99999.999999 mm")?;
+        }
+        if let Some(v) = z {
+            let word = parse_length("Z", v)?;
+            target[1] = self.target(1, word, inc, "Z beyond 99999.999999 mm")?;
+        }
+        let to = ImpulsePoint {
+            x: quantize(target[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
+            z: quantize(target[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
+        };
+        let block = LinearBlock::new(self.pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+        let seq = block_crc(&block, Crc32::new()).finish();
+        self.cmd = target;
+        self.pos = to;
+        io.run_block(&block);
+        let (nx, nz) = block.delta();
+        send_ok(
+            io,
+            Some(format_args!(
+                "NX={nx} NZ={nz} PX={} PZ={} SEQ={seq:08X}",
+                to.x.get(),
+                to.z.get()
+            )),
+        );
+        Ok(())
+    }
+
+    /// The commanded coordinate of `axis` after a word: absolute, or added
+    /// to the current one.
+    fn target(
+        &self,
+        axis: usize,
+        word: Length,
+        inc: bool,
+        beyond: &'static str,
+    ) -> Result<Length, Refusal<'static>> {
+        if inc {
+            let now = self.cmd.get(axis).copied().unwrap_or(Length::ZERO);
+            now.checked_add(word).ok_or(Refusal::Range(beyond))
+        } else {
+            Ok(word)
+        }
+    }
+
+    fn pos_reply<I: Io>(&self, io: &mut I) {
+        let factor = if self.cfg.diam { 2 } else { 1 };
+        // |cmd| < 10¹² Å: doubling cannot overflow.
+        let x = div_round_half_away(self.cmd[0].as_angstrom() * factor, 1_000);
+        let mut line = ReplyLine::new();
+        let _ = write!(
+            line,
+            "OK PX={} PZ={} X=",
+            self.pos.x.get(),
+            self.pos.z.get()
+        );
+        let _ = write_mm4(&mut line, x);
+        let _ = write!(line, " Z={}", self.cmd[1]);
+        io.send(line.finish());
+    }
+}
+
+const RANGE_POS_X: &str = "X position beyond 999999999 impulses";
+const RANGE_POS_Z: &str = "Z position beyond 999999999 impulses";
+const RANGE_BLOCK: &str = "block beyond 1000000 impulses per axis";
+const _: () = assert!(MAX_POSITION == 999_999_999 && MAX_BLOCK_IMPULSES == 1_000_000);
+
+/// Adds the step-event bytes of a block to a running CRC.
+pub(crate) fn block_crc(block: &LinearBlock, mut crc: Crc32) -> Crc32 {
+    for e in block.events() {
+        crc.push(StepEvent::bits(e));
+    }
+    crc
+}
+
+/// Splits off and checks a trailing `*HH`; returns the bytes before it.
+fn strip_checksum(line: &[u8]) -> Result<&[u8], Refusal<'static>> {
+    let Some(star) = line.iter().rposition(|&b| b == b'*') else {
+        return Ok(line);
+    };
+    let (body, tail) = line.split_at(star);
+    let given = match tail {
+        [_, h, l] => match (hex_value(*h), hex_value(*l)) {
+            (Some(h), Some(l)) => h << 4 | l,
+            _ => return Err(Refusal::ChecksumForm),
+        },
+        _ => return Err(Refusal::ChecksumForm),
+    };
+    let expected = checksum(body);
+    if given == expected {
+        Ok(body)
+    } else {
+        Err(Refusal::Checksum(expected))
+    }
+}
+
+fn hex_value(b: u8) -> Option<u8> {
+    match b {
+        b'0'..=b'9' => Some(b - b'0'),
+        b'A'..=b'F' => Some(b - b'A' + 10),
+        b'a'..=b'f' => Some(b - b'a' + 10),
+        _ => None,
+    }
+}
+
+fn no_args<'a>(mut words: Words<'a>, command: &'static str) -> Outcome<'a> {
+    match words.next() {
+        None => Ok(()),
+        Some(_) => Err(Refusal::NoArgs(command)),
+    }
+}
+
+fn parse_length(key: &'static str, v: &str) -> Result<Length, Refusal<'static>> {
+    Length::from_mm_str(v).map_err(|e| Refusal::Value(key, e.as_str()))
+}
+
+fn parse_price(key: &'static str, v: &str) -> Result<ImpulsePrice, Refusal<'static>> {
+    ImpulsePrice::from_length(parse_length(key, v)?)
+        .ok_or(Refusal::Value(key, "must be 0.000001 to 1 mm"))
+}
+
+fn parse_bounded(
+    key: &'static str,
+    v: &str,
+    min_um: i64,
+    max_um: i64,
+    why: &'static str,
+) -> Result<Length, Refusal<'static>> {
+    let l = parse_length(key, v)?;
+    let (lo, hi) = match (Length::from_um(min_um), Length::from_um(max_um)) {
+        (Some(lo), Some(hi)) => (lo, hi),
+        _ => return Err(Refusal::Value(key, why)),
+    };
+    if l >= lo && l <= hi {
+        Ok(l)
+    } else {
+        Err(Refusal::Value(key, why))
+    }
+}
+
+fn parse_flag(key: &'static str, v: &str) -> Result<bool, Refusal<'static>> {
+    match v {
+        "0" => Ok(false),
+        "1" => Ok(true),
+        _ => Err(Refusal::Value(key, "must be 0 or 1")),
+    }
+}
+
+/// At most this much of a word from the request is echoed in an error.
+const ECHO: usize = 16;
+
+/// The printable start of a request word, for error texts.
+fn echo(word: &str) -> &str {
+    word.get(..ECHO.min(word.len())).unwrap_or("")
+}
+
+fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
+    use ErrorCode as E;
+    match refusal {
+        Refusal::Checksum(expected) => {
+            let h = hex_digits(expected);
+            send_error(
+                io,
+                E::Checksum,
+                format_args!(
+                    "mismatch, line sums to {}{}",
+                    char::from(h[0]),
+                    char::from(h[1])
+                ),
+            )
+        }
+        Refusal::ChecksumForm => send_error(
+            io,
+            E::Checksum,
+            format_args!("malformed, expected *HH at the end"),
+        ),
+        Refusal::Control => send_error(
+            io,
+            E::Syntax,
+            format_args!("control or non-ASCII byte in request"),
+        ),
+        Refusal::Empty => send_error(io, E::Empty, format_args!("empty request")),
+        Refusal::Unknown(word) => {
+            send_error(io, E::Unknown, format_args!("command {}", echo(word)))
+        }
+        Refusal::Args(ArgError::NotKeyValue(word)) => send_error(
+            io,
+            E::Syntax,
+            format_args!("expected KEY=VALUE, got {}", echo(word)),
+        ),
+        Refusal::Args(ArgError::UnknownKey(key)) => {
+            send_error(io, E::Syntax, format_args!("unknown key {}", echo(key)))
+        }
+        Refusal::Args(ArgError::Duplicate(key)) => {
+            send_error(io, E::Syntax, format_args!("key {key} given twice"))
+        }
+        Refusal::NoArgs(command) => send_error(
+            io,
+            E::Syntax,
+            format_args!("{command} takes no arguments"),
+        ),
+        Refusal::Value(key, why) => send_error(io, E::Value, format_args!("{key} {why}")),
+        Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
+    }
+}
+
+/// Sends `OK`, followed by the given words if any.
+pub(crate) fn send_ok<I: Io>(io: &mut I, words: Option<fmt::Arguments<'_>>) {
+    let mut line = ReplyLine::new();
+    let _ = line.write_str("OK");
+    if let Some(words) = words {
+        let _ = write!(line, " {words}");
+    }
+    io.send(line.finish());
+}
+
+/// Sends `ERR <CODE> <text>`.
+pub(crate) fn send_error<I: Io>(io: &mut I, code: ErrorCode, text: fmt::Arguments<'_>) {
+    let mut line = ReplyLine::new();
+    let _ = write!(line, "ERR {} {}", code.as_str(), text);
+    io.send(line.finish());
+}
