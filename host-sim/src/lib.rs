@@ -1,1 +1,13 @@
+//! Host simulator of the lathe retrofit controller.
+//!
+//! - [`reference`]: the f64 reference of the impulse rules, written from the
+//!   domain brief independently of the fixed-point core;
+//! - [`device`]: the core's protocol handler in this process;
+//! - [`link`]: the virtual serial link (a pseudo-terminal pair driven through
+//!   the `serialport` crate) and the device server behind it;
+//! - [`compare`]: the bit-for-bit comparison of device replies against the
+//!   reference;
+//! - [`scenario`]: the built-in scenarios of the main job.
+
+pub mod device;
 pub mod reference;

@@ -126,3 +126,6 @@ impl Device {
         &self.session
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,259 @@
+//! The handler through its byte interface: every error code, state unchanged
+//! after every error, and no input that panics it.
+
+extern crate std;
+use super::*;
+use proptest::prelude::*;
+use std::string::{String, ToString};
+use std::vec;
+use std::vec::Vec;
+
+#[derive(Default)]
+struct Lines {
+    out: Vec<String>,
+    blocks: usize,
+}
+
+impl Io for Lines {
+    fn send(&mut self, line: &[u8]) {
+        assert!(line.ends_with(b"\r\n"), "terminator");
+        let text = std::str::from_utf8(line).expect("replies are ASCII");
+        let text = text.strip_suffix("\r\n").unwrap_or(text);
+        let (body, sum) = text.rsplit_once('*').expect("every reply has *HH");
+        let xor = body.bytes().fold(0u8, |a, b| a ^ b);
+        assert_eq!(sum, std::format!("{xor:02X}"), "reply checksum of {text:?}");
+        self.out.push(body.to_string());
+    }
+    fn run_block(&mut self, _: &LinearBlock) {
+        self.blocks += 1;
+    }
+}
+
+fn ask(dev: &mut Device, request: &[u8]) -> Vec<String> {
+    let mut io = Lines::default();
+    dev.receive_bytes(request, &mut io);
+    io.out
+}
+
+fn ask1(dev: &mut Device, request: &str) -> String {
+    let mut r = ask(dev, std::format!("{request}\n").as_bytes());
+    assert_eq!(r.len(), 1, "{request:?} -> {r:?}");
+    r.remove(0)
+}
+
+/// Everything a request could change, as the device reports it.
+fn state(dev: &mut Device) -> (String, String) {
+    (ask1(dev, "POS"), ask1(dev, "CFG"))
+}
+
+fn with_checksum(body: &str) -> String {
+    let xor = body.bytes().fold(0u8, |a, b| a ^ b);
+    std::format!("{body}*{xor:02X}")
+}
+
+/// A device moved away from zero with a non-default configuration.
+fn busy_device() -> Device {
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "CFG HX=0.0025 TOL=0.02 PASS=ROUGH").starts_with("OK"));
+    assert!(ask1(&mut dev, "MOVE X=12.345678 Z=-7.000005").starts_with("OK"));
+    dev
+}
+
+#[test]
+fn every_error_code_is_reached_and_changes_nothing() {
+    let mut long = String::from("MOVE X=1 ");
+    while long.len() <= framing::MAX_LINE {
+        long.push('0');
+    }
+    let cases: &[(&str, &str)] = &[
+        ("MOVE X=1*00", "ERR CHECKSUM"),
+        ("MOVE X=1*4", "ERR CHECKSUM"),
+        ("MOVE X=1*ZZ", "ERR CHECKSUM"),
+        (long.as_str(), "ERR LINE_TOO_LONG"),
+        ("", "ERR EMPTY"),
+        ("   \t ", "ERR EMPTY"),
+        ("*00", "ERR EMPTY"),
+        ("FLY X=1", "ERR UNKNOWN"),
+        ("MOVE X1", "ERR SYNTAX"),
+        ("MOVE Y=1", "ERR SYNTAX"),
+        ("MOVE X=1 X=2", "ERR SYNTAX"),
+        ("MOVE X= Z=1", "ERR SYNTAX"),
+        ("POS X=1", "ERR SYNTAX"),
+        ("ZERO now", "ERR SYNTAX"),
+        ("VER 2", "ERR SYNTAX"),
+        ("MOVE X=1\u{7f}", "ERR SYNTAX"),
+        ("MOVE X=abc", "ERR VALUE X"),
+        ("MOVE Z=1.0000001", "ERR VALUE Z"),
+        ("MOVE Z=1e3", "ERR VALUE Z"),
+        ("MOVE X=100000", "ERR VALUE X"),
+        ("MOVE X=1 INC=2", "ERR VALUE INC"),
+        ("CFG HX=0", "ERR VALUE HX"),
+        ("CFG HZ=-0.01", "ERR VALUE HZ"),
+        ("CFG HX=1.000001", "ERR VALUE HX"),
+        ("CFG DIAM=2", "ERR VALUE DIAM"),
+        ("CFG RN=-0.4", "ERR VALUE RN"),
+        ("CFG RN=25.000001", "ERR VALUE RN"),
+        ("CFG TIP=10", "ERR VALUE TIP"),
+        ("CFG TOL=0", "ERR VALUE TOL"),
+        ("CFG PASS=FAST", "ERR VALUE PASS"),
+        ("CFG HX=0.001 PASS=FAST", "ERR VALUE PASS"),
+        ("MOVE Z=-99999", "ERR RANGE"),
+        ("MOVE X=99999.99 Z=-7", "ERR RANGE"),
+        ("MOVE Z=-99993 INC=1", "ERR RANGE"),
+        ("MOVE Z=-10007.01", "ERR RANGE"),
+    ];
+    for &(request, expected) in cases {
+        let mut dev = busy_device();
+        let before = state(&mut dev);
+        let mut io = Lines::default();
+        dev.receive_bytes(std::format!("{request}\r\n").as_bytes(), &mut io);
+        assert_eq!(io.out.len(), 1, "{request:?} -> {:?}", io.out);
+        assert!(
+            io.out[0].starts_with(expected),
+            "{request:?} -> {:?}, expected {expected}",
+            io.out
+        );
+        assert_eq!(io.blocks, 0, "{request:?} moved an axis");
+        assert_eq!(state(&mut dev), before, "{request:?} changed state");
+    }
+}
+
+#[test]
+fn range_of_increments_and_block_length() {
+    // The coordinate limit: 99999.999999 mm is the last representable value.
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "CFG DIAM=0 HZ=0.1").starts_with("OK"));
+    assert!(ask1(&mut dev, "MOVE Z=99999.99").starts_with("OK NX=0 NZ=1000000 "));
+    let before = state(&mut dev);
+    assert!(ask1(&mut dev, "MOVE Z=0.01 INC=1").starts_with("ERR RANGE"));
+    assert_eq!(state(&mut dev), before);
+    assert!(ask1(&mut dev, "MOVE Z=0.009999 INC=1").starts_with("OK NX=0 NZ=0 "));
+    // Exactly 1 000 000 impulses in a block: accepted; one more: refused.
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "CFG DIAM=0").starts_with("OK"));
+    assert!(ask1(&mut dev, "MOVE X=5000").starts_with("OK NX=1000000 "));
+    assert!(ask1(&mut dev, "MOVE X=-0.005").starts_with("ERR RANGE"));
+    assert!(ask1(&mut dev, "MOVE X=-0.0025").starts_with("ERR RANGE"));
+    assert!(ask1(&mut dev, "MOVE X=-0.002499").starts_with("OK NX=-1000000 "));
+    // A finer price that would put the register beyond 999 999 999: refused.
+    assert!(ask1(&mut dev, "MOVE X=5000").starts_with("OK NX=1000000 "));
+    let before = state(&mut dev);
+    assert!(ask1(&mut dev, "CFG HX=0.000005").starts_with("ERR RANGE"));
+    assert_eq!(state(&mut dev), before);
+    assert!(ask1(&mut dev, "CFG HX=0.000006").starts_with("OK"));
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=833333333 "));
+}
+
+#[test]
+fn replies_of_the_happy_path() {
+    let mut dev = Device::new();
+    assert_eq!(
+        ask1(&mut dev, "ver"),
+        std::format!("OK PROTO=1 NAME={NAME} VERSION={VERSION}")
+    );
+    assert_eq!(
+        ask1(&mut dev, "CFG"),
+        "OK HX=0.0050 HZ=0.0100 DIAM=1 RN=0.4000 TIP=3 TOL=0.0100 PASS=FIN"
+    );
+    assert_eq!(
+        ask1(&mut dev, "cfg tip=2 rn=0.8 pass=rough tol=0.005"),
+        "OK HX=0.0050 HZ=0.0100 DIAM=1 RN=0.8000 TIP=2 TOL=0.0050 PASS=ROUGH"
+    );
+    assert_eq!(ask1(&mut dev, &with_checksum("MOVE X=0.005 Z=-0.015")), "OK NX=1 NZ=-2 PX=1 PZ=-2 SEQ=42F8222A");
+    assert_eq!(ask1(&mut dev, "POS"), "OK PX=1 PZ=-2 X=0.0050 Z=-0.0150");
+    assert_eq!(ask1(&mut dev, "move x=-0.005 inc=1"), "OK NX=-1 NZ=0 PX=0 PZ=-2 SEQ=A2681B02");
+    assert_eq!(ask1(&mut dev, "CFG DIAM=0"), "OK HX=0.0050 HZ=0.0100 DIAM=0 RN=0.8000 TIP=2 TOL=0.0050 PASS=ROUGH");
+    assert_eq!(ask1(&mut dev, "POS"), "OK PX=0 PZ=-2 X=0.0000 Z=-0.0150");
+    assert_eq!(ask1(&mut dev, "ZERO"), "OK");
+    assert_eq!(ask1(&mut dev, "POS"), "OK PX=0 PZ=0 X=0.0000 Z=0.0000");
+    assert_eq!(ask1(&mut dev, "MOVE"), "OK NX=0 NZ=0 PX=0 PZ=0 SEQ=00000000");
+}
+
+#[test]
+fn price_change_re_expresses_registers() {
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "MOVE X=10.01 Z=3.333").starts_with("OK NX=1001 NZ=333 "));
+    assert_eq!(
+        ask1(&mut dev, "CFG HX=0.001 HZ=0.002"),
+        "OK HX=0.0010 HZ=0.0020 DIAM=1 RN=0.4000 TIP=3 TOL=0.0100 PASS=FIN"
+    );
+    // 5.005 mm / 0.001 = 5005; 3.333 / 0.002 = 1666.5 → 1667.
+    assert_eq!(ask1(&mut dev, "POS"), "OK PX=5005 PZ=1667 X=10.0100 Z=3.3330");
+}
+
+#[test]
+fn garbage_and_framing() {
+    let mut dev = busy_device();
+    let before = state(&mut dev);
+    let r = ask(&mut dev, b"\x00\xff\xfe MOVE\n");
+    assert_eq!(r.len(), 1);
+    assert!(r[0].starts_with("ERR SYNTAX"));
+    // CRLF is one terminator; a lone CR and a lone LF each end a line.
+    let r = ask(&mut dev, b"POS\r\nPOS\rPOS\n");
+    assert_eq!(r.len(), 3);
+    // The rest of an over-long line is discarded up to its terminator.
+    let mut long = std::vec![b'M'; 300];
+    long.extend_from_slice(b"\r\nPOS\r\n");
+    let r = ask(&mut dev, &long);
+    assert_eq!(r.len(), 2);
+    assert!(r[0].starts_with("ERR LINE_TOO_LONG"));
+    assert!(r[1].starts_with("OK PX="));
+    assert_eq!(state(&mut dev), before);
+    // A lower-case checksum is accepted.
+    let line = with_checksum("POS").to_lowercase().replace("pos", "POS");
+    assert!(ask1(&mut dev, &line).starts_with("OK PX="));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// Any bytes: no panic, exactly one final reply line per request line,
+    /// and every reply well formed (checked by `Lines`).
+    #[test]
+    fn any_bytes_one_final_line_per_request(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+        let mut dev = busy_device();
+        let mut io = Lines::default();
+        dev.receive_bytes(&bytes, &mut io);
+        // Count the requests the framing saw: terminators, CRLF counted once,
+        // plus over-long stretches reported early.
+        let mut expected = 0;
+        let mut run = 0usize;
+        let mut over = false;
+        let mut prev_cr = false;
+        for &b in &bytes {
+            let is_cr = b == b'\r';
+            if b == b'\n' && prev_cr {
+            } else if b == b'\r' || b == b'\n' {
+                if !over { expected += 1; }
+                over = false;
+                run = 0;
+            } else if !over {
+                run += 1;
+                if run > framing::MAX_LINE { expected += 1; over = true; }
+            }
+            prev_cr = is_cr;
+        }
+        let finals = io.out.iter().filter(|l| l.starts_with("OK") || l.starts_with("ERR ")).count();
+        prop_assert_eq!(finals, io.out.len());
+        prop_assert_eq!(finals, expected);
+    }
+
+    /// Random printable requests built from protocol words never panic, and a
+    /// refused one changes nothing.
+    #[test]
+    fn word_salad_errors_change_nothing(words in proptest::collection::vec(
+        prop_oneof![
+            Just("MOVE"), Just("CFG"), Just("POS"), Just("ZERO"), Just("VER"),
+            Just("X=1.5"), Just("Z=-0.0000005"), Just("X=99999.999999"), Just("INC=1"),
+            Just("HX=0.000001"), Just("HZ=1"), Just("DIAM=0"), Just("TIP=9"), Just("RN=0"),
+            Just("="), Just("X=="), Just("*"), Just("Z=-"), Just("TOL=1.0000000"), Just("PASS=FIN"),
+        ], 0..8)) {
+        let mut dev = busy_device();
+        let before = state(&mut dev);
+        let line = words.join(" ");
+        let reply = ask1(&mut dev, &line);
+        if reply.starts_with("ERR") {
+            prop_assert_eq!(state(&mut dev), before);
+        }
+    }
+}
