@@ -4,10 +4,13 @@
 //!   domain brief independently of the fixed-point core;
 //! - [`device`]: the core's protocol handler in this process;
 //! - [`link`]: the virtual serial link (a pseudo-terminal pair driven through
-//!   the `serialport` crate) and the device server behind it;
+//!   the `serialport` crate) and the host side of the protocol;
 //! - [`compare`]: the bit-for-bit comparison of device replies against the
 //!   reference;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
+pub mod compare;
 pub mod device;
+pub mod link;
 pub mod reference;
+pub mod scenario;

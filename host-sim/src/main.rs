@@ -1,1 +1,199 @@
-fn main() {}
+//! `host-sim`: the host simulator of the lathe retrofit controller.
+//!
+//! With no arguments it runs the main job: the built-in scenarios over the
+//! virtual serial link against the f64 reference, bit for bit.
+
+use clap::{Parser, Subcommand, ValueEnum};
+use host_sim::compare::{format_distance, Comparator, Scenario, Tally};
+use host_sim::device::LocalDevice;
+use host_sim::link::{Client, LinkError, PtyDevice, Transport};
+use host_sim::scenario;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::{Read, Write};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+#[derive(Parser)]
+#[command(name = "host-sim", version, about = "Host simulator of the lathe retrofit controller")]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Compare the device with the f64 reference, bit for bit (the default).
+    Run(RunArgs),
+    /// Serve the in-process device for a terminal or another program.
+    Serve {
+        /// Serve on standard input and output.
+        #[arg(long, conflicts_with = "pty")]
+        stdio: bool,
+        /// Serve on a new pseudo-terminal and print its path.
+        #[arg(long)]
+        pty: bool,
+    },
+}
+
+#[derive(clap::Args, Clone)]
+struct RunArgs {
+    /// Seed of the random blocks.
+    #[arg(long, default_value_t = 1977)]
+    seed: u64,
+    /// Number of random blocks.
+    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    blocks: u32,
+    /// How the host reaches the device.
+    #[arg(long, value_enum, default_value_t = LinkKind::Pty)]
+    link: LinkKind,
+}
+
+impl Default for RunArgs {
+    fn default() -> Self {
+        RunArgs {
+            seed: 1977,
+            blocks: 10_000,
+            link: LinkKind::Pty,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum LinkKind {
+    /// A pseudo-terminal pair, the host side opened with the serialport crate.
+    Pty,
+    /// Direct calls into the in-process device.
+    Local,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
+        Command::Run(args) => run(&args),
+        Command::Serve { stdio: _, pty: true } => serve_pty(),
+        Command::Serve { .. } => serve_stdio(),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("host-sim: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn serve_stdio() -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let mut device = LocalDevice::new();
+    let mut stdin = std::io::stdin().lock();
+    let mut stdout = std::io::stdout().lock();
+    let mut buf = [0u8; 4096];
+    loop {
+        let n = stdin.read(&mut buf)?;
+        if n == 0 {
+            return Ok(ExitCode::SUCCESS);
+        }
+        let out = device.feed(&buf[..n]);
+        stdout.write_all(&out)?;
+        stdout.flush()?;
+    }
+}
+
+fn serve_pty() -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let device = PtyDevice::start()?;
+    println!("device on {} (115200 8N1); Ctrl-C ends", device.path());
+    std::io::stdout().flush()?;
+    device.wait();
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run(args: &RunArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    println!("Lathe retrofit controller: device against the f64 reference, bit for bit");
+    match args.link {
+        LinkKind::Pty => {
+            let device = PtyDevice::start()?;
+            println!(
+                "link: in-process device on {} ({} 8N1, serialport)",
+                device.path(),
+                host_sim::link::BAUD
+            );
+            let client = Client::open(device.path(), Duration::from_secs(10))?;
+            let code = compare_all(client, args)?;
+            drop(device);
+            Ok(code)
+        }
+        LinkKind::Local => {
+            println!("link: in-process device, direct calls");
+            Ok(compare_all(LocalDevice::new(), args)?)
+        }
+    }
+}
+
+fn compare_all<T: Transport>(link: T, args: &RunArgs) -> Result<ExitCode, LinkError> {
+    let started = Instant::now();
+    let mut cmp = Comparator::new(link)?;
+    for s in [scenario::table21(), scenario::krylenko()] {
+        let before = cmp.tally.clone();
+        cmp.run(&s, |_| {})?;
+        report_scenario(&s, &before, &cmp.tally);
+    }
+    let random = scenario::random(args.seed, args.blocks as usize);
+    let bar = ProgressBar::new(random.blocks() as u64).with_style(
+        ProgressStyle::with_template("  {bar:40} {pos}/{len} blocks {per_sec} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let before = cmp.tally.clone();
+    let t0 = Instant::now();
+    cmp.run(&random, |_| bar.inc(1))?;
+    let random_time = t0.elapsed();
+    bar.finish_and_clear();
+    report_scenario(&random, &before, &cmp.tally);
+    let t = &cmp.tally;
+    let random_blocks = t.blocks - before.blocks;
+    println!(
+        "speed: {:.0} blocks/s, {:.2} M step events/s over the link (random part, {:.2} s)",
+        random_blocks as f64 / random_time.as_secs_f64(),
+        (t.events - before.events) as f64 / random_time.as_secs_f64() / 1e6,
+        random_time.as_secs_f64()
+    );
+    println!(
+        "ties: {} exact ties decided away from zero (quantizer {}, interleaver {})",
+        t.exact_ties(),
+        t.quantizer.exact_ties,
+        t.interleave.exact_ties
+    );
+    println!(
+        "margin: nearest non-tie {} impulses from a tie (quantizer {}, interleaver {})",
+        format_distance(t.min_tie_distance()),
+        format_distance(t.quantizer.min_distance),
+        format_distance(t.interleave.min_distance)
+    );
+    for m in t.mismatches.iter().take(10) {
+        println!(
+            "MISMATCH {} step {}: {}\n  device:    {}\n  reference: {}",
+            m.scenario, m.index, m.request, m.device, m.expected
+        );
+    }
+    println!(
+        "total: {} blocks, {} step events, {} impulses in {:.2} s",
+        t.blocks,
+        t.events,
+        t.impulses,
+        started.elapsed().as_secs_f64()
+    );
+    println!("{}", t.result_line());
+    Ok(if t.mismatches.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+fn report_scenario(s: &Scenario, before: &Tally, after: &Tally) {
+    println!(
+        "{:<55} {:>6} blocks {:>10} events {:>3} mismatches",
+        s.name,
+        after.blocks - before.blocks,
+        after.events - before.events,
+        after.mismatches.len() - before.mismatches.len()
+    );
+}

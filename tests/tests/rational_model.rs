@@ -1,8 +1,1395 @@
+//! Exact rational model of the pendant's `MOVE` replies, checked against the
+//! device line for line.
+//!
+//! The model is written from the domain brief (SPEC.md §1–§2) and the line
+//! protocol (PROTOCOL.md) alone and shares no arithmetic with the product:
+//!
+//! - every length is an exact rational (`Ratio`, an `i128` fraction kept in
+//!   lowest terms); a request word with up to 6 decimals is `n / 10^6`, and an
+//!   X diameter word is halved exactly to give the radius;
+//! - the session keeps the exact commanded coordinates `(X radius, Z)` since
+//!   the last `ZERO`, the impulse prices `HX`, `HZ` and the `DIAM` mode;
+//! - an axis position in impulses is `Q(P / h)`, `P` the exact commanded
+//!   coordinate, `Q` rounding half away from zero in integer arithmetic, so a
+//!   block issues `Q(P_k/h) − Q(P_{k−1}/h)` impulses (residual carry);
+//! - the step events of a block follow SPEC.md §2 straight from the
+//!   definition: the leading axis is the one with the larger `|Δ|` (X when
+//!   equal), event `i = 1 … |Δlead|` steps it once and puts the other axis at
+//!   `b0 + Q(i·Δb/|Δlead|)`; one byte per event (bit0 X steps, bit1 Z steps,
+//!   bit2 X negative, bit3 Z negative) and `SEQ` is the bitwise CRC-32 (IEEE,
+//!   reflected polynomial 0xEDB88320, as in zlib) of those bytes;
+//! - `CFG HX=/HZ=` keeps the commanded coordinates and re-expresses each
+//!   register as `Q(P / h_new)` without motion; `DIAM` only changes how later
+//!   X words are read and how `POS` prints X; `ZERO` sets coordinates and
+//!   registers to 0; a block of more than 1 000 000 impulses on an axis, or a
+//!   position beyond 999 999 999 impulses, is `ERR RANGE`, and an error
+//!   changes no state;
+//! - `POS` prints the registers and the exact coordinates (X as a diameter
+//!   when `DIAM=1`) with 4 decimals rounded half away from zero.
+//!
+//! Every reply line's `*HH` checksum (XOR of the bytes before `*`) is checked
+//! too. The sessions are seeded and deterministic.
+
 use host_sim::device::LocalDevice;
-#[test]
-fn probe() {
-    let mut d = LocalDevice::new();
-    for r in ["MOVE Z=1 X=2","MOVE INC=1 X=1","POS","CFG DIAM=0","MOVE X=-0.00004 Z=-0.00005","POS","MOVE X=+1.500000 Z=-0","POS","MOVE X=1. Z=2","MOVE X=-0.000049","POS","CFG DIAM=1","POS","MOVE X=-0.000099","POS","CFG HX=0.0025 DIAM=0 HZ=0.000001","CFG HX=0.000001 HZ=0.000001","POS","CFG","Cfg hx=0.001 diam=1", "MOVE X=3 INC=0", "CFG HX=0.00005"] {
-        println!("{r:?} -> {:?}", d.request(r));
+use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Denominator of a request length (6 decimals).
+const MICRO: i128 = 1_000_000;
+/// Most impulses one block may issue per axis.
+const BLOCK_MAX: i128 = 1_000_000;
+/// Largest position register magnitude, in impulses.
+const POS_MAX: i128 = 999_999_999;
+/// Generated coordinates stay within this many mm (X radius and Z), so that
+/// every word, absolute or incremental, stays below the 99999.999999 mm limit.
+const COORD_LIMIT_UM: i128 = 49_999 * MICRO;
+
+// ---------------------------------------------------------------------------
+// Exact arithmetic
+// ---------------------------------------------------------------------------
+
+fn gcd(mut a: i128, mut b: i128) -> i128 {
+    a = a.abs();
+    b = b.abs();
+    while b != 0 {
+        let t = a % b;
+        a = b;
+        b = t;
     }
+    a
+}
+
+/// `n / d` rounded to the nearest integer, exact halves away from zero.
+fn q_div(n: i128, d: i128) -> i128 {
+    assert!(d != 0, "division by zero in the model");
+    let (n, d) = if d < 0 { (-n, -d) } else { (n, d) };
+    let q = (2 * n.abs() + d) / (2 * d);
+    if n < 0 {
+        -q
+    } else {
+        q
+    }
+}
+
+/// Whether `n / d` is exactly an integer plus one half.
+fn is_half(n: i128, d: i128) -> bool {
+    let d = d.abs();
+    (2 * n) % d == 0 && ((2 * n) / d) % 2 != 0
+}
+
+/// An exact rational in lowest terms, denominator positive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Ratio {
+    n: i128,
+    d: i128,
+}
+
+impl Ratio {
+    fn new(n: i128, d: i128) -> Self {
+        assert!(d != 0, "zero denominator in the model");
+        let (n, d) = if d < 0 { (-n, -d) } else { (n, d) };
+        let g = gcd(n, d).max(1);
+        Ratio { n: n / g, d: d / g }
+    }
+    fn int(n: i128) -> Self {
+        Ratio { n, d: 1 }
+    }
+    /// A request length given in micrometres (`um / 10^6` mm).
+    fn micro(um: i128) -> Self {
+        Ratio::new(um, MICRO)
+    }
+    fn add(self, o: Ratio) -> Ratio {
+        Ratio::new(self.n * o.d + o.n * self.d, self.d * o.d)
+    }
+    fn sub(self, o: Ratio) -> Ratio {
+        Ratio::new(self.n * o.d - o.n * self.d, self.d * o.d)
+    }
+    fn mul(self, o: Ratio) -> Ratio {
+        Ratio::new(self.n * o.n, self.d * o.d)
+    }
+    fn div(self, o: Ratio) -> Ratio {
+        Ratio::new(self.n * o.d, self.d * o.n)
+    }
+    fn half(self) -> Ratio {
+        Ratio::new(self.n, self.d * 2)
+    }
+    fn double(self) -> Ratio {
+        Ratio::new(self.n * 2, self.d)
+    }
+    /// `Q(self)`: nearest integer, halves away from zero.
+    fn round(self) -> i128 {
+        q_div(self.n, self.d)
+    }
+    fn is_half(self) -> bool {
+        is_half(self.n, self.d)
+    }
+    /// Truncated towards zero to a whole number of micrometres.
+    fn to_micro_trunc(self) -> i128 {
+        (self.n * MICRO) / self.d
+    }
+}
+
+/// A length as the pendant prints it: mm, exactly 4 decimals, rounded half
+/// away from zero (no sign on a zero).
+fn fmt4(r: Ratio) -> String {
+    let q = r.mul(Ratio::int(10_000)).round();
+    let sign = if q < 0 { "-" } else { "" };
+    let a = q.abs();
+    format!("{sign}{}.{:04}", a / 10_000, a % 10_000)
+}
+
+/// CRC-32 (IEEE 802.3, as in zlib), bit by bit.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xFFFF_FFFFu32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                (c >> 1) ^ 0xEDB8_8320
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// The XOR of all bytes, as a line checksum.
+fn xor_sum(s: &str) -> u8 {
+    s.bytes().fold(0, |a, b| a ^ b)
+}
+
+/// The step events of a block issuing `dx`, `dz` impulses, by SPEC.md §2.
+/// Counts the events whose other-axis value `i·Δb/|Δlead|` is an exact tie.
+fn step_sequence(dx: i128, dz: i128, ties: &mut u64) -> Vec<u8> {
+    let x_leads = dx.abs() >= dz.abs();
+    let (dl, db) = if x_leads { (dx, dz) } else { (dz, dx) };
+    let len = dl.abs();
+    let mut out = Vec::with_capacity(len as usize);
+    let mut prev = 0i128;
+    for i in 1..=len {
+        let num = i * db;
+        if db != 0 && is_half(num, len) {
+            *ties += 1;
+        }
+        let b = q_div(num, len);
+        assert!((b - prev).abs() <= 1, "other axis jumps by more than one");
+        let other = b != prev;
+        prev = b;
+        let (xs, xn, zs, zn) = if x_leads {
+            (true, dl < 0, other, other && db < 0)
+        } else {
+            (other, other && db < 0, true, dl < 0)
+        };
+        out.push(u8::from(xs) | u8::from(zs) << 1 | u8::from(xn) << 2 | u8::from(zn) << 3);
+    }
+    assert_eq!(prev, db, "the other axis must end on its target");
+    out
+}
+
+// ---------------------------------------------------------------------------
+// The session model
+// ---------------------------------------------------------------------------
+
+/// What the model expects as the final reply line (body before `*HH`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Expect {
+    Ok(String),
+    Err(&'static str),
+}
+
+#[derive(Debug, Default, Clone)]
+struct Stats {
+    requests: u64,
+    moves: u64,
+    inc_moves: u64,
+    omitted_words: u64,
+    range_errors: u64,
+    cfg_changes: u64,
+    diam_changes: u64,
+    zeros: u64,
+    step_events: u64,
+    /// Block end points exactly half-way between impulses (per axis word).
+    endpoint_ties: u64,
+    /// Registers re-expressed by `CFG` exactly at a tie.
+    cfg_ties: u64,
+    /// Step events whose other-axis value was exactly at a tie.
+    step_ties: u64,
+}
+
+impl Stats {
+    fn add(&mut self, o: &Stats) {
+        self.requests += o.requests;
+        self.moves += o.moves;
+        self.inc_moves += o.inc_moves;
+        self.omitted_words += o.omitted_words;
+        self.range_errors += o.range_errors;
+        self.cfg_changes += o.cfg_changes;
+        self.diam_changes += o.diam_changes;
+        self.zeros += o.zeros;
+        self.step_events += o.step_events;
+        self.endpoint_ties += o.endpoint_ties;
+        self.cfg_ties += o.cfg_ties;
+        self.step_ties += o.step_ties;
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Model {
+    hx: Ratio,
+    hz: Ratio,
+    diam: bool,
+    /// Exact commanded X, on the radius.
+    cx: Ratio,
+    /// Exact commanded Z.
+    cz: Ratio,
+    px: i128,
+    pz: i128,
+}
+
+impl Model {
+    /// Power-on: HX 0.005, HZ 0.01, DIAM=1, at program zero.
+    fn new() -> Self {
+        Model {
+            hx: Ratio::micro(5_000),
+            hz: Ratio::micro(10_000),
+            diam: true,
+            cx: Ratio::int(0),
+            cz: Ratio::int(0),
+            px: 0,
+            pz: 0,
+        }
+    }
+
+    fn mov(&mut self, x: Option<Ratio>, z: Option<Ratio>, inc: bool, st: &mut Stats) -> Expect {
+        let tx = match x {
+            None => self.cx,
+            Some(w) => {
+                let r = if self.diam { w.half() } else { w };
+                if inc {
+                    self.cx.add(r)
+                } else {
+                    r
+                }
+            }
+        };
+        let tz = match z {
+            None => self.cz,
+            Some(w) => {
+                if inc {
+                    self.cz.add(w)
+                } else {
+                    w
+                }
+            }
+        };
+        let qx = tx.div(self.hx);
+        let qz = tz.div(self.hz);
+        let (px, pz) = (qx.round(), qz.round());
+        let (nx, nz) = (px - self.px, pz - self.pz);
+        if nx.abs() > BLOCK_MAX || nz.abs() > BLOCK_MAX || px.abs() > POS_MAX || pz.abs() > POS_MAX
+        {
+            st.range_errors += 1;
+            return Expect::Err("RANGE");
+        }
+        if x.is_some() && qx.is_half() {
+            st.endpoint_ties += 1;
+        }
+        if z.is_some() && qz.is_half() {
+            st.endpoint_ties += 1;
+        }
+        let seq = step_sequence(nx, nz, &mut st.step_ties);
+        st.step_events += seq.len() as u64;
+        self.cx = tx;
+        self.cz = tz;
+        self.px = px;
+        self.pz = pz;
+        Expect::Ok(format!(
+            "OK NX={nx} NZ={nz} PX={px} PZ={pz} SEQ={:08X}",
+            crc32(&seq)
+        ))
+    }
+
+    fn cfg(
+        &mut self,
+        hx: Option<Ratio>,
+        hz: Option<Ratio>,
+        diam: Option<bool>,
+        st: &mut Stats,
+    ) -> Expect {
+        let hx = hx.unwrap_or(self.hx);
+        let hz = hz.unwrap_or(self.hz);
+        let diam = diam.unwrap_or(self.diam);
+        let qx = self.cx.div(hx);
+        let qz = self.cz.div(hz);
+        let (px, pz) = (qx.round(), qz.round());
+        if px.abs() > POS_MAX || pz.abs() > POS_MAX {
+            st.range_errors += 1;
+            return Expect::Err("RANGE");
+        }
+        if hx != self.hx && qx.is_half() {
+            st.cfg_ties += 1;
+        }
+        if hz != self.hz && qz.is_half() {
+            st.cfg_ties += 1;
+        }
+        if hx != self.hx || hz != self.hz {
+            st.cfg_changes += 1;
+        }
+        if diam != self.diam {
+            st.diam_changes += 1;
+        }
+        self.hx = hx;
+        self.hz = hz;
+        self.diam = diam;
+        self.px = px;
+        self.pz = pz;
+        Expect::Ok(format!(
+            "OK HX={} HZ={} DIAM={} RN=0.4000 TIP=3 TOL=0.0100 PASS=FIN",
+            fmt4(hx),
+            fmt4(hz),
+            u8::from(diam)
+        ))
+    }
+
+    fn zero(&mut self, st: &mut Stats) -> Expect {
+        st.zeros += 1;
+        self.cx = Ratio::int(0);
+        self.cz = Ratio::int(0);
+        self.px = 0;
+        self.pz = 0;
+        Expect::Ok("OK".to_owned())
+    }
+
+    fn pos(&self) -> String {
+        let x = if self.diam { self.cx.double() } else { self.cx };
+        format!(
+            "OK PX={} PZ={} X={} Z={}",
+            self.px,
+            self.pz,
+            fmt4(x),
+            fmt4(self.cz)
+        )
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Requests
+// ---------------------------------------------------------------------------
+
+/// A request of a session. Lengths are in micrometres (6 decimals of a mm).
+/// `style` varies the spelling: bit0 lower case, bit1 `+` on positive
+/// values, bit2 always 6 decimals, bit3 Z word first, bit4 `INC=1` first.
+#[derive(Debug, Clone)]
+enum Op {
+    Move {
+        x: Option<i128>,
+        z: Option<i128>,
+        inc: bool,
+        style: u8,
+    },
+    Cfg {
+        hx: Option<i128>,
+        hz: Option<i128>,
+        diam: Option<bool>,
+        style: u8,
+    },
+    Zero,
+    Pos,
+}
+
+/// A request length: `[+-]digits[.digits]`, at most 6 decimals.
+fn fmt_len(um: i128, style: u8) -> String {
+    let sign = if um < 0 {
+        "-"
+    } else if style & 2 != 0 {
+        "+"
+    } else {
+        ""
+    };
+    let (i, f) = (um.abs() / MICRO, um.abs() % MICRO);
+    if style & 4 != 0 {
+        format!("{sign}{i}.{f:06}")
+    } else if f == 0 {
+        format!("{sign}{i}")
+    } else {
+        let digits = format!("{f:06}");
+        format!("{sign}{i}.{}", digits.trim_end_matches('0'))
+    }
+}
+
+impl Op {
+    fn render(&self) -> String {
+        let (mut words, style) = match *self {
+            Op::Move { x, z, inc, style } => {
+                let mut w = Vec::new();
+                if let Some(x) = x {
+                    w.push(format!("X={}", fmt_len(x, style)));
+                }
+                if let Some(z) = z {
+                    w.push(format!("Z={}", fmt_len(z, style)));
+                }
+                if style & 8 != 0 {
+                    w.reverse();
+                }
+                if inc {
+                    if style & 16 != 0 {
+                        w.insert(0, "INC=1".to_owned());
+                    } else {
+                        w.push("INC=1".to_owned());
+                    }
+                }
+                w.insert(0, "MOVE".to_owned());
+                (w, style)
+            }
+            Op::Cfg {
+                hx,
+                hz,
+                diam,
+                style,
+            } => {
+                let mut w = Vec::new();
+                if let Some(h) = hx {
+                    w.push(format!("HX={}", fmt_len(h, style)));
+                }
+                if let Some(h) = hz {
+                    w.push(format!("HZ={}", fmt_len(h, style)));
+                }
+                if let Some(d) = diam {
+                    w.push(format!("DIAM={}", u8::from(d)));
+                }
+                if style & 8 != 0 {
+                    w.reverse();
+                }
+                w.insert(0, "CFG".to_owned());
+                (w, style)
+            }
+            Op::Zero => (vec!["ZERO".to_owned()], 0),
+            Op::Pos => (vec!["POS".to_owned()], 0),
+        };
+        let line = std::mem::take(&mut words).join(" ");
+        if style & 1 != 0 {
+            line.to_lowercase()
+        } else {
+            line
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Device against model
+// ---------------------------------------------------------------------------
+
+/// Checks a reply line's `*HH` and returns the part before it.
+fn checked_body(line: &str) -> Result<&str, String> {
+    let (body, hh) = line
+        .rsplit_once('*')
+        .ok_or_else(|| format!("reply without checksum: {line:?}"))?;
+    let want = format!("{:02X}", xor_sum(body));
+    if hh != want {
+        return Err(format!(
+            "reply checksum {hh:?}, the XOR of its bytes is {want}: {line:?}"
+        ));
+    }
+    Ok(body)
+}
+
+/// The value of `KEY=` in a reply body.
+fn field<'a>(body: &'a str, key: &str) -> &'a str {
+    body.split(' ')
+        .find_map(|w| w.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
+        .unwrap_or_else(|| panic!("no {key}= in {body:?}"))
+}
+
+struct Session {
+    dev: LocalDevice,
+    model: Model,
+    stats: Stats,
+    log: Vec<String>,
+}
+
+impl Session {
+    fn new() -> Self {
+        Session {
+            dev: LocalDevice::new(),
+            model: Model::new(),
+            stats: Stats::default(),
+            log: Vec::new(),
+        }
+    }
+
+    /// Sends one line and returns the body of its single reply line.
+    fn send(&mut self, line: &str) -> Result<String, String> {
+        self.stats.requests += 1;
+        self.log.push(line.to_owned());
+        let replies = self.dev.request(line);
+        self.dev.take_blocks();
+        if replies.len() != 1 {
+            return Err(self.context(&format!("expected one reply line, got {replies:?}")));
+        }
+        let body = checked_body(&replies[0]).map_err(|e| self.context(&e))?;
+        Ok(body.to_owned())
+    }
+
+    /// The failure text: the message and the last requests of the session.
+    fn context(&self, msg: &str) -> String {
+        let from = self.log.len().saturating_sub(16);
+        format!(
+            "{msg}\nrequest #{} of the session; last requests:\n  {}",
+            self.log.len(),
+            self.log[from..].join("\n  ")
+        )
+    }
+
+    fn compare(&self, got: &str, want: &Expect) -> Result<(), String> {
+        let ok = match want {
+            Expect::Ok(w) => got == w,
+            Expect::Err(code) => {
+                let head = format!("ERR {code}");
+                got == head || got.starts_with(&(head + " "))
+            }
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(self.context(&format!(
+                "reply differs from the model\n  device: {got}\n  model:  {want:?}"
+            )))
+        }
+    }
+
+    fn check_pos(&mut self) -> Result<(), String> {
+        let got = self.send("POS")?;
+        let want = self.model.pos();
+        self.compare(&got, &Expect::Ok(want))
+    }
+
+    /// Runs one request on both sides and compares; a `MOVE` is followed by
+    /// a `POS`. Returns the device's reply body.
+    fn step(&mut self, op: &Op) -> Result<String, String> {
+        let line = op.render();
+        let got = self.send(&line)?;
+        let st = &mut self.stats;
+        let want = match *op {
+            Op::Move { x, z, inc, .. } => {
+                st.moves += 1;
+                st.inc_moves += u64::from(inc);
+                st.omitted_words += u64::from(x.is_none()) + u64::from(z.is_none());
+                self.model
+                    .mov(x.map(Ratio::micro), z.map(Ratio::micro), inc, st)
+            }
+            Op::Cfg { hx, hz, diam, .. } => {
+                self.model
+                    .cfg(hx.map(Ratio::micro), hz.map(Ratio::micro), diam, st)
+            }
+            Op::Zero => self.model.zero(st),
+            Op::Pos => Expect::Ok(self.model.pos()),
+        };
+        self.compare(&got, &want)?;
+        if matches!(op, Op::Move { .. }) {
+            self.check_pos()?;
+        }
+        Ok(got)
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Random sessions
+// ---------------------------------------------------------------------------
+
+/// Impulse prices used by the sessions, in micrometres.
+const PRICES_UM: [i128; 21] = [
+    1, 2, 5, 7, 10, 25, 100, 500, 1_000, 2_000, 2_500, 3_000, 5_000, 7_500, 10_000, 12_500, 20_000,
+    50_000, 100_000, 333_333, 1_000_000,
+];
+
+fn price(rng: &mut ChaCha8Rng) -> i128 {
+    PRICES_UM[rng.random_range(0..PRICES_UM.len())]
+}
+
+/// A word for one axis. `h` the axis price, `coord` its exact commanded
+/// coordinate (radius for X), `p` its register, `doubled` whether the word is
+/// a diameter. Aims at an exact tie, an exact impulse, a point near one, or
+/// anywhere within the chosen span.
+fn axis_word(
+    rng: &mut ChaCha8Rng,
+    h: Ratio,
+    coord: Ratio,
+    p: i128,
+    doubled: bool,
+    inc: bool,
+) -> i128 {
+    let r = rng.random_range(0..1000);
+    let span: i128 = if r < 600 {
+        30
+    } else if r < 900 {
+        1_000
+    } else if r < 990 {
+        8_000
+    } else if r < 997 {
+        60_000
+    } else {
+        // Just beyond what one block may issue.
+        -1
+    };
+    let k = if span < 0 {
+        let over = BLOCK_MAX + rng.random_range(1..100);
+        p + if rng.random_bool(0.5) { over } else { -over }
+    } else {
+        p + rng.random_range(-span..=span)
+    };
+    let kind = rng.random_range(0..10);
+    let target = match kind {
+        // Exactly half-way: (2k+1)·h/2.
+        0..=2 => Ratio::int(2 * k + 1).mul(h).half(),
+        // Exactly on an impulse.
+        3 | 4 => Ratio::int(k).mul(h),
+        // Within one impulse of one, to half a micrometre.
+        5..=7 => {
+            let hu = h.mul(Ratio::int(2 * MICRO)).round();
+            Ratio::int(k)
+                .mul(h)
+                .add(Ratio::new(rng.random_range(-hu..=hu), 2 * MICRO))
+        }
+        // Anywhere near.
+        _ => {
+            let s = span.abs().max(1);
+            let lo = Ratio::int(p - s).mul(h).to_micro_trunc();
+            let hi = Ratio::int(p + s).mul(h).to_micro_trunc();
+            Ratio::micro(rng.random_range(lo.min(hi)..=hi.max(lo)))
+        }
+    };
+    let limit = Ratio::micro(COORD_LIMIT_UM);
+    let target = if target.n * limit.d > limit.n * target.d {
+        limit
+    } else if -target.n * limit.d > limit.n * target.d {
+        Ratio::micro(-COORD_LIMIT_UM)
+    } else {
+        target
+    };
+    let word = if inc { target.sub(coord) } else { target };
+    let word = if doubled { word.double() } else { word };
+    // A word has at most 6 decimals.
+    word.to_micro_trunc()
+}
+
+fn random_op(rng: &mut ChaCha8Rng, m: &Model) -> Op {
+    let r = rng.random_range(0..1000);
+    if r < 860 {
+        let inc = rng.random_bool(0.35);
+        let (with_x, with_z) = match rng.random_range(0..100) {
+            0 => (false, false),
+            1..=12 => (true, false),
+            13..=24 => (false, true),
+            _ => (true, true),
+        };
+        let x = with_x.then(|| axis_word(rng, m.hx, m.cx, m.px, m.diam, inc));
+        let z = with_z.then(|| axis_word(rng, m.hz, m.cz, m.pz, false, inc));
+        let style = if rng.random_bool(0.8) {
+            0
+        } else {
+            rng.random()
+        };
+        Op::Move { x, z, inc, style }
+    } else if r < 930 {
+        let (hx, hz) = match rng.random_range(0..3) {
+            0 => (Some(price(rng)), None),
+            1 => (None, Some(price(rng))),
+            _ => (Some(price(rng)), Some(price(rng))),
+        };
+        let diam = rng.random_bool(0.2).then(|| rng.random_bool(0.5));
+        Op::Cfg {
+            hx,
+            hz,
+            diam,
+            style: rng.random(),
+        }
+    } else if r < 975 {
+        Op::Cfg {
+            hx: None,
+            hz: None,
+            diam: Some(!m.diam),
+            style: rng.random(),
+        }
+    } else if r < 985 {
+        Op::Zero
+    } else {
+        Op::Pos
+    }
+}
+
+fn run_random_session(seed: u64, len: usize) -> Result<Stats, String> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut s = Session::new();
+    for _ in 0..len {
+        let op = random_op(&mut rng, &s.model);
+        s.step(&op).map_err(|e| format!("seed {seed}: {e}"))?;
+    }
+    Ok(s.stats)
+}
+
+#[test]
+fn random_sessions_match_the_exact_model() {
+    let mut total = Stats::default();
+    for seed in 0..48u64 {
+        match run_random_session(0x5EED_0000 + seed, 300) {
+            Ok(st) => total.add(&st),
+            Err(e) => panic!("{e}"),
+        }
+    }
+    println!("random sessions: {total:#?}");
+    // The sessions must really exercise what they are meant to.
+    assert!(total.moves > 10_000);
+    assert!(total.endpoint_ties > 1_000, "{total:?}");
+    assert!(total.step_ties > 1_000, "{total:?}");
+    assert!(total.cfg_ties > 10, "{total:?}");
+    assert!(total.cfg_changes > 300 && total.diam_changes > 300 && total.zeros > 50);
+    assert!(total.range_errors > 10 && total.inc_moves > 3_000 && total.omitted_words > 1_000);
+}
+
+// ---------------------------------------------------------------------------
+// Proptest: small sessions, shrinking to a minimal failing one
+// ---------------------------------------------------------------------------
+
+fn len_um() -> impl Strategy<Value = i128> {
+    prop_oneof![
+        4 => (-20_000i64..=20_000).prop_map(i128::from),
+        // Multiples of 0.0025 mm: ties at many prices.
+        3 => (-400i64..=400).prop_map(|k| i128::from(k) * 2_500),
+        1 => (-3_000_000i64..=3_000_000).prop_map(i128::from),
+    ]
+}
+
+fn price_um() -> impl Strategy<Value = i128> {
+    prop::sample::select(vec![
+        500i128, 1_000, 2_000, 2_500, 3_000, 5_000, 7_000, 10_000, 12_500, 50_000,
+    ])
+}
+
+fn op_strategy() -> impl Strategy<Value = Op> {
+    prop_oneof![
+        8 => (
+            prop::option::weighted(0.85, len_um()),
+            prop::option::weighted(0.85, len_um()),
+            any::<bool>(),
+            any::<u8>(),
+        )
+            .prop_map(|(x, z, inc, style)| Op::Move { x, z, inc, style }),
+        2 => (
+            prop::option::of(price_um()),
+            prop::option::of(price_um()),
+            prop::option::of(any::<bool>()),
+            any::<u8>(),
+        )
+            .prop_map(|(hx, hz, diam, style)| Op::Cfg { hx, hz, diam, style }),
+        1 => Just(Op::Zero),
+        1 => Just(Op::Pos),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 160,
+        failure_persistence: None,
+        rng_seed: RngSeed::Fixed(0x7E57_5EED),
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn small_sessions_match_the_exact_model(ops in prop::collection::vec(op_strategy(), 1..40)) {
+        let mut s = Session::new();
+        for op in &ops {
+            if let Err(e) = s.step(op) {
+                return Err(TestCaseError::fail(e));
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Closed paths and split segments
+// ---------------------------------------------------------------------------
+
+#[test]
+fn closed_paths_return_to_zero_with_zero_impulse_sums() {
+    let mut moves = 0u64;
+    for seed in 0..24u64 {
+        let mut rng = ChaCha8Rng::seed_from_u64(0xC105_ED00 + seed);
+        let mut s = Session::new();
+        let cfg = Op::Cfg {
+            hx: Some(price(&mut rng)),
+            hz: Some(price(&mut rng)),
+            diam: Some(rng.random_bool(0.5)),
+            style: 0,
+        };
+        s.step(&cfg).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+
+        // A path from the program zero, absolute and incremental blocks,
+        // back to zero by an absolute block.
+        let (mut sx, mut sz) = (0i128, 0i128);
+        let n = rng.random_range(5..60);
+        for i in 0..=n {
+            let op = if i == n {
+                Op::Move {
+                    x: Some(0),
+                    z: Some(0),
+                    inc: false,
+                    style: 0,
+                }
+            } else {
+                let inc = rng.random_bool(0.4);
+                let m = &s.model;
+                Op::Move {
+                    x: Some(axis_word(&mut rng, m.hx, m.cx, m.px, m.diam, inc)),
+                    z: Some(axis_word(&mut rng, m.hz, m.cz, m.pz, false, inc)),
+                    inc,
+                    style: 0,
+                }
+            };
+            let body = s.step(&op).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+            moves += 1;
+            if body.starts_with("OK") {
+                sx += field(&body, "NX").parse::<i128>().unwrap();
+                sz += field(&body, "NZ").parse::<i128>().unwrap();
+            }
+            if i == n {
+                assert_eq!(field(&body, "PX"), "0", "seed {seed}: {body}");
+                assert_eq!(field(&body, "PZ"), "0", "seed {seed}: {body}");
+            }
+        }
+        assert_eq!(
+            (sx, sz),
+            (0, 0),
+            "seed {seed}: impulse sums of a closed path"
+        );
+
+        // A closed path of increments from wherever the axes are: the words
+        // sum to zero, so do the impulses, and the registers come back.
+        let start = Op::Move {
+            x: Some(rng.random_range(-9_999_999..=9_999_999)),
+            z: Some(rng.random_range(-9_999_999..=9_999_999)),
+            inc: false,
+            style: 0,
+        };
+        let body = s
+            .step(&start)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        if !body.starts_with("OK") {
+            continue;
+        }
+        let (px0, pz0) = (s.model.px, s.model.pz);
+        let (mut wx, mut wz, mut sx, mut sz) = (0i128, 0i128, 0i128, 0i128);
+        let n = rng.random_range(3..40);
+        for i in 0..=n {
+            let (x, z) = if i == n {
+                (-wx, -wz)
+            } else {
+                let m = &s.model;
+                (
+                    axis_word(&mut rng, m.hx, m.cx, m.px, m.diam, true),
+                    axis_word(&mut rng, m.hz, m.cz, m.pz, false, true),
+                )
+            };
+            let op = Op::Move {
+                x: Some(x),
+                z: Some(z),
+                inc: true,
+                style: 0,
+            };
+            let body = s.step(&op).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+            moves += 1;
+            if body.starts_with("OK") {
+                wx += x;
+                wz += z;
+                sx += field(&body, "NX").parse::<i128>().unwrap();
+                sz += field(&body, "NZ").parse::<i128>().unwrap();
+            } else {
+                assert!(i < n, "seed {seed}: the closing block was refused: {body}");
+            }
+        }
+        assert_eq!(
+            (sx, sz),
+            (0, 0),
+            "seed {seed}: impulse sums of a closed path"
+        );
+        assert_eq!((s.model.px, s.model.pz), (px0, pz0), "seed {seed}");
+    }
+    println!("closed paths: {moves} blocks");
+}
+
+#[test]
+fn splitting_a_segment_keeps_the_end_point() {
+    for seed in 0..40u64 {
+        let mut rng = ChaCha8Rng::seed_from_u64(0x5B11_7000 + seed);
+        let hx = price(&mut rng).max(500);
+        let hz = price(&mut rng).max(500);
+        let diam = rng.random_bool(0.5);
+        let (x, z): (i128, i128) = (
+            rng.random_range(-3_000_000..=3_000_000),
+            rng.random_range(-3_000_000..=3_000_000),
+        );
+        let cfg = Op::Cfg {
+            hx: Some(hx),
+            hz: Some(hz),
+            diam: Some(diam),
+            style: 0,
+        };
+        let mut whole = Session::new();
+        whole.step(&cfg).unwrap();
+        let one = Op::Move {
+            x: Some(x),
+            z: Some(z),
+            inc: false,
+            style: 0,
+        };
+        let end = whole
+            .step(&one)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+
+        let mut split = Session::new();
+        split.step(&cfg).unwrap();
+        let pieces = rng.random_range(2..12);
+        let (mut dx, mut dz) = (0i128, 0i128);
+        let mut body = String::new();
+        for i in 1..=pieces {
+            // Uneven increments with up to 6 decimals that add up exactly.
+            let (ix, iz) = if i == pieces {
+                (x - dx, z - dz)
+            } else {
+                (
+                    (x - dx) * rng.random_range(1..=9) / 10,
+                    (z - dz) * rng.random_range(1..=9) / 10,
+                )
+            };
+            dx += ix;
+            dz += iz;
+            let op = Op::Move {
+                x: Some(ix),
+                z: Some(iz),
+                inc: true,
+                style: 0,
+            };
+            body = split
+                .step(&op)
+                .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        }
+        assert_eq!(
+            (field(&body, "PX"), field(&body, "PZ")),
+            (field(&end, "PX"), field(&end, "PZ")),
+            "seed {seed}: split into {pieces} pieces"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Ties, by hand
+// ---------------------------------------------------------------------------
+
+/// `OK NX= NZ= PX= PZ= SEQ=` for a block with the given step bytes.
+fn move_reply(nx: i128, nz: i128, px: i128, pz: i128, steps: &[u8]) -> String {
+    format!(
+        "OK NX={nx} NZ={nz} PX={px} PZ={pz} SEQ={:08X}",
+        crc32(steps)
+    )
+}
+
+/// Runs `line` (a `MOVE`) and checks it against the model and the literal.
+fn check_literal(s: &mut Session, x: Option<i128>, z: Option<i128>, inc: bool, want: &str) {
+    let op = Op::Move {
+        x,
+        z,
+        inc,
+        style: 0,
+    };
+    let got = s.step(&op).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(got, want, "request {:?}", op.render());
+}
+
+#[test]
+fn crc_and_checksum_are_the_standard_ones() {
+    assert_eq!(crc32(b""), 0);
+    assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+    assert_eq!(xor_sum("OK"), b'O' ^ b'K');
+    assert!(checked_body("OK*04").is_ok());
+    assert!(checked_body("OK*05").is_err());
+    assert!(checked_body("OK*4").is_err());
+}
+
+#[test]
+fn model_self_checks() {
+    assert_eq!(q_div(1, 2), 1);
+    assert_eq!(q_div(-1, 2), -1);
+    assert_eq!(q_div(3, 2), 2);
+    assert_eq!(q_div(-3, 2), -2);
+    assert_eq!(q_div(49, 100), 0);
+    assert_eq!(q_div(-51, 100), -1);
+    assert_eq!(q_div(5, -2), -3);
+    assert_eq!(fmt4(Ratio::new(-1, 20_000)), "-0.0001");
+    assert_eq!(fmt4(Ratio::new(-49, 1_000_000)), "0.0000");
+    assert_eq!(fmt4(Ratio::micro(12_345_678_900)), "12345.6789");
+    assert_eq!(fmt_len(-1_500_000, 0), "-1.5");
+    assert_eq!(fmt_len(2_000_000, 2), "+2");
+    assert_eq!(fmt_len(5, 4), "0.000005");
+    let mut t = 0;
+    assert_eq!(step_sequence(4, 2, &mut t), [0x03, 0x01, 0x03, 0x01]);
+    assert_eq!(step_sequence(-4, -2, &mut t), [0x0F, 0x05, 0x0F, 0x05]);
+    assert_eq!(step_sequence(1, 4, &mut t), [0x02, 0x03, 0x02, 0x02]);
+    assert_eq!(step_sequence(-1, -4, &mut t), [0x0A, 0x0F, 0x0A, 0x0A]);
+    assert_eq!(step_sequence(3, -3, &mut t), [0x0B, 0x0B, 0x0B]);
+    assert_eq!(step_sequence(0, 0, &mut t), []);
+    assert_eq!(t, 6);
+}
+
+#[test]
+fn ties_round_away_from_zero() {
+    // Power-on: HX 0.005 on the radius, HZ 0.01, X words are diameters.
+    // X=0.005 is a radius of 0.0025 = half an impulse.
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        Some(5_000),
+        None,
+        false,
+        &move_reply(1, 0, 1, 0, &[0x01]),
+    );
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        Some(-5_000),
+        None,
+        false,
+        &move_reply(-1, 0, -1, 0, &[0x05]),
+    );
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        None,
+        Some(5_000),
+        false,
+        &move_reply(0, 1, 0, 1, &[0x02]),
+    );
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        None,
+        Some(-15_000),
+        false,
+        &move_reply(0, -2, 0, -2, &[0x0A, 0x0A]),
+    );
+
+    // The same ties in one session, the carry crossing zero.
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        Some(5_000),
+        None,
+        false,
+        &move_reply(1, 0, 1, 0, &[0x01]),
+    );
+    check_literal(
+        &mut s,
+        Some(-5_000),
+        None,
+        false,
+        &move_reply(-2, 0, -1, 0, &[0x05; 2]),
+    );
+    check_literal(
+        &mut s,
+        Some(15_000),
+        None,
+        false,
+        &move_reply(3, 0, 2, 0, &[0x01; 3]),
+    );
+    check_literal(
+        &mut s,
+        None,
+        Some(5_000),
+        false,
+        &move_reply(0, 1, 2, 1, &[0x02]),
+    );
+    check_literal(
+        &mut s,
+        None,
+        Some(-15_000),
+        false,
+        &move_reply(0, -3, 2, -2, &[0x0A; 3]),
+    );
+    check_literal(
+        &mut s,
+        None,
+        Some(25_000),
+        false,
+        &move_reply(0, 5, 2, 3, &[0x02; 5]),
+    );
+    // Incremental words reaching ties: -0.0025 mm radius, +0.01 mm on Z.
+    check_literal(
+        &mut s,
+        Some(-20_000),
+        Some(10_000),
+        true,
+        &move_reply(-3, 1, -1, 4, &[0x05, 0x07, 0x05]),
+    );
+    assert_eq!(
+        s.step(&Op::Pos).unwrap(),
+        "OK PX=-1 PZ=4 X=-0.0050 Z=0.0350"
+    );
+
+    // Just off the tie, both sides, to the micrometre.
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        Some(4_999),
+        Some(4_999),
+        false,
+        &move_reply(0, 0, 0, 0, &[]),
+    );
+    check_literal(
+        &mut s,
+        Some(5_001),
+        Some(5_001),
+        false,
+        &move_reply(1, 1, 1, 1, &[0x03]),
+    );
+    check_literal(
+        &mut s,
+        Some(-4_999),
+        Some(-4_999),
+        false,
+        &move_reply(-1, -1, 0, 0, &[0x0F]),
+    );
+    check_literal(
+        &mut s,
+        Some(-5_001),
+        Some(-5_001),
+        false,
+        &move_reply(-1, -1, -1, -1, &[0x0F]),
+    );
+
+    // Radius words (DIAM=0).
+    let mut s = Session::new();
+    s.step(&Op::Cfg {
+        hx: None,
+        hz: None,
+        diam: Some(false),
+        style: 0,
+    })
+    .unwrap();
+    check_literal(
+        &mut s,
+        Some(2_500),
+        None,
+        false,
+        &move_reply(1, 0, 1, 0, &[0x01]),
+    );
+    check_literal(
+        &mut s,
+        Some(-7_500),
+        None,
+        false,
+        &move_reply(-3, 0, -2, 0, &[0x05; 3]),
+    );
+
+    // A tie at the finest price: half a micrometre on the radius.
+    let mut s = Session::new();
+    s.step(&Op::Cfg {
+        hx: Some(1),
+        hz: Some(1),
+        diam: None,
+        style: 0,
+    })
+    .unwrap();
+    check_literal(
+        &mut s,
+        Some(1),
+        None,
+        false,
+        &move_reply(1, 0, 1, 0, &[0x01]),
+    );
+    check_literal(
+        &mut s,
+        Some(-1),
+        None,
+        false,
+        &move_reply(-2, 0, -1, 0, &[0x05; 2]),
+    );
+    // The diameter -0.000001 prints as a zero without sign.
+    assert_eq!(s.step(&Op::Pos).unwrap(), "OK PX=-1 PZ=0 X=0.0000 Z=0.0000");
+
+    // Ties inside a block: the other axis at Q(i·Δb/|Δlead|).
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        Some(40_000),
+        Some(20_000),
+        false,
+        &move_reply(4, 2, 4, 2, &[0x03, 0x01, 0x03, 0x01]),
+    );
+    check_literal(
+        &mut s,
+        Some(0),
+        Some(0),
+        false,
+        &move_reply(-4, -2, 0, 0, &[0x0F, 0x05, 0x0F, 0x05]),
+    );
+    check_literal(
+        &mut s,
+        Some(10_000),
+        Some(40_000),
+        false,
+        &move_reply(1, 4, 1, 4, &[0x02, 0x03, 0x02, 0x02]),
+    );
+    check_literal(
+        &mut s,
+        Some(0),
+        Some(0),
+        false,
+        &move_reply(-1, -4, 0, 0, &[0x0A, 0x0F, 0x0A, 0x0A]),
+    );
+    // Equal counts: X leads, every event diagonal.
+    check_literal(
+        &mut s,
+        Some(30_000),
+        Some(-30_000),
+        false,
+        &move_reply(3, -3, 3, -3, &[0x0B; 3]),
+    );
+
+    // CFG re-expresses a register at a tie: radius 0.015 at HX 0.01 is 1.5.
+    let mut s = Session::new();
+    check_literal(
+        &mut s,
+        Some(30_000),
+        Some(-15_000),
+        false,
+        &move_reply(3, -2, 3, -2, &[0x0B, 0x01, 0x0B]),
+    );
+    s.step(&Op::Cfg {
+        hx: Some(10_000),
+        hz: Some(10_000),
+        diam: None,
+        style: 0,
+    })
+    .unwrap();
+    assert_eq!(
+        s.step(&Op::Pos).unwrap(),
+        "OK PX=2 PZ=-2 X=0.0300 Z=-0.0150"
+    );
+    check_literal(
+        &mut s,
+        Some(-30_000),
+        None,
+        true,
+        &move_reply(-2, 0, 0, -2, &[0x05; 2]),
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Range
+// ---------------------------------------------------------------------------
+
+/// Sends `op`, expects `ERR RANGE`, and checks that `POS` and `CFG` are as
+/// before.
+fn expect_range(s: &mut Session, op: &Op) {
+    let pos = s.send("POS").unwrap();
+    let cfg = s.send("CFG").unwrap();
+    let got = s.step(op).unwrap_or_else(|e| panic!("{e}"));
+    assert!(got.starts_with("ERR RANGE"), "{:?} -> {got}", op.render());
+    assert_eq!(s.send("POS").unwrap(), pos, "after {:?}", op.render());
+    assert_eq!(s.send("CFG").unwrap(), cfg, "after {:?}", op.render());
+}
+
+#[test]
+fn blocks_beyond_a_million_impulses_are_refused() {
+    let mv = |x: Option<i128>, z: Option<i128>, inc: bool| Op::Move {
+        x,
+        z,
+        inc,
+        style: 0,
+    };
+
+    // Z at 0.01: 10000.01 mm is 1 000 001 impulses; 10000.005 is a tie that
+    // rounds to 1 000 001.
+    let mut s = Session::new();
+    expect_range(&mut s, &mv(None, Some(-10_000_010_000), false));
+    expect_range(&mut s, &mv(None, Some(10_000_005_000), false));
+    expect_range(&mut s, &mv(Some(1_000), Some(10_000_005_000), false));
+    // X at 0.005 on the radius: a diameter of 10000.01 is 1 000 001.
+    expect_range(&mut s, &mv(Some(10_000_010_000), Some(1_000), false));
+    expect_range(&mut s, &mv(Some(-10_000_005_000), None, false));
+    // After a refused block the next one starts from the unchanged state.
+    check_literal(
+        &mut s,
+        Some(5_000),
+        Some(-5_000),
+        false,
+        &move_reply(1, -1, 1, -1, &[0x0B]),
+    );
+    expect_range(&mut s, &mv(None, Some(10_000_000_000), true));
+    check_literal(
+        &mut s,
+        None,
+        Some(5_000),
+        true,
+        &move_reply(0, 1, 1, 0, &[0x02]),
+    );
+
+    // The finest price: one micrometre on the radius.
+    let mut s = Session::new();
+    s.step(&Op::Cfg {
+        hx: Some(1),
+        hz: Some(1),
+        diam: Some(false),
+        style: 0,
+    })
+    .unwrap();
+    expect_range(&mut s, &mv(Some(1_000_001), None, false));
+    expect_range(&mut s, &mv(Some(-1_000_001), Some(3), false));
+    expect_range(&mut s, &mv(None, Some(1_000_001), true));
+    // Exactly a million is a block the machine takes.
+    let got = s.step(&mv(Some(1_000_000), None, false)).unwrap();
+    assert!(
+        got.starts_with("OK NX=1000000 NZ=0 PX=1000000 PZ=0 SEQ="),
+        "{got}"
+    );
+    expect_range(&mut s, &mv(Some(-1), None, false));
+    expect_range(&mut s, &mv(Some(1_000_001), None, true));
+
+    // Positions beyond 999 999 999 impulses, reached by a change of price.
+    let mut s = Session::new();
+    s.step(&Op::Cfg {
+        hx: Some(1_000_000),
+        hz: Some(1_000_000),
+        diam: None,
+        style: 0,
+    })
+    .unwrap();
+    // Diameter 2000 → radius 1000 mm → 10^9 µm impulses: too many.
+    s.step(&mv(Some(2_000_000_000), Some(999_999_999), false))
+        .unwrap();
+    expect_range(
+        &mut s,
+        &Op::Cfg {
+            hx: Some(1),
+            hz: None,
+            diam: Some(false),
+            style: 0,
+        },
+    );
+    // Radius 999.999999 mm is 999 999 999 impulses: held.
+    s.step(&mv(Some(1_999_999_998), None, false)).unwrap();
+    s.step(&Op::Cfg {
+        hx: Some(1),
+        hz: Some(1),
+        diam: None,
+        style: 0,
+    })
+    .unwrap();
+    assert_eq!(s.model.px, POS_MAX);
+    assert_eq!(s.model.pz, POS_MAX);
+    expect_range(&mut s, &mv(Some(2), None, true));
+    expect_range(&mut s, &mv(None, Some(1), true));
+    let got = s.step(&mv(Some(-2), Some(-1), true)).unwrap();
+    assert!(got.starts_with("OK NX=-1 NZ=-1 "), "{got}");
 }

@@ -1,0 +1,326 @@
+//! The built-in scenarios of the main job.
+//!
+//! - the closed tool paths of Kosenko's table 21 (lathe АТПр-2М12, carriage
+//!   0.01 mm and cross slide 0.005 mm per impulse);
+//! - the contours of Krylenko's parts (Fig. 12, 17, 22, 24) as plain moves;
+//! - seeded random blocks: absolute and incremental words, diameters, values
+//!   with up to 6 decimals, exact rounding ties, price and mode changes.
+
+use crate::compare::{Scenario, Step};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// One row of Kosenko's table 21, with the seed's axes renamed to ours: the
+/// seed's `x` (carriage, 0.01 mm) is our Z, its `y` (cross slide on the
+/// radius, 0.005 mm) is our X radius.
+#[derive(Clone, Copy, Debug)]
+pub struct Table21Row {
+    /// The seed's point number.
+    pub point: u32,
+    /// Z coordinate, mm (the seed's `x`).
+    pub z: &'static str,
+    /// X radius, mm (the seed's `y`).
+    pub x: &'static str,
+    /// Z impulses of the move into this point as printed (`None`: no move printed).
+    pub printed_nz: Option<i64>,
+    /// X impulses of the move into this point as printed.
+    pub printed_nx: Option<i64>,
+}
+
+const fn row(
+    point: u32,
+    z: &'static str,
+    x: &'static str,
+    printed_nz: Option<i64>,
+    printed_nx: Option<i64>,
+) -> Table21Row {
+    Table21Row {
+        point,
+        z,
+        x,
+        printed_nz,
+        printed_nx,
+    }
+}
+
+/// Kosenko's table 21: four closed tool paths, each starting and ending at its
+/// tool's reference point. The coordinates are the table's; where its
+/// printed figures slip, the coordinate consistent with the rest of the row is
+/// used and the slip is noted:
+/// - point 1: ΔZ printed `12400` without its sign (the move is −12400);
+/// - point 9: ΔX printed as 2.32 mm, the move is 32 − 29.18 = 2.82 mm (= the
+///   printed 564 impulses);
+/// - point 13: X printed as −20.95; the row's own Δ (−4.05 mm, −810) puts it at
+///   +20.95;
+/// - point 20 and 23: the millimetre columns lose or flip a sign; the impulse
+///   columns are right;
+/// - point 25: ΔX printed `25606` without its sign (the move is −25606);
+/// - the third path's X check sum is printed Σ− = 20206, the moves give 24206.
+pub const TABLE21_PATHS: [&[Table21Row]; 4] = [
+    &[
+        row(0, "246", "150", None, None),
+        row(1, "122", "0", Some(12400), Some(-30000)),
+        row(2, "119.79", "0", Some(-221), None),
+        row(3, "119.79", "24", None, Some(4800)),
+        row(4, "121", "24", Some(121), None),
+        row(5, "121", "22.16", None, Some(-368)),
+        row(6, "90.3", "22.16", Some(-3070), None),
+        row(7, "60.5", "29.18", Some(-2980), Some(1404)),
+        row(8, "40.5", "29.18", Some(-2000), None),
+        row(9, "40.5", "32", None, Some(564)),
+        row(10, "246", "150", Some(20550), Some(23600)),
+    ],
+    &[
+        row(11, "271", "115", None, None),
+        row(12, "89.89", "25", Some(-18111), Some(-18000)),
+        row(13, "89.89", "20.95", None, Some(-810)),
+        row(14, "89.89", "32", None, Some(2210)),
+        row(15, "39.89", "32", Some(-5000), None),
+        row(16, "39.89", "26.92", None, Some(-1016)),
+        row(17, "39.89", "35", None, Some(1616)),
+        row(18, "271", "115", Some(23111), Some(16000)),
+    ],
+    &[
+        row(19, "251", "150", None, None),
+        row(20, "80", "28.97", Some(-17100), Some(-24206)),
+        row(21, "42", "28.97", Some(-3800), None),
+        row(22, "42", "32", None, Some(606)),
+        row(23, "251", "150", Some(20900), Some(23600)),
+    ],
+    &[
+        row(24, "251", "150", None, None),
+        row(25, "121", "21.97", Some(-13000), Some(25606)),
+        row(26, "92", "21.97", Some(-2900), None),
+        row(27, "92", "24", None, Some(406)),
+        row(28, "251", "150", Some(15900), Some(25200)),
+    ],
+];
+
+/// The check sums printed under each path of table 21: (Σ+ Z, Σ− Z, Σ+ X,
+/// Σ− X), magnitudes as printed (the third path's Σ− X is a slip).
+pub const TABLE21_PRINTED_SUMS: [(i64, i64, i64, i64); 4] = [
+    (20671, 20671, 30368, 30368),
+    (23111, 23111, 19826, 19826),
+    (20900, 20900, 24206, 20206),
+    (15900, 15900, 25606, 25606),
+];
+
+/// Table 21 as a scenario: radius programming at 0.005/0.01 mm, each path
+/// driven from its reference point through its points back to it.
+pub fn table21() -> Scenario {
+    let mut steps = vec![
+        Step::Cfg {
+            hx: Some("0.005".into()),
+            hz: Some("0.01".into()),
+            diam: Some(false),
+        },
+        Step::Zero,
+    ];
+    for path in TABLE21_PATHS {
+        for r in path {
+            steps.push(Step::to(r.x, r.z));
+        }
+    }
+    steps.push(Step::to("0", "0"));
+    Scenario {
+        name: "Kosenko table 21 (АТПр-2М12 tool paths)".into(),
+        steps,
+    }
+}
+
+/// Krylenko's part programs as plain moves (diameter words, compensated
+/// points as printed, arcs replaced by their end points), each run from and
+/// back to its approach point.
+pub fn krylenko() -> Scenario {
+    let programs: [&[(&str, &str)]; 4] = [
+        // Fig. 12: external tapers, r 0.4.
+        &[
+            ("30", "10"),
+            ("27.532", "0"),
+            ("48", "-10.234"),
+            ("48", "-46.234"),
+            ("67.532", "-56"),
+            ("93.532", "-56"),
+            ("114", "-66.234"),
+            ("114", "10"),
+            ("30", "10"),
+        ],
+        // Fig. 17: internal tapers.
+        &[
+            ("88", "10"),
+            ("78.468", "0"),
+            ("50", "-14.234"),
+            ("50", "-34.234"),
+            ("28.468", "-45"),
+            ("12", "-45"),
+            ("12", "10"),
+            ("88", "10"),
+        ],
+        // Fig. 22: arcs R2.4, R2.6, R4.4 (end points), line 12 at −14.4.
+        &[
+            ("10", "10"),
+            ("7.2", "0"),
+            ("12", "-2.4"),
+            ("12", "-14.4"),
+            ("17.2", "-17"),
+            ("29.2", "-17"),
+            ("38", "-21.4"),
+            ("38", "10"),
+            ("10", "10"),
+        ],
+        // Fig. 24: hemisphere, as printed.
+        &[
+            ("30", "10"),
+            ("20.8", "0"),
+            ("0", "-10.4"),
+            ("0", "10"),
+            ("30", "10"),
+        ],
+    ];
+    let mut steps = vec![
+        Step::Cfg {
+            hx: Some("0.005".into()),
+            hz: Some("0.01".into()),
+            diam: Some(true),
+        },
+        Step::Zero,
+    ];
+    for program in programs {
+        for &(x, z) in program {
+            steps.push(Step::to(x, z));
+        }
+    }
+    steps.push(Step::to("0", "0"));
+    Scenario {
+        name: "Krylenko part contours (Fig. 12, 17, 22, 24) as moves".into(),
+        steps,
+    }
+}
+
+/// Formats a count of nanometres (10⁻⁶ mm) as an exact decimal, trailing
+/// zeros dropped.
+pub fn nm_to_decimal(nm: i64) -> String {
+    let sign = if nm < 0 { "-" } else { "" };
+    let a = nm.unsigned_abs();
+    let (int, frac) = (a / 1_000_000, a % 1_000_000);
+    if frac == 0 {
+        format!("{sign}{int}")
+    } else {
+        let f = format!("{frac:06}");
+        format!("{sign}{int}.{}", f.trim_end_matches('0'))
+    }
+}
+
+/// Prices the random scenario switches between, in nm (X on the radius).
+const X_PRICES_NM: [i64; 5] = [5_000, 1_000, 2_500, 10_000, 2_000];
+const Z_PRICES_NM: [i64; 5] = [10_000, 5_000, 1_000, 2_500, 2_000];
+
+/// `n` seeded random blocks, with the configuration changes and program
+/// zeros between them. The same seed gives the same scenario.
+pub fn random(seed: u64, n: usize) -> Scenario {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut steps = vec![
+        Step::Cfg {
+            hx: Some("0.005".into()),
+            hz: Some("0.01".into()),
+            diam: Some(true),
+        },
+        Step::Zero,
+    ];
+    let (mut hx, mut hz, mut diam) = (5_000i64, 10_000i64, true);
+    // Commanded coordinates in nm: X as a diameter (twice the radius, so an
+    // odd count is a radius with half a nanometre), Z.
+    let (mut cx, mut cz) = (0i64, 0i64);
+    let mut blocks = 0;
+    while blocks < n {
+        let roll: u32 = rng.random_range(0..1000);
+        if roll < 10 {
+            let nhx = X_PRICES_NM[rng.random_range(0..X_PRICES_NM.len())];
+            let nhz = Z_PRICES_NM[rng.random_range(0..Z_PRICES_NM.len())];
+            let nd = rng.random_bool(0.7);
+            // Radius words need an even diameter (odd only under DIAM=1).
+            if !nd && cx % 2 != 0 {
+                cx -= 1;
+                steps.push(Step::Move {
+                    x: Some(nm_to_decimal(cx)),
+                    z: None,
+                    inc: false,
+                });
+                blocks += 1;
+            }
+            steps.push(Step::Cfg {
+                hx: Some(nm_to_decimal(nhx)),
+                hz: Some(nm_to_decimal(nhz)),
+                diam: Some(nd),
+            });
+            (hx, hz, diam) = (nhx, nhz, nd);
+            continue;
+        }
+        if roll < 15 {
+            steps.push(Step::Zero);
+            (cx, cz) = (0, 0);
+            continue;
+        }
+        let inc = rng.random_bool(0.3);
+        // A target within a lathe's working space, in the axis' written unit.
+        let target = |rng: &mut ChaCha8Rng, now: i64, lo: i64, hi: i64, h: i64| -> i64 {
+            match rng.random_range(0..4) {
+                // An exact tie: an odd number of half impulses.
+                0 => rng.random_range(lo / h..hi / h) * h + h / 2,
+                // A programmer's round value, 0.01 mm.
+                1 => rng.random_range(lo / 10_000..hi / 10_000) * 10_000,
+                // Any value with 6 decimals.
+                2 => rng.random_range(lo..hi),
+                // A short move near the current point.
+                _ => (now + rng.random_range(-50_000..50_000)).clamp(lo, hi),
+            }
+        };
+        let x = if rng.random_bool(0.85) {
+            let mut t = target(&mut rng, cx, -300_000_000, 300_000_000, 2 * hx);
+            if !diam {
+                t -= t.rem_euclid(2);
+            }
+            let w = if inc { t - cx } else { t };
+            cx = t;
+            Some(nm_to_decimal(if diam { w } else { w / 2 }))
+        } else {
+            None
+        };
+        let z = if rng.random_bool(0.85) {
+            let t = target(&mut rng, cz, -300_000_000, 50_000_000, hz);
+            let w = if inc { t - cz } else { t };
+            cz = t;
+            Some(nm_to_decimal(w))
+        } else {
+            None
+        };
+        steps.push(Step::Move { x, z, inc });
+        blocks += 1;
+    }
+    Scenario {
+        name: format!("random blocks (seed {seed})"),
+        steps,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimals_are_exact() {
+        assert_eq!(nm_to_decimal(0), "0");
+        assert_eq!(nm_to_decimal(-1), "-0.000001");
+        assert_eq!(nm_to_decimal(12_500_000), "12.5");
+        assert_eq!(nm_to_decimal(-150_000_000), "-150");
+    }
+
+    #[test]
+    fn random_is_reproducible_and_sized() {
+        let a = random(7, 500);
+        let b = random(7, 500);
+        assert_eq!(a.steps, b.steps);
+        assert_eq!(a.blocks(), 500);
+        assert_ne!(random(8, 500).steps, a.steps);
+    }
+}
