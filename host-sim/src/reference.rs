@@ -374,7 +374,7 @@ fn normalise_price(axis: char, h_mm: f64) -> f64 {
     let micro = h_mm * 1e6;
     let q = micro.round();
     assert!(
-        q >= 1.0 && q <= 1e12 && (micro - q).abs() <= 1e-6 * q,
+        (1.0..=1e12).contains(&q) && (micro - q).abs() <= 1e-6 * q,
         "{axis} price must be a decimal with at most 6 decimals, got {h_mm}"
     );
     q / 1e6

@@ -303,6 +303,52 @@ pub fn random(seed: u64, n: usize) -> Scenario {
     }
 }
 
+/// A mixed session of raw request bytes: calculator and motion requests,
+/// bad input, binary garbage, an over-long line, wrong and right checksums,
+/// every terminator. Two devices that speak the protocol alike answer it with
+/// identical bytes.
+pub fn mixed_session() -> Vec<u8> {
+    let mut s: Vec<u8> = Vec::new();
+    fn push(s: &mut Vec<u8>, l: &str) {
+        s.extend_from_slice(l.as_bytes());
+        s.extend_from_slice(b"\r\n");
+    }
+    let mut line = |l: &str| push(&mut s, l);
+    line("VER");
+    line("CFG");
+    line("cfg hx=0.0025 tol=0.02 pass=rough");
+    line("MOVE X=27.532 Z=0");
+    line("MOVE X=48 Z=-10.234");
+    line("move z=-0.005 inc=1");
+    line("POS");
+    line(&crate::link::with_checksum("MOVE X=93.532 Z=-56"));
+    line("MOVE X=93.532 Z=-56*00");
+    line("MOVE X=1*G1");
+    line("MOVE X=12.1234567");
+    line("MOVE X=1e3");
+    line("MOVE Q=1");
+    line("MOVE X=100000");
+    line("MOVE Z=-99999");
+    line("CFG TIP=12");
+    line("FROB");
+    line("");
+    line("   ");
+    line("ZERO 1");
+    line("CFG DIAM=0");
+    line("MOVE X=0.0025 Z=0.005");
+    line("POS");
+    let mut long = "MOVE X=1 ".to_string();
+    long.push_str(&"0".repeat(200));
+    line(&long);
+    line("POS");
+    let mut tail: Vec<u8> = b"\x00\xff\x1b[A\x7f\xfe\r\nPOS\rPOS\nPOS\r\n\n".to_vec();
+    for l in ["CFG HX=0.005 DIAM=1", "MOVE X=0 Z=0", "ZERO", "POS"] {
+        push(&mut tail, l);
+    }
+    s.extend_from_slice(&tail);
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

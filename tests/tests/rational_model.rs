@@ -422,7 +422,7 @@ fn fmt_len(um: i128, style: u8) -> String {
 
 impl Op {
     fn render(&self) -> String {
-        let (mut words, style) = match *self {
+        let (words, style) = match *self {
             Op::Move { x, z, inc, style } => {
                 let mut w = Vec::new();
                 if let Some(x) = x {
@@ -469,7 +469,7 @@ impl Op {
             Op::Zero => (vec!["ZERO".to_owned()], 0),
             Op::Pos => (vec!["POS".to_owned()], 0),
         };
-        let line = std::mem::take(&mut words).join(" ");
+        let line = words.join(" ");
         if style & 1 != 0 {
             line.to_lowercase()
         } else {
@@ -569,8 +569,12 @@ impl Session {
     /// Runs one request on both sides and compares; a `MOVE` is followed by
     /// a `POS`. Returns the device's reply body.
     fn step(&mut self, op: &Op) -> Result<String, String> {
-        let line = op.render();
-        let got = self.send(&line)?;
+        self.run(&op.render(), op)
+    }
+
+    /// Like [`Session::step`], with `line` the spelling of `op` sent.
+    fn run(&mut self, line: &str, op: &Op) -> Result<String, String> {
+        let got = self.send(line)?;
         let st = &mut self.stats;
         let want = match *op {
             Op::Move { x, z, inc, .. } => {
@@ -987,24 +991,77 @@ fn splitting_a_segment_keeps_the_end_point() {
 // Ties, by hand
 // ---------------------------------------------------------------------------
 
-/// `OK NX= NZ= PX= PZ= SEQ=` for a block with the given step bytes.
-fn move_reply(nx: i128, nz: i128, px: i128, pz: i128, steps: &[u8]) -> String {
-    format!(
-        "OK NX={nx} NZ={nz} PX={px} PZ={pz} SEQ={:08X}",
-        crc32(steps)
-    )
+/// Parses a request length `[+-]digits[.digits]` into micrometres.
+fn parse_len(v: &str) -> i128 {
+    let (neg, v) = match v.strip_prefix('-') {
+        Some(r) => (true, r),
+        None => (false, v.strip_prefix('+').unwrap_or(v)),
+    };
+    let (i, f) = v.split_once('.').unwrap_or((v, ""));
+    assert!(f.len() <= 6, "{v}");
+    let um = i.parse::<i128>().unwrap() * MICRO + format!("{f:0<6}").parse::<i128>().unwrap();
+    if neg {
+        -um
+    } else {
+        um
+    }
 }
 
-/// Runs `line` (a `MOVE`) and checks it against the model and the literal.
-fn check_literal(s: &mut Session, x: Option<i128>, z: Option<i128>, inc: bool, want: &str) {
-    let op = Op::Move {
-        x,
-        z,
-        inc,
-        style: 0,
-    };
-    let got = s.step(&op).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(got, want, "request {:?}", op.render());
+/// The model's view of a literal `MOVE` or `CFG` line.
+fn parse_op(line: &str) -> Op {
+    let mut words = line.split(' ');
+    let cmd = words.next().unwrap();
+    let (mut x, mut z, mut inc) = (None, None, false);
+    let (mut hx, mut hz, mut diam) = (None, None, None);
+    for w in words {
+        let (k, v) = w.split_once('=').unwrap();
+        match k {
+            "X" => x = Some(parse_len(v)),
+            "Z" => z = Some(parse_len(v)),
+            "INC" => inc = v == "1",
+            "HX" => hx = Some(parse_len(v)),
+            "HZ" => hz = Some(parse_len(v)),
+            "DIAM" => diam = Some(v == "1"),
+            _ => panic!("{w}"),
+        }
+    }
+    match cmd {
+        "MOVE" => Op::Move {
+            x,
+            z,
+            inc,
+            style: 0,
+        },
+        "CFG" => Op::Cfg {
+            hx,
+            hz,
+            diam,
+            style: 0,
+        },
+        "ZERO" => Op::Zero,
+        "POS" => Op::Pos,
+        _ => panic!("{line}"),
+    }
+}
+
+/// Sends a literal request, checks it against the model, returns the reply.
+fn req(s: &mut Session, line: &str) -> String {
+    s.run(line, &parse_op(line))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Sends a literal `MOVE`, checks it against the model and against the
+/// literal counts `(NX, NZ)`, positions `(PX, PZ)` and step bytes.
+fn lit(s: &mut Session, line: &str, n: (i128, i128), p: (i128, i128), steps: &[u8]) {
+    let want = format!(
+        "OK NX={} NZ={} PX={} PZ={} SEQ={:08X}",
+        n.0,
+        n.1,
+        p.0,
+        p.1,
+        crc32(steps)
+    );
+    assert_eq!(req(s, line), want, "request {line:?}");
 }
 
 #[test]
@@ -1045,351 +1102,191 @@ fn model_self_checks() {
 #[test]
 fn ties_round_away_from_zero() {
     // Power-on: HX 0.005 on the radius, HZ 0.01, X words are diameters.
-    // X=0.005 is a radius of 0.0025 = half an impulse.
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        Some(5_000),
-        None,
-        false,
-        &move_reply(1, 0, 1, 0, &[0x01]),
+    // X=0.005 is a radius of 0.0025 mm, exactly half an impulse.
+    lit(&mut Session::new(), "MOVE X=0.005", (1, 0), (1, 0), &[0x01]);
+    lit(
+        &mut Session::new(),
+        "MOVE X=-0.005",
+        (-1, 0),
+        (-1, 0),
+        &[0x05],
     );
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        Some(-5_000),
-        None,
-        false,
-        &move_reply(-1, 0, -1, 0, &[0x05]),
-    );
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        None,
-        Some(5_000),
-        false,
-        &move_reply(0, 1, 0, 1, &[0x02]),
-    );
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        None,
-        Some(-15_000),
-        false,
-        &move_reply(0, -2, 0, -2, &[0x0A, 0x0A]),
+    lit(&mut Session::new(), "MOVE Z=0.005", (0, 1), (0, 1), &[0x02]);
+    lit(
+        &mut Session::new(),
+        "MOVE Z=-0.015",
+        (0, -2),
+        (0, -2),
+        &[0x0A; 2],
     );
 
     // The same ties in one session, the carry crossing zero.
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        Some(5_000),
-        None,
-        false,
-        &move_reply(1, 0, 1, 0, &[0x01]),
-    );
-    check_literal(
-        &mut s,
-        Some(-5_000),
-        None,
-        false,
-        &move_reply(-2, 0, -1, 0, &[0x05; 2]),
-    );
-    check_literal(
-        &mut s,
-        Some(15_000),
-        None,
-        false,
-        &move_reply(3, 0, 2, 0, &[0x01; 3]),
-    );
-    check_literal(
-        &mut s,
-        None,
-        Some(5_000),
-        false,
-        &move_reply(0, 1, 2, 1, &[0x02]),
-    );
-    check_literal(
-        &mut s,
-        None,
-        Some(-15_000),
-        false,
-        &move_reply(0, -3, 2, -2, &[0x0A; 3]),
-    );
-    check_literal(
-        &mut s,
-        None,
-        Some(25_000),
-        false,
-        &move_reply(0, 5, 2, 3, &[0x02; 5]),
-    );
-    // Incremental words reaching ties: -0.0025 mm radius, +0.01 mm on Z.
-    check_literal(
-        &mut s,
-        Some(-20_000),
-        Some(10_000),
-        true,
-        &move_reply(-3, 1, -1, 4, &[0x05, 0x07, 0x05]),
-    );
-    assert_eq!(
-        s.step(&Op::Pos).unwrap(),
-        "OK PX=-1 PZ=4 X=-0.0050 Z=0.0350"
+    let s = &mut Session::new();
+    lit(s, "MOVE X=0.005", (1, 0), (1, 0), &[0x01]);
+    lit(s, "MOVE X=-0.005", (-2, 0), (-1, 0), &[0x05; 2]);
+    lit(s, "MOVE X=0.015", (3, 0), (2, 0), &[0x01; 3]);
+    lit(s, "MOVE Z=0.005", (0, 1), (2, 1), &[0x02]);
+    lit(s, "MOVE Z=-0.015", (0, -3), (2, -2), &[0x0A; 3]);
+    lit(s, "MOVE Z=0.025", (0, 5), (2, 3), &[0x02; 5]);
+    // Increments reaching ties: radius 0.0075 − 0.01 = −0.0025, Z 0.035.
+    let steps = [0x05, 0x07, 0x05];
+    lit(s, "MOVE X=-0.02 Z=0.01 INC=1", (-3, 1), (-1, 4), &steps);
+    assert_eq!(req(s, "POS"), "OK PX=-1 PZ=4 X=-0.0050 Z=0.0350");
+
+    // A micrometre either side of the tie.
+    let s = &mut Session::new();
+    lit(s, "MOVE X=0.004999 Z=0.004999", (0, 0), (0, 0), &[]);
+    lit(s, "MOVE X=0.005001 Z=0.005001", (1, 1), (1, 1), &[0x03]);
+    lit(s, "MOVE X=-0.004999 Z=-0.004999", (-1, -1), (0, 0), &[0x0F]);
+    lit(
+        s,
+        "MOVE X=-0.005001 Z=-0.005001",
+        (-1, -1),
+        (-1, -1),
+        &[0x0F],
     );
 
-    // Just off the tie, both sides, to the micrometre.
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        Some(4_999),
-        Some(4_999),
-        false,
-        &move_reply(0, 0, 0, 0, &[]),
-    );
-    check_literal(
-        &mut s,
-        Some(5_001),
-        Some(5_001),
-        false,
-        &move_reply(1, 1, 1, 1, &[0x03]),
-    );
-    check_literal(
-        &mut s,
-        Some(-4_999),
-        Some(-4_999),
-        false,
-        &move_reply(-1, -1, 0, 0, &[0x0F]),
-    );
-    check_literal(
-        &mut s,
-        Some(-5_001),
-        Some(-5_001),
-        false,
-        &move_reply(-1, -1, -1, -1, &[0x0F]),
-    );
+    // Radius words.
+    let s = &mut Session::new();
+    req(s, "CFG DIAM=0");
+    lit(s, "MOVE X=0.0025", (1, 0), (1, 0), &[0x01]);
+    lit(s, "MOVE X=-0.0075", (-3, 0), (-2, 0), &[0x05; 3]);
 
-    // Radius words (DIAM=0).
-    let mut s = Session::new();
-    s.step(&Op::Cfg {
-        hx: None,
-        hz: None,
-        diam: Some(false),
-        style: 0,
-    })
-    .unwrap();
-    check_literal(
-        &mut s,
-        Some(2_500),
-        None,
-        false,
-        &move_reply(1, 0, 1, 0, &[0x01]),
-    );
-    check_literal(
-        &mut s,
-        Some(-7_500),
-        None,
-        false,
-        &move_reply(-3, 0, -2, 0, &[0x05; 3]),
-    );
-
-    // A tie at the finest price: half a micrometre on the radius.
-    let mut s = Session::new();
-    s.step(&Op::Cfg {
-        hx: Some(1),
-        hz: Some(1),
-        diam: None,
-        style: 0,
-    })
-    .unwrap();
-    check_literal(
-        &mut s,
-        Some(1),
-        None,
-        false,
-        &move_reply(1, 0, 1, 0, &[0x01]),
-    );
-    check_literal(
-        &mut s,
-        Some(-1),
-        None,
-        false,
-        &move_reply(-2, 0, -1, 0, &[0x05; 2]),
-    );
-    // The diameter -0.000001 prints as a zero without sign.
-    assert_eq!(s.step(&Op::Pos).unwrap(), "OK PX=-1 PZ=0 X=0.0000 Z=0.0000");
+    // The finest price: a diameter of 1 µm is half an impulse.
+    let s = &mut Session::new();
+    req(s, "CFG HX=0.000001 HZ=0.000001");
+    lit(s, "MOVE X=0.000001", (1, 0), (1, 0), &[0x01]);
+    lit(s, "MOVE X=-0.000001", (-2, 0), (-1, 0), &[0x05; 2]);
+    assert_eq!(req(s, "POS"), "OK PX=-1 PZ=0 X=0.0000 Z=0.0000");
 
     // Ties inside a block: the other axis at Q(i·Δb/|Δlead|).
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        Some(40_000),
-        Some(20_000),
-        false,
-        &move_reply(4, 2, 4, 2, &[0x03, 0x01, 0x03, 0x01]),
+    let s = &mut Session::new();
+    lit(
+        s,
+        "MOVE X=0.04 Z=0.02",
+        (4, 2),
+        (4, 2),
+        &[0x03, 0x01, 0x03, 0x01],
     );
-    check_literal(
-        &mut s,
-        Some(0),
-        Some(0),
-        false,
-        &move_reply(-4, -2, 0, 0, &[0x0F, 0x05, 0x0F, 0x05]),
+    lit(
+        s,
+        "MOVE X=0 Z=0",
+        (-4, -2),
+        (0, 0),
+        &[0x0F, 0x05, 0x0F, 0x05],
     );
-    check_literal(
-        &mut s,
-        Some(10_000),
-        Some(40_000),
-        false,
-        &move_reply(1, 4, 1, 4, &[0x02, 0x03, 0x02, 0x02]),
+    lit(
+        s,
+        "MOVE X=0.01 Z=0.04",
+        (1, 4),
+        (1, 4),
+        &[0x02, 0x03, 0x02, 0x02],
     );
-    check_literal(
-        &mut s,
-        Some(0),
-        Some(0),
-        false,
-        &move_reply(-1, -4, 0, 0, &[0x0A, 0x0F, 0x0A, 0x0A]),
+    lit(
+        s,
+        "MOVE X=0 Z=0",
+        (-1, -4),
+        (0, 0),
+        &[0x0A, 0x0F, 0x0A, 0x0A],
     );
     // Equal counts: X leads, every event diagonal.
-    check_literal(
-        &mut s,
-        Some(30_000),
-        Some(-30_000),
-        false,
-        &move_reply(3, -3, 3, -3, &[0x0B; 3]),
-    );
+    lit(s, "MOVE X=0.03 Z=-0.03", (3, -3), (3, -3), &[0x0B; 3]);
 
     // CFG re-expresses a register at a tie: radius 0.015 at HX 0.01 is 1.5.
-    let mut s = Session::new();
-    check_literal(
-        &mut s,
-        Some(30_000),
-        Some(-15_000),
-        false,
-        &move_reply(3, -2, 3, -2, &[0x0B, 0x01, 0x0B]),
+    let s = &mut Session::new();
+    lit(
+        s,
+        "MOVE X=0.03 Z=-0.015",
+        (3, -2),
+        (3, -2),
+        &[0x0B, 0x01, 0x0B],
     );
-    s.step(&Op::Cfg {
-        hx: Some(10_000),
-        hz: Some(10_000),
-        diam: None,
-        style: 0,
-    })
-    .unwrap();
-    assert_eq!(
-        s.step(&Op::Pos).unwrap(),
-        "OK PX=2 PZ=-2 X=0.0300 Z=-0.0150"
-    );
-    check_literal(
-        &mut s,
-        Some(-30_000),
-        None,
-        true,
-        &move_reply(-2, 0, 0, -2, &[0x05; 2]),
-    );
+    req(s, "CFG HX=0.01");
+    assert_eq!(req(s, "POS"), "OK PX=2 PZ=-2 X=0.0300 Z=-0.0150");
+    lit(s, "MOVE X=-0.03 INC=1", (-2, 0), (0, -2), &[0x05; 2]);
+    // DIAM changes neither coordinates nor registers, only the X readout.
+    req(s, "CFG DIAM=0");
+    assert_eq!(req(s, "POS"), "OK PX=0 PZ=-2 X=0.0000 Z=-0.0150");
+    lit(s, "MOVE X=0.015", (2, 0), (2, -2), &[0x01; 2]);
+    req(s, "CFG DIAM=1");
+    assert_eq!(req(s, "POS"), "OK PX=2 PZ=-2 X=0.0300 Z=-0.0150");
+    lit(s, "MOVE X=-0.01 INC=1", (-1, 0), (1, -2), &[0x05]);
+    req(s, "ZERO");
+    assert_eq!(req(s, "POS"), "OK PX=0 PZ=0 X=0.0000 Z=0.0000");
 }
 
 // ---------------------------------------------------------------------------
 // Range
 // ---------------------------------------------------------------------------
 
-/// Sends `op`, expects `ERR RANGE`, and checks that `POS` and `CFG` are as
-/// before.
-fn expect_range(s: &mut Session, op: &Op) {
+/// Sends `line`, expects `ERR RANGE` (the model too), and checks that `POS`
+/// and `CFG` read as before.
+fn expect_range(s: &mut Session, line: &str) {
     let pos = s.send("POS").unwrap();
     let cfg = s.send("CFG").unwrap();
-    let got = s.step(op).unwrap_or_else(|e| panic!("{e}"));
-    assert!(got.starts_with("ERR RANGE"), "{:?} -> {got}", op.render());
-    assert_eq!(s.send("POS").unwrap(), pos, "after {:?}", op.render());
-    assert_eq!(s.send("CFG").unwrap(), cfg, "after {:?}", op.render());
+    let got = req(s, line);
+    assert!(got.starts_with("ERR RANGE"), "{line:?} -> {got}");
+    assert_eq!(s.send("POS").unwrap(), pos, "after {line:?}");
+    assert_eq!(s.send("CFG").unwrap(), cfg, "after {line:?}");
 }
 
 #[test]
 fn blocks_beyond_a_million_impulses_are_refused() {
-    let mv = |x: Option<i128>, z: Option<i128>, inc: bool| Op::Move {
-        x,
-        z,
-        inc,
-        style: 0,
-    };
-
     // Z at 0.01: 10000.01 mm is 1 000 001 impulses; 10000.005 is a tie that
     // rounds to 1 000 001.
-    let mut s = Session::new();
-    expect_range(&mut s, &mv(None, Some(-10_000_010_000), false));
-    expect_range(&mut s, &mv(None, Some(10_000_005_000), false));
-    expect_range(&mut s, &mv(Some(1_000), Some(10_000_005_000), false));
+    let s = &mut Session::new();
+    expect_range(s, "MOVE Z=-10000.01");
+    expect_range(s, "MOVE Z=10000.005");
+    expect_range(s, "MOVE X=0.001 Z=10000.005");
     // X at 0.005 on the radius: a diameter of 10000.01 is 1 000 001.
-    expect_range(&mut s, &mv(Some(10_000_010_000), Some(1_000), false));
-    expect_range(&mut s, &mv(Some(-10_000_005_000), None, false));
+    expect_range(s, "MOVE X=10000.01 Z=0.001");
+    expect_range(s, "MOVE X=-10000.005");
     // After a refused block the next one starts from the unchanged state.
-    check_literal(
-        &mut s,
-        Some(5_000),
-        Some(-5_000),
-        false,
-        &move_reply(1, -1, 1, -1, &[0x0B]),
-    );
-    expect_range(&mut s, &mv(None, Some(10_000_000_000), true));
-    check_literal(
-        &mut s,
-        None,
-        Some(5_000),
-        true,
-        &move_reply(0, 1, 1, 0, &[0x02]),
-    );
+    lit(s, "MOVE X=0.005 Z=-0.005", (1, -1), (1, -1), &[0x0B]);
+    expect_range(s, "MOVE Z=10000 INC=1");
+    lit(s, "MOVE Z=0.005 INC=1", (0, 1), (1, 0), &[0x02]);
 
     // The finest price: one micrometre on the radius.
-    let mut s = Session::new();
-    s.step(&Op::Cfg {
-        hx: Some(1),
-        hz: Some(1),
-        diam: Some(false),
-        style: 0,
-    })
-    .unwrap();
-    expect_range(&mut s, &mv(Some(1_000_001), None, false));
-    expect_range(&mut s, &mv(Some(-1_000_001), Some(3), false));
-    expect_range(&mut s, &mv(None, Some(1_000_001), true));
+    let s = &mut Session::new();
+    req(s, "CFG HX=0.000001 HZ=0.000001 DIAM=0");
+    expect_range(s, "MOVE X=1.000001");
+    expect_range(s, "MOVE X=-1.000001 Z=0.000003");
+    expect_range(s, "MOVE Z=1.000001 INC=1");
     // Exactly a million is a block the machine takes.
-    let got = s.step(&mv(Some(1_000_000), None, false)).unwrap();
+    let got = req(s, "MOVE X=1");
     assert!(
         got.starts_with("OK NX=1000000 NZ=0 PX=1000000 PZ=0 SEQ="),
         "{got}"
     );
-    expect_range(&mut s, &mv(Some(-1), None, false));
-    expect_range(&mut s, &mv(Some(1_000_001), None, true));
+    expect_range(s, "MOVE X=-0.000001");
+    expect_range(s, "MOVE X=1.000001 INC=1");
 
     // Positions beyond 999 999 999 impulses, reached by a change of price.
-    let mut s = Session::new();
-    s.step(&Op::Cfg {
-        hx: Some(1_000_000),
-        hz: Some(1_000_000),
-        diam: None,
-        style: 0,
-    })
-    .unwrap();
-    // Diameter 2000 → radius 1000 mm → 10^9 µm impulses: too many.
-    s.step(&mv(Some(2_000_000_000), Some(999_999_999), false))
-        .unwrap();
-    expect_range(
-        &mut s,
-        &Op::Cfg {
-            hx: Some(1),
-            hz: None,
-            diam: Some(false),
-            style: 0,
-        },
+    let s = &mut Session::new();
+    req(s, "CFG HX=1 HZ=1");
+    lit(
+        s,
+        "MOVE X=2000 Z=999.999999",
+        (1000, 1000),
+        (1000, 1000),
+        &[0x03; 1000],
     );
+    // Radius 1000 mm is 10^9 impulses of 1 µm; DIAM is not changed either.
+    expect_range(s, "CFG HX=0.000001 DIAM=0");
     // Radius 999.999999 mm is 999 999 999 impulses: held.
-    s.step(&mv(Some(1_999_999_998), None, false)).unwrap();
-    s.step(&Op::Cfg {
-        hx: Some(1),
-        hz: Some(1),
-        diam: None,
-        style: 0,
-    })
-    .unwrap();
-    assert_eq!(s.model.px, POS_MAX);
-    assert_eq!(s.model.pz, POS_MAX);
-    expect_range(&mut s, &mv(Some(2), None, true));
-    expect_range(&mut s, &mv(None, Some(1), true));
-    let got = s.step(&mv(Some(-2), Some(-1), true)).unwrap();
-    assert!(got.starts_with("OK NX=-1 NZ=-1 "), "{got}");
+    lit(s, "MOVE X=1999.999998", (0, 0), (1000, 1000), &[]);
+    req(s, "CFG HX=0.000001 HZ=0.000001");
+    assert_eq!(
+        req(s, "POS"),
+        "OK PX=999999999 PZ=999999999 X=2000.0000 Z=1000.0000"
+    );
+    expect_range(s, "MOVE X=0.000002 INC=1");
+    expect_range(s, "MOVE Z=0.000001 INC=1");
+    lit(
+        s,
+        "MOVE X=-0.000002 Z=-0.000001 INC=1",
+        (-1, -1),
+        (999_999_998, 999_999_998),
+        &[0x0F],
+    );
 }
