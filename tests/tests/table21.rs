@@ -57,7 +57,8 @@ fn printed_impulses_match_except_the_known_slips() {
         }
     }
     assert_eq!(slips, SLIPS);
-    assert_eq!(checked, 40);
+    // 34 impulse figures are printed; all but the two slips match.
+    assert_eq!(checked, 32);
 }
 
 #[test]
