@@ -1,1 +1,101 @@
-fn main() {}
+//! Speed of the motion path: step events, quantizing a block, a whole MOVE.
+
+use core_nostd::crc32::Crc32;
+use core_nostd::impulse::{quantize, ImpulsePrice, Impulses};
+use core_nostd::interleave::{ImpulsePoint, LinearBlock};
+use core_nostd::length::Length;
+use core_nostd::protocol::{Device, Io};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use std::hint::black_box;
+
+fn interleaver(c: &mut Criterion) {
+    let p = |x, z| ImpulsePoint {
+        x: Impulses(x),
+        z: Impulses(z),
+    };
+    let block = LinearBlock::new(p(-12_345, 500), p(87_655, -36_623)).unwrap();
+    let n = block.events().len() as u64;
+    let mut g = c.benchmark_group("interleaver");
+    g.throughput(Throughput::Elements(n));
+    g.bench_function("step events", |b| {
+        b.iter(|| {
+            let mut acc = 0u32;
+            for e in black_box(&block).events() {
+                acc = acc.wrapping_add(u32::from(black_box(e.bits())));
+            }
+            acc
+        })
+    });
+    g.bench_function("step events + SEQ CRC", |b| {
+        b.iter(|| {
+            let mut crc = Crc32::new();
+            for e in black_box(&block).events() {
+                crc.push(e.bits());
+            }
+            crc.finish()
+        })
+    });
+    g.finish();
+}
+
+fn quantizer(c: &mut Criterion) {
+    // 1024 end points with 6 decimals, diameters halved exactly.
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % 600_000_000) as i64 - 300_000_000
+    };
+    let points: Vec<(Length, Length)> = (0..1024)
+        .map(|_| {
+            (
+                Length::from_angstrom(next() * 5).unwrap(),
+                Length::from_angstrom(next() * 10).unwrap(),
+            )
+        })
+        .collect();
+    let (hx, hz) = (ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z);
+    let mut g = c.benchmark_group("quantizer");
+    g.throughput(Throughput::Elements(points.len() as u64));
+    g.bench_function("block end point (2 axes) + block check", |b| {
+        b.iter(|| {
+            let mut from = ImpulsePoint::default();
+            let mut acc = 0i64;
+            for &(x, z) in black_box(&points) {
+                let to = ImpulsePoint {
+                    x: quantize(x, hx).unwrap(),
+                    z: quantize(z, hz).unwrap(),
+                };
+                if let Ok(block) = LinearBlock::new(from, to) {
+                    acc += i64::from(block.delta().0);
+                }
+                from = to;
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+struct Sink(usize);
+impl Io for Sink {
+    fn send(&mut self, line: &[u8]) {
+        self.0 += line.len();
+    }
+}
+
+fn protocol(c: &mut Criterion) {
+    let mut g = c.benchmark_group("protocol");
+    let requests = b"MOVE X=27.532 Z=0\r\nMOVE X=48 Z=-10.234\r\n";
+    g.throughput(Throughput::Elements(2));
+    g.bench_function("MOVE request, short block", |b| {
+        let mut dev = Device::new();
+        let mut sink = Sink(0);
+        b.iter(|| dev.receive_bytes(black_box(requests), &mut sink))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, interleaver, quantizer, protocol);
+criterion_main!(benches);

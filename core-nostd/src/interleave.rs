@@ -209,17 +209,18 @@ mod tests {
 
     /// The rule written with a division per event, as SPEC §2 states it.
     fn by_definition(from: ImpulsePoint, to: ImpulsePoint) -> Vec<u8> {
-        let (dx, dz) = (
-            i64::from(to.x.0 - from.x.0),
-            i64::from(to.z.0 - from.z.0),
-        );
+        let (dx, dz) = (i64::from(to.x.0 - from.x.0), i64::from(to.z.0 - from.z.0));
         let lead_x = dx.abs() >= dz.abs();
         let (dl, db) = if lead_x { (dx, dz) } else { (dz, dx) };
         let l = dl.abs();
         let q = |n: i64, d: i64| {
             // Q(n/d), d > 0, half away from zero.
             let a = (2 * n.abs() + d) / (2 * d);
-            if n < 0 { -a } else { a }
+            if n < 0 {
+                -a
+            } else {
+                a
+            }
         };
         let mut out = Vec::new();
         let mut prev = 0;
@@ -284,6 +285,9 @@ mod tests {
             nz += i64::from(e.z_steps());
             assert!(!e.x_negative() && (e.z_negative() == e.z_steps()));
         }
-        assert_eq!((n, nx, nz), (MAX_BLOCK_IMPULSES, i64::from(m), i64::from(m - 1)));
+        assert_eq!(
+            (n, nx, nz),
+            (MAX_BLOCK_IMPULSES, i64::from(m), i64::from(m - 1))
+        );
     }
 }

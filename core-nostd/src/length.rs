@@ -287,8 +287,13 @@ mod tests {
 
     #[test]
     fn limits_are_checked() {
-        assert!(LENGTH_LIMIT.checked_add(Length::from_angstrom(10).unwrap()).is_none());
-        assert!(LENGTH_LIMIT.neg().checked_sub(Length::from_angstrom(1).unwrap()).is_none());
+        assert!(LENGTH_LIMIT
+            .checked_add(Length::from_angstrom(10).unwrap())
+            .is_none());
+        assert!(LENGTH_LIMIT
+            .neg()
+            .checked_sub(Length::from_angstrom(1).unwrap())
+            .is_none());
         assert!(LENGTH_LIMIT.checked_double().is_none());
         assert_eq!(Length::from_angstrom(3).unwrap().exact_half(), None);
     }

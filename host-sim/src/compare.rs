@@ -113,7 +113,7 @@ pub struct Mismatch {
 }
 
 /// Running totals of a comparison.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Tally {
     /// Blocks compared.
     pub blocks: u64,
@@ -127,19 +127,6 @@ pub struct Tally {
     pub quantizer: TieStats,
     /// Ties of the interleaver `Q(i·Δb/|Δlead|)`.
     pub interleave: TieStats,
-}
-
-impl Default for Tally {
-    fn default() -> Self {
-        Tally {
-            blocks: 0,
-            events: 0,
-            impulses: 0,
-            mismatches: Vec::new(),
-            quantizer: TieStats::new(),
-            interleave: TieStats::new(),
-        }
-    }
 }
 
 impl Tally {
@@ -262,9 +249,7 @@ impl<T: Transport> Comparator<T> {
                 }
             }
             Step::Move { x, z, inc } => {
-                let expected = self
-                    .reference
-                    .move_block(x.as_deref(), z.as_deref(), *inc);
+                let expected = self.reference.move_block(x.as_deref(), z.as_deref(), *inc);
                 self.tally.blocks += 1;
                 self.tally.events += expected.events;
                 self.tally.impulses += expected.nx.unsigned_abs() + expected.nz.unsigned_abs();
@@ -301,6 +286,9 @@ pub fn block_matches(reply: &Reply, b: &RefBlock) -> bool {
         && int("NZ") == Some(b.nz)
         && int("PX") == Some(b.px)
         && int("PZ") == Some(b.pz)
-        && reply.value("SEQ").and_then(|v| u32::from_str_radix(v, 16).ok()) == Some(b.seq)
+        && reply
+            .value("SEQ")
+            .and_then(|v| u32::from_str_radix(v, 16).ok())
+            == Some(b.seq)
         && reply.value("SEQ").map(str::len) == Some(8)
 }

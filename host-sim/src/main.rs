@@ -14,7 +14,11 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 #[derive(Parser)]
-#[command(name = "host-sim", version, about = "Host simulator of the lathe retrofit controller")]
+#[command(
+    name = "host-sim",
+    version,
+    about = "Host simulator of the lathe retrofit controller"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -70,7 +74,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
         Command::Run(args) => run(&args),
-        Command::Serve { stdio: _, pty: true } => serve_pty(),
+        Command::Serve {
+            stdio: _,
+            pty: true,
+        } => serve_pty(),
         Command::Serve { .. } => serve_stdio(),
     };
     match result {

@@ -20,10 +20,18 @@ fn scenarios_over_the_pty_match_the_reference() {
     let device = PtyDevice::start().unwrap();
     let client = Client::open(device.path(), Duration::from_secs(10)).unwrap();
     let mut cmp = Comparator::new(client).unwrap();
-    for s in [scenario::table21(), scenario::krylenko(), scenario::random(5, 200)] {
+    for s in [
+        scenario::table21(),
+        scenario::krylenko(),
+        scenario::random(5, 200),
+    ] {
         cmp.run(&s, |_| {}).unwrap();
     }
-    assert!(cmp.tally.mismatches.is_empty(), "{:?}", cmp.tally.mismatches);
+    assert!(
+        cmp.tally.mismatches.is_empty(),
+        "{:?}",
+        cmp.tally.mismatches
+    );
     assert!(cmp.tally.blocks >= 262);
 }
 
@@ -43,10 +51,21 @@ fn mixed_session_bytes_are_identical_over_the_pty() {
         got.extend_from_slice(line.as_bytes());
         got.extend_from_slice(b"\r\n");
     }
-    assert_eq!(String::from_utf8_lossy(&got), String::from_utf8_lossy(&expected));
+    assert_eq!(
+        String::from_utf8_lossy(&got),
+        String::from_utf8_lossy(&expected)
+    );
     // Every kind of refusal is in the session.
     let text = String::from_utf8_lossy(&expected);
-    for code in ["CHECKSUM", "LINE_TOO_LONG", "EMPTY", "UNKNOWN", "SYNTAX", "VALUE", "RANGE"] {
+    for code in [
+        "CHECKSUM",
+        "LINE_TOO_LONG",
+        "EMPTY",
+        "UNKNOWN",
+        "SYNTAX",
+        "VALUE",
+        "RANGE",
+    ] {
         assert!(text.contains(&format!("ERR {code} ")), "{code}");
     }
     // And the device ended at the program zero it was told.

@@ -117,8 +117,15 @@ fn built_in_scenarios_match_the_reference() {
     ] {
         cmp.run(&s, |_| {}).unwrap();
     }
-    assert!(cmp.tally.mismatches.is_empty(), "{:?}", cmp.tally.mismatches);
-    assert!(cmp.tally.exact_ties() > 50, "the random blocks include exact ties");
+    assert!(
+        cmp.tally.mismatches.is_empty(),
+        "{:?}",
+        cmp.tally.mismatches
+    );
+    assert!(
+        cmp.tally.exact_ties() > 50,
+        "the random blocks include exact ties"
+    );
     assert!(cmp.tally.min_tie_distance() > 1e-7);
 }
 

@@ -23,8 +23,11 @@ fn moves() -> Vec<Vec<(u32, i64, i64)>> {
         .map(|path| {
             path.iter()
                 .map(|row| {
-                    let r = ok(Transport::request(&mut dev, &format!("MOVE X={} Z={}", row.x, row.z))
-                        .unwrap());
+                    let r = ok(Transport::request(
+                        &mut dev,
+                        &format!("MOVE X={} Z={}", row.x, row.z),
+                    )
+                    .unwrap());
                     let n = |k| words_value(&r.last, k).unwrap().parse::<i64>().unwrap();
                     (row.point, n("NX"), n("NZ"))
                 })
@@ -45,7 +48,10 @@ fn printed_impulses_match_except_the_known_slips() {
                 match printed {
                     Some(p) if p == issued => checked += 1,
                     Some(p) => {
-                        assert_eq!(p, -issued, "point {point} {axis}: printed {p}, issued {issued}");
+                        assert_eq!(
+                            p, -issued,
+                            "point {point} {axis}: printed {p}, issued {issued}"
+                        );
                         slips.push((point, axis));
                     }
                     // Nothing printed: the axis does not move (first rows

@@ -115,7 +115,10 @@ mod tests {
 
     #[test]
     fn terminators() {
-        assert_eq!(run(b"A\rB\nC\r\nD"), [Ok(b"A".to_vec()), Ok(b"B".to_vec()), Ok(b"C".to_vec())]);
+        assert_eq!(
+            run(b"A\rB\nC\r\nD"),
+            [Ok(b"A".to_vec()), Ok(b"B".to_vec()), Ok(b"C".to_vec())]
+        );
         assert_eq!(run(b"\r\n\r\n"), [Ok(StdVec::new()), Ok(StdVec::new())]);
         assert_eq!(run(b"\n\r"), [Ok(StdVec::new()), Ok(StdVec::new())]);
         assert_eq!(run(b"\r\r\n"), [Ok(StdVec::new()), Ok(StdVec::new())]);

@@ -189,7 +189,10 @@ impl Session {
 
     fn run<'a, I: Io>(&mut self, line: &'a [u8], io: &mut I) -> Outcome<'a> {
         let body = strip_checksum(line)?;
-        if !body.iter().all(|&b| b == b'\t' || (0x20..0x7F).contains(&b)) {
+        if !body
+            .iter()
+            .all(|&b| b == b'\t' || (0x20..0x7F).contains(&b))
+        {
             return Err(Refusal::Control);
         }
         // Printable ASCII only from here on, so this never fails.
@@ -198,7 +201,10 @@ impl Session {
         let command = words.next().ok_or(Refusal::Empty)?;
         if command.eq_ignore_ascii_case("VER") {
             no_args(words, "VER")?;
-            send_ok(io, Some(format_args!("PROTO=1 NAME={NAME} VERSION={VERSION}")));
+            send_ok(
+                io,
+                Some(format_args!("PROTO=1 NAME={NAME} VERSION={VERSION}")),
+            );
             Ok(())
         } else if command.eq_ignore_ascii_case("CFG") {
             self.cfg_command(words, io)
@@ -290,7 +296,8 @@ impl Session {
         if let Some(v) = x {
             let word = parse_length("X", v)?;
             let radius = if self.cfg.diam {
-                word.exact_half().ok_or(Refusal::Value("X", "not an exact radius"))?
+                word.exact_half()
+                    .ok_or(Refusal::Value("X", "not an exact radius"))?
             } else {
                 word
             };
@@ -489,11 +496,9 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         Refusal::Args(ArgError::Duplicate(key)) => {
             send_error(io, E::Syntax, format_args!("key {key} given twice"))
         }
-        Refusal::NoArgs(command) => send_error(
-            io,
-            E::Syntax,
-            format_args!("{command} takes no arguments"),
-        ),
+        Refusal::NoArgs(command) => {
+            send_error(io, E::Syntax, format_args!("{command} takes no arguments"))
+        }
         Refusal::Value(key, why) => send_error(io, E::Value, format_args!("{key} {why}")),
         Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
     }

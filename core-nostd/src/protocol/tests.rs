@@ -159,14 +159,26 @@ fn replies_of_the_happy_path() {
         ask1(&mut dev, "cfg tip=2 rn=0.8 pass=rough tol=0.005"),
         "OK HX=0.0050 HZ=0.0100 DIAM=1 RN=0.8000 TIP=2 TOL=0.0050 PASS=ROUGH"
     );
-    assert_eq!(ask1(&mut dev, &with_checksum("MOVE X=0.005 Z=-0.015")), "OK NX=1 NZ=-2 PX=1 PZ=-2 SEQ=42F8222A");
+    assert_eq!(
+        ask1(&mut dev, &with_checksum("MOVE X=0.005 Z=-0.015")),
+        "OK NX=1 NZ=-2 PX=1 PZ=-2 SEQ=42F8222A"
+    );
     assert_eq!(ask1(&mut dev, "POS"), "OK PX=1 PZ=-2 X=0.0050 Z=-0.0150");
-    assert_eq!(ask1(&mut dev, "move x=-0.005 inc=1"), "OK NX=-1 NZ=0 PX=0 PZ=-2 SEQ=A2681B02");
-    assert_eq!(ask1(&mut dev, "CFG DIAM=0"), "OK HX=0.0050 HZ=0.0100 DIAM=0 RN=0.8000 TIP=2 TOL=0.0050 PASS=ROUGH");
+    assert_eq!(
+        ask1(&mut dev, "move x=-0.005 inc=1"),
+        "OK NX=-1 NZ=0 PX=0 PZ=-2 SEQ=A2681B02"
+    );
+    assert_eq!(
+        ask1(&mut dev, "CFG DIAM=0"),
+        "OK HX=0.0050 HZ=0.0100 DIAM=0 RN=0.8000 TIP=2 TOL=0.0050 PASS=ROUGH"
+    );
     assert_eq!(ask1(&mut dev, "POS"), "OK PX=0 PZ=-2 X=0.0000 Z=-0.0150");
     assert_eq!(ask1(&mut dev, "ZERO"), "OK");
     assert_eq!(ask1(&mut dev, "POS"), "OK PX=0 PZ=0 X=0.0000 Z=0.0000");
-    assert_eq!(ask1(&mut dev, "MOVE"), "OK NX=0 NZ=0 PX=0 PZ=0 SEQ=00000000");
+    assert_eq!(
+        ask1(&mut dev, "MOVE"),
+        "OK NX=0 NZ=0 PX=0 PZ=0 SEQ=00000000"
+    );
 }
 
 #[test]
@@ -178,7 +190,10 @@ fn price_change_re_expresses_registers() {
         "OK HX=0.0010 HZ=0.0020 DIAM=1 RN=0.4000 TIP=3 TOL=0.0100 PASS=FIN"
     );
     // 5.005 mm / 0.001 = 5005; 3.333 / 0.002 = 1666.5 → 1667.
-    assert_eq!(ask1(&mut dev, "POS"), "OK PX=5005 PZ=1667 X=10.0100 Z=3.3330");
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=5005 PZ=1667 X=10.0100 Z=3.3330"
+    );
 }
 
 #[test]
