@@ -13,6 +13,7 @@
 //!   with integer additions only, for a timer interrupt to pull.
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
+//! - [`stepdir`]: step/dir outputs on `embedded-hal` pins, paced by a timer.
 //!
 //! # Numeric conventions
 //! | quantity | type | unit stored | overflow |
@@ -36,3 +37,4 @@ pub mod impulse;
 pub mod interleave;
 pub mod length;
 pub mod protocol;
+pub mod stepdir;

@@ -2,6 +2,7 @@
 
 use core_nostd::interleave::LinearBlock;
 use core_nostd::protocol::{Device, Io};
+use core_nostd::stepdir::DriveTiming;
 
 /// Collects reply bytes and the blocks the device ran.
 #[derive(Default)]
@@ -14,7 +15,7 @@ impl Io for Collect {
     fn send(&mut self, line: &[u8]) {
         self.out.extend_from_slice(line);
     }
-    fn run_block(&mut self, block: &LinearBlock) {
+    fn run_block(&mut self, block: &LinearBlock, _: &DriveTiming) {
         self.blocks.push(*block);
     }
 }

@@ -13,6 +13,7 @@ mod words;
 pub use session::{Config, Pass, Session, TipCode, NAME, VERSION};
 
 use crate::interleave::LinearBlock;
+use crate::stepdir::DriveTiming;
 use core::fmt;
 use framing::{Framed, LineAssembler};
 
@@ -65,11 +66,12 @@ pub trait Io {
     /// Sends one complete reply line (it ends with `*HH` and CRLF).
     fn send(&mut self, line: &[u8]);
 
-    /// Runs one accepted linear block. Called after the session has taken the
-    /// block (its position registers already hold the end point) and before
-    /// the reply that reports it. The default does nothing (a calculator).
-    fn run_block(&mut self, block: &LinearBlock) {
-        let _ = block;
+    /// Runs one accepted linear block with the session's drive timing.
+    /// Called after the session has taken the block (its position registers
+    /// already hold the end point) and before the reply that reports it. The
+    /// default does nothing (a calculator without motion).
+    fn run_block(&mut self, block: &LinearBlock, timing: &DriveTiming) {
+        let _ = (block, timing);
     }
 }
 

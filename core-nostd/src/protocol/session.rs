@@ -11,6 +11,7 @@ use crate::crc32::Crc32;
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::{div_round_half_away, write_mm4, Length};
+use crate::stepdir::{DriveTiming, TimingError};
 use core::fmt::{self, Write};
 
 /// The device name reported by `VER`.
@@ -122,6 +123,8 @@ pub struct Session {
     cmd: [Length; 2],
     /// Position registers; always `Q(cmd / price)` per axis.
     pos: ImpulsePoint,
+    /// Step/dir output timing.
+    drive: DriveTiming,
 }
 
 impl Default for Session {
@@ -161,12 +164,18 @@ impl Session {
                 x: Impulses(0),
                 z: Impulses(0),
             },
+            drive: DriveTiming::DEFAULT,
         }
     }
 
     /// The configuration.
     pub const fn config(&self) -> &Config {
         &self.cfg
+    }
+
+    /// Step/dir output timing.
+    pub const fn drive(&self) -> &DriveTiming {
+        &self.drive
     }
 
     /// Position registers in impulses.
@@ -216,6 +225,8 @@ impl Session {
             Ok(())
         } else if command.eq_ignore_ascii_case("MOVE") {
             self.move_command(words, io)
+        } else if command.eq_ignore_ascii_case("DRIVE") {
+            self.drive_command(words, io)
         } else if command.eq_ignore_ascii_case("POS") {
             no_args(words, "POS")?;
             self.pos_reply(io);
@@ -286,6 +297,30 @@ impl Session {
         Ok(())
     }
 
+    fn drive_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [rate, pulse, setup] = parse_args(words, ["RATE", "PULSE", "SETUP"])?;
+        let d = self.drive;
+        let rate = parse_count("RATE", rate, d.rate_hz())?;
+        let pulse = parse_count("PULSE", pulse, d.pulse_us())?;
+        let setup = parse_count("SETUP", setup, d.setup_us())?;
+        self.drive = DriveTiming::new(rate, pulse, setup).map_err(|e| match e {
+            TimingError::Rate => Refusal::Value("RATE", "must be 1 to 500000 steps/s"),
+            TimingError::Pulse => Refusal::Value("PULSE", "must be 1 to 1000 us"),
+            TimingError::Setup => Refusal::Value("SETUP", "must be 0 to 1000 us"),
+            TimingError::PulseTooLong => Refusal::Value("PULSE", "longer than a step period"),
+        })?;
+        send_ok(
+            io,
+            Some(format_args!(
+                "RATE={} PULSE={} SETUP={}",
+                self.drive.rate_hz(),
+                self.drive.pulse_us(),
+                self.drive.setup_us()
+            )),
+        );
+        Ok(())
+    }
+
     fn move_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [x, z, inc] = parse_args(words, ["X", "Z", "INC"])?;
         let inc = match inc {
@@ -315,7 +350,7 @@ impl Session {
         let seq = block_crc(&block, Crc32::new()).finish();
         self.cmd = target;
         self.pos = to;
-        io.run_block(&block);
+        io.run_block(&block, &self.drive);
         let (nx, nz) = block.delta();
         send_ok(
             io,
@@ -438,6 +473,17 @@ fn parse_bounded(
     } else {
         Err(Refusal::Value(key, why))
     }
+}
+
+/// An unsigned decimal count of at most 7 digits, or `default` when absent.
+fn parse_count(key: &'static str, v: Option<&str>, default: u32) -> Result<u32, Refusal<'static>> {
+    let Some(v) = v else {
+        return Ok(default);
+    };
+    if v.is_empty() || v.len() > 7 || !v.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(Refusal::Value(key, "not a whole number"));
+    }
+    Ok(v.bytes().fold(0, |n, b| n * 10 + u32::from(b - b'0')))
 }
 
 fn parse_flag(key: &'static str, v: &str) -> Result<bool, Refusal<'static>> {

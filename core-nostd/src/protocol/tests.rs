@@ -24,7 +24,7 @@ impl Io for Lines {
         assert_eq!(sum, std::format!("{xor:02X}"), "reply checksum of {text:?}");
         self.out.push(body.to_string());
     }
-    fn run_block(&mut self, _: &LinearBlock) {
+    fn run_block(&mut self, _: &LinearBlock, _: &crate::stepdir::DriveTiming) {
         self.blocks += 1;
     }
 }
@@ -42,8 +42,8 @@ fn ask1(dev: &mut Device, request: &str) -> String {
 }
 
 /// Everything a request could change, as the device reports it.
-fn state(dev: &mut Device) -> (String, String) {
-    (ask1(dev, "POS"), ask1(dev, "CFG"))
+fn state(dev: &mut Device) -> (String, String, String) {
+    (ask1(dev, "POS"), ask1(dev, "CFG"), ask1(dev, "DRIVE"))
 }
 
 fn with_checksum(body: &str) -> String {
@@ -100,6 +100,14 @@ fn every_error_code_is_reached_and_changes_nothing() {
         ("MOVE Z=-99999", "ERR RANGE"),
         ("MOVE X=99999.99 Z=-7", "ERR RANGE"),
         ("MOVE Z=-99993 INC=1", "ERR RANGE"),
+        ("DRIVE RATE=0", "ERR VALUE RATE"),
+        ("DRIVE RATE=500001", "ERR VALUE RATE"),
+        ("DRIVE RATE=-5", "ERR VALUE RATE"),
+        ("DRIVE RATE=10000 PULSE=100", "ERR VALUE PULSE"),
+        ("DRIVE PULSE=0", "ERR VALUE PULSE"),
+        ("DRIVE SETUP=1001", "ERR VALUE SETUP"),
+        ("DRIVE SETUP=12345678", "ERR VALUE SETUP"),
+        ("DRIVE HZ=5", "ERR SYNTAX"),
         ("MOVE Z=-10007.01", "ERR RANGE"),
     ];
     for &(request, expected) in cases {

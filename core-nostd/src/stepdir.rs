@@ -1,0 +1,347 @@
+//! Step/dir outputs: a linear block's step events on four `embedded-hal`
+//! output pins, paced by a hardware timer.
+//!
+//! For each block the DIR pins are set first and left to settle for the
+//! drive's set-up time; then for every event, on the next tick of the step
+//! clock, the STEP pins of the stepping axes rise together, stay high for the
+//! pulse width, and fall. Events come from the core's iterator one at a time;
+//! a block is never materialised as a list.
+
+use crate::interleave::{LinearBlock, StepEvent};
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::OutputPin;
+
+/// Timing of the step/dir outputs, validated (`DRIVE` in the protocol).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DriveTiming {
+    rate_hz: u32,
+    pulse_us: u32,
+    setup_us: u32,
+}
+
+/// Why a drive timing was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TimingError {
+    /// Rate outside 1 … 500 000 steps per second.
+    Rate,
+    /// Pulse width outside 1 … 1000 µs.
+    Pulse,
+    /// Direction set-up time above 1000 µs.
+    Setup,
+    /// The pulse does not fit in one step period.
+    PulseTooLong,
+}
+
+impl DriveTiming {
+    /// The highest step rate: 500 000 steps per second.
+    pub const MAX_RATE_HZ: u32 = 500_000;
+    /// Defaults that suit common step/dir drives: 10 000 steps/s, 5 µs pulse,
+    /// 5 µs direction set-up.
+    pub const DEFAULT: DriveTiming = DriveTiming {
+        rate_hz: 10_000,
+        pulse_us: 5,
+        setup_us: 5,
+    };
+
+    /// A timing, checked: the pulse must end within one step period.
+    ///
+    /// ```
+    /// use core_nostd::stepdir::{DriveTiming, TimingError};
+    /// assert!(DriveTiming::new(20_000, 5, 5).is_ok());
+    /// assert_eq!(DriveTiming::new(500_000, 2, 0), Err(TimingError::PulseTooLong));
+    /// ```
+    pub const fn new(rate_hz: u32, pulse_us: u32, setup_us: u32) -> Result<Self, TimingError> {
+        if rate_hz == 0 || rate_hz > Self::MAX_RATE_HZ {
+            return Err(TimingError::Rate);
+        }
+        if pulse_us == 0 || pulse_us > 1000 {
+            return Err(TimingError::Pulse);
+        }
+        if setup_us > 1000 {
+            return Err(TimingError::Setup);
+        }
+        // pulse_us ≤ 1000 and rate ≤ 500 000: the product fits in u32.
+        if pulse_us * rate_hz >= 1_000_000 {
+            return Err(TimingError::PulseTooLong);
+        }
+        Ok(DriveTiming {
+            rate_hz,
+            pulse_us,
+            setup_us,
+        })
+    }
+
+    /// Step events per second.
+    pub const fn rate_hz(&self) -> u32 {
+        self.rate_hz
+    }
+    /// STEP pulse width, µs.
+    pub const fn pulse_us(&self) -> u32 {
+        self.pulse_us
+    }
+    /// DIR set-up time before the first step of a block, µs.
+    pub const fn setup_us(&self) -> u32 {
+        self.setup_us
+    }
+}
+
+impl Default for DriveTiming {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// A periodic hardware tick that paces the step events.
+pub trait StepClock {
+    /// Starts ticking at `rate_hz`.
+    fn start(&mut self, rate_hz: u32);
+    /// Waits for the next tick.
+    fn wait_tick(&mut self);
+    /// Stops ticking.
+    fn stop(&mut self);
+}
+
+/// The four outputs of a two-axis step/dir interface.
+pub struct StepDir<XS, XD, ZS, ZD> {
+    x_step: XS,
+    x_dir: XD,
+    z_step: ZS,
+    z_dir: ZD,
+}
+
+/// A pin failed; the outputs were driven low where possible.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PinError;
+
+impl<XS, XD, ZS, ZD> StepDir<XS, XD, ZS, ZD>
+where
+    XS: OutputPin,
+    XD: OutputPin,
+    ZS: OutputPin,
+    ZD: OutputPin,
+{
+    /// Takes the pins and drives both STEP lines low.
+    pub fn new(x_step: XS, x_dir: XD, z_step: ZS, z_dir: ZD) -> Self {
+        let mut s = StepDir {
+            x_step,
+            x_dir,
+            z_step,
+            z_dir,
+        };
+        s.stop_outputs();
+        s
+    }
+
+    /// Drives both STEP lines low (the safe state).
+    pub fn stop_outputs(&mut self) {
+        let _ = self.x_step.set_low();
+        let _ = self.z_step.set_low();
+    }
+
+    /// Issues every step event of `block`. DIR high means the negative
+    /// direction.
+    pub fn run<C: StepClock, D: DelayNs>(
+        &mut self,
+        block: &LinearBlock,
+        timing: &DriveTiming,
+        clock: &mut C,
+        delay: &mut D,
+    ) -> Result<(), PinError> {
+        let result = self.run_inner(block, timing, clock, delay);
+        clock.stop();
+        if result.is_err() {
+            self.stop_outputs();
+        }
+        result
+    }
+
+    fn run_inner<C: StepClock, D: DelayNs>(
+        &mut self,
+        block: &LinearBlock,
+        timing: &DriveTiming,
+        clock: &mut C,
+        delay: &mut D,
+    ) -> Result<(), PinError> {
+        let (dx, dz) = block.delta();
+        if dx == 0 && dz == 0 {
+            return Ok(());
+        }
+        if dx != 0 {
+            self.x_dir
+                .set_state((dx < 0).into())
+                .map_err(|_| PinError)?;
+        }
+        if dz != 0 {
+            self.z_dir
+                .set_state((dz < 0).into())
+                .map_err(|_| PinError)?;
+        }
+        delay.delay_us(timing.setup_us);
+        clock.start(timing.rate_hz);
+        for event in block.events() {
+            clock.wait_tick();
+            self.pulse(event, timing, delay)?;
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn pulse<D: DelayNs>(
+        &mut self,
+        event: StepEvent,
+        timing: &DriveTiming,
+        delay: &mut D,
+    ) -> Result<(), PinError> {
+        if event.x_steps() {
+            self.x_step.set_high().map_err(|_| PinError)?;
+        }
+        if event.z_steps() {
+            self.z_step.set_high().map_err(|_| PinError)?;
+        }
+        delay.delay_us(timing.pulse_us);
+        self.x_step.set_low().map_err(|_| PinError)?;
+        self.z_step.set_low().map_err(|_| PinError)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::impulse::Impulses;
+    use crate::interleave::ImpulsePoint;
+    use core::cell::RefCell;
+    use embedded_hal::digital::ErrorType;
+    use std::rc::Rc;
+    use std::vec::Vec;
+
+    /// (time ns, pin index, level) for every pin write.
+    type Log = Rc<RefCell<(u64, Vec<(u64, usize, bool)>)>>;
+
+    struct Pin(usize, Log);
+    impl ErrorType for Pin {
+        type Error = core::convert::Infallible;
+    }
+    impl OutputPin for Pin {
+        fn set_low(&mut self) -> Result<(), Self::Error> {
+            let mut l = self.1.borrow_mut();
+            let t = l.0;
+            l.1.push((t, self.0, false));
+            Ok(())
+        }
+        fn set_high(&mut self) -> Result<(), Self::Error> {
+            let mut l = self.1.borrow_mut();
+            let t = l.0;
+            l.1.push((t, self.0, true));
+            Ok(())
+        }
+    }
+    /// Virtual time: delays and ticks advance the shared clock.
+    struct Time(Log, u64, u64);
+    impl DelayNs for Time {
+        fn delay_ns(&mut self, ns: u32) {
+            self.0.borrow_mut().0 += u64::from(ns);
+        }
+    }
+    impl StepClock for Time {
+        fn start(&mut self, rate_hz: u32) {
+            self.1 = 1_000_000_000 / u64::from(rate_hz);
+            self.2 = self.0.borrow().0;
+        }
+        fn wait_tick(&mut self) {
+            self.2 += self.1;
+            let mut l = self.0.borrow_mut();
+            assert!(l.0 <= self.2, "the event overran its period");
+            l.0 = self.2;
+        }
+        fn stop(&mut self) {}
+    }
+
+    const XS: usize = 0;
+    const XD: usize = 1;
+    const ZS: usize = 2;
+    const ZD: usize = 3;
+
+    fn run(dx: i32, dz: i32, timing: DriveTiming) -> Vec<(u64, usize, bool)> {
+        let log: Log = Rc::new(RefCell::new((0, Vec::new())));
+        let mut sd = StepDir::new(
+            Pin(XS, log.clone()),
+            Pin(XD, log.clone()),
+            Pin(ZS, log.clone()),
+            Pin(ZD, log.clone()),
+        );
+        log.borrow_mut().1.clear();
+        let p = |x, z| ImpulsePoint {
+            x: Impulses(x),
+            z: Impulses(z),
+        };
+        let block = LinearBlock::new(p(10, 10), p(10 + dx, 10 + dz)).unwrap();
+        let mut time = Time(log.clone(), 0, 0);
+        let mut clock = Time(log.clone(), 0, 0);
+        sd.run(&block, &timing, &mut clock, &mut time).unwrap();
+        let out = log.borrow().1.clone();
+        out
+    }
+
+    #[test]
+    fn pulses_match_the_events_and_dir_settles_first() {
+        let timing = DriveTiming::new(20_000, 5, 8).unwrap();
+        for (dx, dz) in [(7, -3), (-2, 9), (0, -4), (5, 0), (-6, -6)] {
+            let log = run(dx, dz, timing);
+            // Rising edges per axis = impulses of the block.
+            let rises = |pin| log.iter().filter(|e| e.1 == pin && e.2).count() as i32;
+            assert_eq!((rises(XS), rises(ZS)), (dx.abs(), dz.abs()));
+            // DIR written once per moving axis, before any step, at the right level,
+            // and at least the set-up time before the first rising STEP edge.
+            for (step, dir, d) in [(XS, XD, dx), (ZS, ZD, dz)] {
+                let dirs: Vec<_> = log.iter().filter(|e| e.1 == dir).collect();
+                if d == 0 {
+                    assert!(dirs.is_empty());
+                    continue;
+                }
+                assert_eq!(dirs.len(), 1);
+                assert_eq!(dirs[0].2, d < 0);
+                let first = log.iter().find(|e| e.1 == step && e.2).unwrap();
+                assert!(first.0 >= dirs[0].0 + 8_000);
+            }
+            // Each pulse is high for 5 µs; rises are one period (50 µs) apart.
+            let rise_times: Vec<u64> = log
+                .iter()
+                .filter(|e| e.2 && (e.1 == XS || e.1 == ZS))
+                .map(|e| e.0)
+                .collect();
+            for e in log.iter().filter(|e| e.2 && (e.1 == XS || e.1 == ZS)) {
+                let fall = log
+                    .iter()
+                    .find(|f| f.1 == e.1 && !f.2 && f.0 >= e.0)
+                    .unwrap();
+                assert_eq!(fall.0 - e.0, 5_000);
+            }
+            let mut uniq = rise_times.clone();
+            uniq.dedup();
+            assert_eq!(uniq.len() as i32, dx.abs().max(dz.abs()));
+            for w in uniq.windows(2) {
+                assert_eq!(w[1] - w[0], 50_000);
+            }
+        }
+    }
+
+    #[test]
+    fn timing_limits() {
+        assert_eq!(DriveTiming::new(0, 5, 5), Err(TimingError::Rate));
+        assert_eq!(DriveTiming::new(500_001, 1, 0), Err(TimingError::Rate));
+        assert_eq!(DriveTiming::new(1000, 0, 5), Err(TimingError::Pulse));
+        assert_eq!(DriveTiming::new(1000, 1001, 5), Err(TimingError::Pulse));
+        assert_eq!(DriveTiming::new(1000, 5, 1001), Err(TimingError::Setup));
+        assert_eq!(
+            DriveTiming::new(1000, 1000, 0),
+            Err(TimingError::PulseTooLong)
+        );
+        assert!(DriveTiming::new(1001, 999, 0).is_ok());
+        assert!(DriveTiming::new(500_000, 1, 1000).is_ok());
+    }
+}
