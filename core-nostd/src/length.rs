@@ -209,8 +209,11 @@ impl Length {
 /// `n / d` rounded half away from zero, for `d > 0`. Exact integer arithmetic;
 /// `|n| ≤ i64::MAX` so nothing overflows.
 pub(crate) const fn div_round_half_away(n: i64, d: i64) -> i64 {
-    let q = n / d;
-    let r = n % d;
+    let (q, r) = match (n.checked_div(d), n.checked_rem(d)) {
+        (Some(q), Some(r)) => (q, r),
+        // d = 0 or i64::MIN / -1: excluded by the callers (d > 0).
+        _ => return 0,
+    };
     // |r| < d ≤ i64::MAX / 2 is not guaranteed, so compare |r| ≥ d − |r|.
     let ar = r.unsigned_abs();
     if ar >= d.unsigned_abs() - ar {

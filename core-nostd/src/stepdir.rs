@@ -24,7 +24,7 @@ pub struct DriveTiming {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum TimingError {
-    /// Rate outside 1 … 500 000 steps per second.
+    /// Rate outside 1 … 200 000 steps per second.
     Rate,
     /// Pulse width outside 1 … 1000 µs.
     Pulse,
@@ -35,8 +35,8 @@ pub enum TimingError {
 }
 
 impl DriveTiming {
-    /// The highest step rate: 500 000 steps per second.
-    pub const MAX_RATE_HZ: u32 = 500_000;
+    /// The highest step rate: 200 000 steps per second (a 5 µs period).
+    pub const MAX_RATE_HZ: u32 = 200_000;
     /// Defaults that suit common step/dir drives: 10 000 steps/s, 5 µs pulse,
     /// 5 µs direction set-up.
     pub const DEFAULT: DriveTiming = DriveTiming {
@@ -50,7 +50,7 @@ impl DriveTiming {
     /// ```
     /// use core_nostd::stepdir::{DriveTiming, TimingError};
     /// assert!(DriveTiming::new(20_000, 5, 5).is_ok());
-    /// assert_eq!(DriveTiming::new(500_000, 2, 0), Err(TimingError::PulseTooLong));
+    /// assert_eq!(DriveTiming::new(200_000, 5, 0), Err(TimingError::PulseTooLong));
     /// ```
     pub const fn new(rate_hz: u32, pulse_us: u32, setup_us: u32) -> Result<Self, TimingError> {
         if rate_hz == 0 || rate_hz > Self::MAX_RATE_HZ {
@@ -62,7 +62,7 @@ impl DriveTiming {
         if setup_us > 1000 {
             return Err(TimingError::Setup);
         }
-        // pulse_us ≤ 1000 and rate ≤ 500 000: the product fits in u32.
+        // pulse_us ≤ 1000 and rate ≤ 200 000: the product fits in u32.
         if pulse_us * rate_hz >= 1_000_000 {
             return Err(TimingError::PulseTooLong);
         }
@@ -333,7 +333,7 @@ mod tests {
     #[test]
     fn timing_limits() {
         assert_eq!(DriveTiming::new(0, 5, 5), Err(TimingError::Rate));
-        assert_eq!(DriveTiming::new(500_001, 1, 0), Err(TimingError::Rate));
+        assert_eq!(DriveTiming::new(200_001, 1, 0), Err(TimingError::Rate));
         assert_eq!(DriveTiming::new(1000, 0, 5), Err(TimingError::Pulse));
         assert_eq!(DriveTiming::new(1000, 1001, 5), Err(TimingError::Pulse));
         assert_eq!(DriveTiming::new(1000, 5, 1001), Err(TimingError::Setup));
@@ -342,6 +342,6 @@ mod tests {
             Err(TimingError::PulseTooLong)
         );
         assert!(DriveTiming::new(1001, 999, 0).is_ok());
-        assert!(DriveTiming::new(500_000, 1, 1000).is_ok());
+        assert!(DriveTiming::new(200_000, 4, 1000).is_ok());
     }
 }

@@ -5,6 +5,7 @@
 //! - [`device`]: the core's protocol handler in this process;
 //! - [`link`]: the virtual serial link (a pseudo-terminal pair driven through
 //!   the `serialport` crate) and the host side of the protocol;
+//! - [`qemu`]: the firmware booted in QEMU, reached over its serial pty;
 //! - [`compare`]: the bit-for-bit comparison of device replies against the
 //!   reference;
 //! - [`scenario`]: the built-in scenarios of the main job.
@@ -12,5 +13,6 @@
 pub mod compare;
 pub mod device;
 pub mod link;
+pub mod qemu;
 pub mod reference;
 pub mod scenario;

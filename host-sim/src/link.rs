@@ -204,6 +204,11 @@ impl Client {
         }
     }
 
+    /// How long to wait for a reply line.
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout;
+    }
+
     /// Discards whatever has arrived and not been read.
     pub fn drain(&mut self) {
         self.pending.clear();

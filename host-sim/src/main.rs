@@ -28,6 +28,9 @@ struct Cli {
 enum Command {
     /// Compare the device with the f64 reference, bit for bit (the default).
     Run(RunArgs),
+    /// Boot the firmware in QEMU and compare it with the f64 reference over
+    /// its serial link.
+    Qemu(QemuArgs),
     /// Serve the in-process device for a terminal or another program.
     Serve {
         /// Serve on standard input and output.
@@ -40,13 +43,19 @@ enum Command {
 }
 
 #[derive(clap::Args, Clone)]
-struct RunArgs {
+struct ScenarioArgs {
     /// Seed of the random blocks.
     #[arg(long, default_value_t = 1977)]
     seed: u64,
     /// Number of random blocks.
     #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
     blocks: u32,
+}
+
+#[derive(clap::Args, Clone)]
+struct RunArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
     /// How the host reaches the device.
     #[arg(long, value_enum, default_value_t = LinkKind::Pty)]
     link: LinkKind,
@@ -55,11 +64,22 @@ struct RunArgs {
 impl Default for RunArgs {
     fn default() -> Self {
         RunArgs {
-            seed: 1977,
-            blocks: 10_000,
+            scenario: ScenarioArgs {
+                seed: 1977,
+                blocks: 10_000,
+            },
             link: LinkKind::Pty,
         }
     }
+}
+
+#[derive(clap::Args, Clone)]
+struct QemuArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// A firmware ELF built with the `qemu` feature (default: build it).
+    #[arg(long)]
+    elf: Option<std::path::PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -74,6 +94,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
         Command::Run(args) => run(&args),
+        Command::Qemu(args) => run_qemu(&args),
         Command::Serve {
             stdio: _,
             pty: true,
@@ -124,18 +145,35 @@ fn run(args: &RunArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
                 host_sim::link::BAUD
             );
             let client = Client::open(device.path(), Duration::from_secs(10))?;
-            let code = compare_all(client, args)?;
+            let code = compare_all(client, &args.scenario)?;
             drop(device);
             Ok(code)
         }
         LinkKind::Local => {
             println!("link: in-process device, direct calls");
-            Ok(compare_all(LocalDevice::new(), args)?)
+            Ok(compare_all(LocalDevice::new(), &args.scenario)?)
         }
     }
 }
 
-fn compare_all<T: Transport>(link: T, args: &RunArgs) -> Result<ExitCode, LinkError> {
+fn run_qemu(args: &QemuArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    println!("Lathe retrofit controller: firmware in QEMU against the f64 reference, bit for bit");
+    let elf = match &args.elf {
+        Some(p) => p.clone(),
+        None => host_sim::qemu::build_firmware("qemu")?,
+    };
+    let mut qemu = host_sim::qemu::Qemu::boot(&elf, true)?;
+    println!(
+        "link: {} on netduinoplus2, USART1 on {} ({} 8N1, serialport)",
+        elf.display(),
+        qemu.pty(),
+        host_sim::link::BAUD
+    );
+    let client = qemu.connect(Duration::from_secs(60))?;
+    Ok(compare_all(client, &args.scenario)?)
+}
+
+fn compare_all<T: Transport>(link: T, args: &ScenarioArgs) -> Result<ExitCode, LinkError> {
     let started = Instant::now();
     let mut cmp = Comparator::new(link)?;
     for s in [scenario::table21(), scenario::krylenko()] {

@@ -262,21 +262,25 @@ pub fn random(seed: u64, n: usize) -> Scenario {
             continue;
         }
         let inc = rng.random_bool(0.3);
-        // A target within a lathe's working space, in the axis' written unit.
+        // A target in the axis' written unit, like a part program's: mostly
+        // near the current point, sometimes a long move across the envelope.
         let target = |rng: &mut ChaCha8Rng, now: i64, lo: i64, hi: i64, h: i64| -> i64 {
-            match rng.random_range(0..4) {
+            let (nlo, nhi) = ((now - 10_000_000).max(lo), (now + 10_000_000).min(hi));
+            match rng.random_range(0..20) {
                 // An exact tie: an odd number of half impulses.
-                0 => rng.random_range(lo / h..hi / h) * h + h / 2,
+                0..=3 => rng.random_range(nlo / h..nhi / h) * h + h / 2,
                 // A programmer's round value, 0.01 mm.
-                1 => rng.random_range(lo / 10_000..hi / 10_000) * 10_000,
+                4..=7 => rng.random_range(nlo / 10_000..nhi / 10_000) * 10_000,
                 // Any value with 6 decimals.
-                2 => rng.random_range(lo..hi),
-                // A short move near the current point.
-                _ => (now + rng.random_range(-50_000..50_000)).clamp(lo, hi),
+                8..=11 => rng.random_range(nlo..nhi),
+                // A long move anywhere.
+                12 => rng.random_range(lo..hi),
+                // A short move.
+                _ => (now + rng.random_range(-2_000_000..2_000_000)).clamp(lo, hi),
             }
         };
         let x = if rng.random_bool(0.85) {
-            let mut t = target(&mut rng, cx, -300_000_000, 300_000_000, 2 * hx);
+            let mut t = target(&mut rng, cx, -200_000_000, 200_000_000, 2 * hx);
             if !diam {
                 t -= t.rem_euclid(2);
             }

@@ -304,7 +304,7 @@ impl Session {
         let pulse = parse_count("PULSE", pulse, d.pulse_us())?;
         let setup = parse_count("SETUP", setup, d.setup_us())?;
         self.drive = DriveTiming::new(rate, pulse, setup).map_err(|e| match e {
-            TimingError::Rate => Refusal::Value("RATE", "must be 1 to 500000 steps/s"),
+            TimingError::Rate => Refusal::Value("RATE", "must be 1 to 200000 steps/s"),
             TimingError::Pulse => Refusal::Value("PULSE", "must be 1 to 1000 us"),
             TimingError::Setup => Refusal::Value("SETUP", "must be 0 to 1000 us"),
             TimingError::PulseTooLong => Refusal::Value("PULSE", "longer than a step period"),

@@ -101,7 +101,7 @@ fn every_error_code_is_reached_and_changes_nothing() {
         ("MOVE X=99999.99 Z=-7", "ERR RANGE"),
         ("MOVE Z=-99993 INC=1", "ERR RANGE"),
         ("DRIVE RATE=0", "ERR VALUE RATE"),
-        ("DRIVE RATE=500001", "ERR VALUE RATE"),
+        ("DRIVE RATE=200001", "ERR VALUE RATE"),
         ("DRIVE RATE=-5", "ERR VALUE RATE"),
         ("DRIVE RATE=10000 PULSE=100", "ERR VALUE PULSE"),
         ("DRIVE PULSE=0", "ERR VALUE PULSE"),

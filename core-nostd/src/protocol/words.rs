@@ -20,7 +20,8 @@ impl<'a> Iterator for Words<'a> {
             return None;
         }
         let end = s.find([' ', '\t']).unwrap_or(s.len());
-        let (word, rest) = s.split_at(end);
+        // `end` is at an ASCII byte or the end: always a char boundary.
+        let (word, rest) = s.split_at_checked(end).unwrap_or((s, ""));
         self.rest = rest;
         Some(word)
     }

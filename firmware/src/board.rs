@@ -1,0 +1,354 @@
+//! The board: clocks, pins, USART1 and the step clock, by register.
+//!
+//! | signal | pin | |
+//! |---|---|---|
+//! | USART1 TX / RX | PA9 / PA10 (AF7) | 115200 8N1 |
+//! | X STEP / X DIR | PC0 / PC1 | push-pull |
+//! | Z STEP / Z DIR | PC2 / PC3 | push-pull |
+//!
+//! Two configurations. The real board runs from an 8 MHz crystal through the
+//! PLL at 168 MHz (APB2 84 MHz, APB1 42 MHz, timers 84 MHz). QEMU 7.2's
+//! `netduinoplus2` emulates no RCC ready bits, so the `qemu` build stays on
+//! the 16 MHz HSI and waits for nothing; QEMU's timers count at 1 GHz.
+
+use core::cell::RefCell;
+use core::convert::Infallible;
+use core::sync::atomic::{AtomicBool, Ordering};
+use core_nostd::stepdir::StepClock;
+use critical_section::Mutex;
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{ErrorType, OutputPin};
+use heapless::Deque;
+use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
+
+/// Core clock.
+#[cfg(not(feature = "qemu"))]
+pub const SYSCLK_HZ: u32 = 168_000_000;
+#[cfg(feature = "qemu")]
+pub const SYSCLK_HZ: u32 = 16_000_000;
+
+/// USART1's bus clock (APB2).
+#[cfg(not(feature = "qemu"))]
+const PCLK2_HZ: u32 = 84_000_000;
+#[cfg(feature = "qemu")]
+const PCLK2_HZ: u32 = 16_000_000;
+
+/// TIM2's counter clock before its prescaler.
+#[cfg(not(feature = "qemu"))]
+pub const TIM2_CLK_HZ: u32 = 84_000_000;
+#[cfg(feature = "qemu")]
+pub const TIM2_CLK_HZ: u32 = 1_000_000_000;
+
+const BAUD: u32 = 115_200;
+
+/// Bytes received and not yet handled. When it is full the receive interrupt
+/// leaves the next byte in the UART and masks itself until the main loop has
+/// made room, so nothing is dropped by this side.
+static RX: Mutex<RefCell<Deque<u8, 512>>> = Mutex::new(RefCell::new(Deque::new()));
+static RX_PAUSED: AtomicBool = AtomicBool::new(false);
+static TICK: AtomicBool = AtomicBool::new(false);
+
+/// Brings up clocks, pins, USART1 and TIM2. Returns the board's devices.
+pub fn init(dp: pac::Peripherals) -> Board {
+    clocks(&dp);
+    let rcc = &dp.RCC;
+    rcc.ahb1enr()
+        .modify(|_, w| w.gpioaen().set_bit().gpiocen().set_bit());
+    rcc.apb2enr().modify(|_, w| w.usart1en().set_bit());
+    rcc.apb1enr().modify(|_, w| w.tim2en().set_bit());
+
+    // PA9, PA10: alternate function 7, PA10 pulled up.
+    let gpioa = &dp.GPIOA;
+    gpioa
+        .afrh()
+        .modify(|_, w| unsafe { w.afrh9().bits(7).afrh10().bits(7) });
+    gpioa
+        .moder()
+        .modify(|_, w| unsafe { w.moder9().bits(0b10).moder10().bits(0b10) });
+    gpioa
+        .pupdr()
+        .modify(|_, w| unsafe { w.pupdr10().bits(0b01) });
+
+    // PC0..PC3: outputs, low.
+    let gpioc = &dp.GPIOC;
+    gpioc.bsrr().write(|w| {
+        w.br0()
+            .set_bit()
+            .br1()
+            .set_bit()
+            .br2()
+            .set_bit()
+            .br3()
+            .set_bit()
+    });
+    gpioc.moder().modify(|_, w| unsafe {
+        w.moder0()
+            .bits(0b01)
+            .moder1()
+            .bits(0b01)
+            .moder2()
+            .bits(0b01)
+            .moder3()
+            .bits(0b01)
+    });
+
+    let usart = dp.USART1;
+    // Both boards give a divider well below 2^16.
+    let brr = ((PCLK2_HZ + BAUD / 2) / BAUD) as u16;
+    usart.brr().write(|w| unsafe { w.bits(brr) });
+    usart.cr1().write(|w| {
+        w.ue()
+            .set_bit()
+            .te()
+            .set_bit()
+            .re()
+            .set_bit()
+            .rxneie()
+            .set_bit()
+    });
+
+    // SAFETY: the handlers only touch the critical-section-protected queue
+    // and atomics.
+    unsafe {
+        pac::NVIC::unmask(Interrupt::USART1);
+        pac::NVIC::unmask(Interrupt::TIM2);
+    }
+    Board {
+        usart,
+        tim2: StepTimer { tim: dp.TIM2 },
+    }
+}
+
+#[cfg(not(feature = "qemu"))]
+fn clocks(dp: &pac::Peripherals) {
+    let rcc = &dp.RCC;
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    while rcc.cr().read().hserdy().bit_is_clear() {}
+    // 168 MHz needs 5 wait states at 3.3 V.
+    dp.FLASH.acr().modify(|_, w| unsafe {
+        w.latency()
+            .bits(5)
+            .prften()
+            .set_bit()
+            .icen()
+            .set_bit()
+            .dcen()
+            .set_bit()
+    });
+    // 8 MHz / 8 × 336 / 2 = 168 MHz; USB 336 / 7 = 48 MHz.
+    rcc.pllcfgr().write(|w| unsafe {
+        w.pllsrc()
+            .set_bit()
+            .pllm()
+            .bits(8)
+            .plln()
+            .bits(336)
+            .pllp()
+            .bits(0b00)
+            .pllq()
+            .bits(7)
+    });
+    rcc.cr().modify(|_, w| w.pllon().set_bit());
+    while rcc.cr().read().pllrdy().bit_is_clear() {}
+    // AHB /1, APB1 /4 (42 MHz), APB2 /2 (84 MHz), system clock from the PLL.
+    rcc.cfgr().modify(|_, w| unsafe {
+        w.hpre()
+            .bits(0)
+            .ppre1()
+            .bits(0b101)
+            .ppre2()
+            .bits(0b100)
+            .sw()
+            .bits(0b10)
+    });
+    while rcc.cfgr().read().sws().bits() != 0b10 {}
+}
+
+#[cfg(feature = "qemu")]
+fn clocks(_: &pac::Peripherals) {
+    // HSI 16 MHz from reset; QEMU 7.2 would hang on any ready-bit wait.
+}
+
+/// USART1 and the step timer.
+pub struct Board {
+    usart: pac::USART1,
+    /// Paces the step events.
+    pub tim2: StepTimer,
+}
+
+impl Board {
+    /// Sends bytes, waiting for the transmitter each time.
+    pub fn send(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            while self.usart.sr().read().txe().bit_is_clear() {}
+            self.usart.dr().write(|w| unsafe { w.bits(u16::from(b)) });
+        }
+    }
+
+    /// The next received byte, if any; re-arms reception after a pause.
+    pub fn receive(&mut self) -> Option<u8> {
+        let byte = critical_section::with(|cs| {
+            RX.borrow(cs)
+                .try_borrow_mut()
+                .ok()
+                .and_then(|mut q| q.pop_front())
+        });
+        if byte.is_none() && RX_PAUSED.swap(false, Ordering::AcqRel) {
+            self.usart.cr1().modify(|_, w| w.rxneie().set_bit());
+        }
+        byte
+    }
+}
+
+/// Sleeps until an interrupt unless `ready` already holds; no wake-up is
+/// lost between the check and the sleep.
+pub fn sleep_unless(ready: impl Fn() -> bool) {
+    cortex_m::interrupt::free(|_| {
+        if !ready() {
+            cortex_m::asm::wfi();
+        }
+    });
+}
+
+/// Whether bytes are waiting.
+pub fn rx_pending() -> bool {
+    critical_section::with(|cs| RX.borrow(cs).try_borrow().is_ok_and(|q| !q.is_empty()))
+}
+
+#[interrupt]
+fn USART1() {
+    // SAFETY: read-only status access and the data register; this handler is
+    // the only reader of DR.
+    let usart = unsafe { &*pac::USART1::ptr() };
+    let sr = usart.sr().read();
+    if sr.rxne().bit_is_set() || sr.ore().bit_is_set() {
+        let full =
+            critical_section::with(|cs| RX.borrow(cs).try_borrow().map_or(true, |q| q.is_full()));
+        if full {
+            // Leave the byte in DR; stop asking until there is room.
+            usart.cr1().modify(|_, w| w.rxneie().clear_bit());
+            RX_PAUSED.store(true, Ordering::Release);
+        } else {
+            let byte = usart.dr().read().bits() as u8;
+            critical_section::with(|cs| {
+                if let Ok(mut q) = RX.borrow(cs).try_borrow_mut() {
+                    let _ = q.push_back(byte);
+                }
+            });
+        }
+    }
+}
+
+#[interrupt]
+fn TIM2() {
+    // SAFETY: only the status register's update flag is cleared here.
+    let tim = unsafe { &*pac::TIM2::ptr() };
+    tim.sr().modify(|_, w| w.uif().clear_bit());
+    TICK.store(true, Ordering::Release);
+}
+
+/// TIM2 as the step clock: an update interrupt every step period.
+pub struct StepTimer {
+    tim: pac::TIM2,
+}
+
+impl StepTimer {
+    /// The timer's counter, in ticks of `TIM2_CLK_HZ / (PSC + 1)`.
+    pub fn count(&self) -> u32 {
+        self.tim.cnt().read().bits()
+    }
+
+    /// Runs the counter freely at the undivided timer clock (measurements).
+    pub fn free_run(&mut self) {
+        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        self.tim.psc().write(|w| unsafe { w.bits(0) });
+        self.tim.arr().write(|w| unsafe { w.bits(u32::MAX) });
+        self.tim.egr().write(|w| w.ug().set_bit());
+        self.tim.dier().modify(|_, w| w.uie().clear_bit());
+        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    }
+}
+
+/// Under QEMU the steps drive no motor; unless `qemu-paced` is set they are
+/// issued as fast as the core runs, since every timer wake-up costs QEMU tens
+/// of microseconds of host time.
+#[cfg(all(feature = "qemu", not(feature = "qemu-paced")))]
+impl StepClock for StepTimer {
+    fn start(&mut self, _rate_hz: u32) {}
+    fn wait_tick(&mut self) {}
+    fn stop(&mut self) {}
+}
+
+#[cfg(any(not(feature = "qemu"), feature = "qemu-paced"))]
+impl StepClock for StepTimer {
+    fn start(&mut self, rate_hz: u32) {
+        // Count at 1 MHz; one update every 1/rate s (rate ≤ 500 kHz, so ARR ≥ 1).
+        let psc = TIM2_CLK_HZ / 1_000_000 - 1;
+        let arr = (1_000_000 / rate_hz.max(1)).saturating_sub(1).max(1);
+        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        self.tim.psc().write(|w| unsafe { w.bits(psc) });
+        self.tim.arr().write(|w| unsafe { w.bits(arr) });
+        self.tim.cnt().write(|w| unsafe { w.bits(0) });
+        self.tim.egr().write(|w| w.ug().set_bit());
+        self.tim.sr().modify(|_, w| w.uif().clear_bit());
+        TICK.store(false, Ordering::Release);
+        self.tim.dier().modify(|_, w| w.uie().set_bit());
+        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    }
+
+    fn wait_tick(&mut self) {
+        while !TICK.swap(false, Ordering::AcqRel) {
+            sleep_unless(|| TICK.load(Ordering::Acquire));
+        }
+    }
+
+    fn stop(&mut self) {
+        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        self.tim.dier().modify(|_, w| w.uie().clear_bit());
+        TICK.store(false, Ordering::Release);
+    }
+}
+
+/// Busy-wait delays counted in core cycles.
+pub struct CycleDelay;
+
+impl DelayNs for CycleDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        let cycles = (u64::from(ns) * u64::from(SYSCLK_HZ)).div_ceil(1_000_000_000);
+        cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX));
+    }
+}
+
+/// One pin of GPIOC, driven through its set/reset register.
+pub struct PortCPin(pub u8);
+
+impl ErrorType for PortCPin {
+    type Error = Infallible;
+}
+
+impl OutputPin for PortCPin {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        // SAFETY: BSRR writes are atomic and touch only this pin.
+        let gpioc = unsafe { &*pac::GPIOC::ptr() };
+        gpioc
+            .bsrr()
+            .write(|w| unsafe { w.bits(1u32 << (16 + u32::from(self.0 & 15))) });
+        Ok(())
+    }
+
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        // SAFETY: as above.
+        let gpioc = unsafe { &*pac::GPIOC::ptr() };
+        gpioc
+            .bsrr()
+            .write(|w| unsafe { w.bits(1u32 << u32::from(self.0 & 15)) });
+        Ok(())
+    }
+}
+
+/// Drives every STEP output low at once, without needing the driver (panics).
+pub fn step_outputs_low() {
+    // SAFETY: a single atomic BSRR write.
+    let gpioc = unsafe { &*pac::GPIOC::ptr() };
+    gpioc.bsrr().write(|w| w.br0().set_bit().br2().set_bit());
+}

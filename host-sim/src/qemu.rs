@@ -1,0 +1,204 @@
+//! The firmware in QEMU: build the ELF, boot it on `netduinoplus2` with USART1
+//! on a pseudo-terminal, and reach it with the same [`Client`] as a board.
+//!
+//! Facts of QEMU 7.2 this relies on: the firmware's `qemu` build runs on the
+//! HSI (no RCC ready bits are emulated); USART1 is the first `-serial`; bytes
+//! sent before the firmware has enabled its UART are lost, so the host
+//! repeats `VER` until the device answers; semihosting carries the defmt log
+//! and the exit code of a failed debug build.
+
+use crate::link::{check_reply_line, Client, LinkError};
+use std::io::{self, BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// The QEMU binary.
+pub const QEMU: &str = "qemu-system-arm";
+
+/// The firmware crate's directory.
+pub fn firmware_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware")
+}
+
+/// Whether QEMU can be started here.
+pub fn qemu_available() -> bool {
+    Command::new(QEMU)
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+fn other(msg: String) -> LinkError {
+    LinkError::Io(io::Error::other(msg))
+}
+
+/// Builds the firmware for QEMU (release, `--features <features>`) if it is
+/// not up to date, and returns the ELF's path.
+pub fn build_firmware(features: &str) -> Result<PathBuf, LinkError> {
+    let dir = firmware_dir();
+    let target_dir = dir.join("target").join(features.replace(',', "+"));
+    let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .current_dir(&dir)
+        .args(["build", "--release", "--features", features, "--target-dir"])
+        .arg(&target_dir)
+        .status()
+        .map_err(|e| other(format!("cargo for the firmware: {e}")))?;
+    if !status.success() {
+        return Err(other(format!("firmware build failed ({status})")));
+    }
+    Ok(target_dir.join("thumbv7em-none-eabihf/release/firmware"))
+}
+
+/// A running QEMU with the firmware.
+pub struct Qemu {
+    child: Child,
+    pty: String,
+    log: Arc<Mutex<Vec<u8>>>,
+}
+
+impl Qemu {
+    /// Boots `elf`; `icount` makes instruction counts deterministic
+    /// (`-icount shift=0`: one instruction, one nanosecond of virtual time).
+    pub fn boot(elf: &Path, icount: bool) -> Result<Qemu, LinkError> {
+        let mut cmd = Command::new(QEMU);
+        cmd.args([
+            "-machine",
+            "netduinoplus2",
+            "-display",
+            "none",
+            "-monitor",
+            "none",
+            "-serial",
+            "pty",
+            "-semihosting-config",
+            "enable=on,target=native",
+        ]);
+        if icount {
+            cmd.args(["-icount", "shift=0,sleep=off"]);
+        }
+        cmd.arg("-kernel").arg(elf);
+        cmd.stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        let mut child = cmd
+            .spawn()
+            .map_err(|e| other(format!("{QEMU}: {e} (is it installed?)")))?;
+        let stdout = child
+            .stdout
+            .take()
+            .ok_or_else(|| other("no stdout".into()))?;
+        let stderr = child
+            .stderr
+            .take()
+            .ok_or_else(|| other("no stderr".into()))?;
+        let log = Arc::new(Mutex::new(Vec::new()));
+        let (tx, rx) = mpsc::channel();
+        // QEMU names the pty on stdout; what follows there is the
+        // semihosting log.
+        let out_log = Arc::clone(&log);
+        let tx_out = tx.clone();
+        std::thread::spawn(move || {
+            let mut reader = BufReader::new(stdout);
+            let mut line = Vec::new();
+            if reader.read_until(b'\n', &mut line).is_ok() {
+                let text = String::from_utf8_lossy(&line);
+                if let Some(p) = text.split("redirected to ").nth(1) {
+                    let path = p.split_whitespace().next().unwrap_or("").to_owned();
+                    let _ = tx_out.send(path);
+                } else if let Ok(mut l) = out_log.lock() {
+                    l.extend_from_slice(&line);
+                }
+            }
+            let mut buf = [0u8; 1024];
+            while let Ok(n) = reader.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                if let Ok(mut l) = out_log.lock() {
+                    l.extend_from_slice(&buf[..n]);
+                }
+            }
+        });
+        let err_log = Arc::clone(&log);
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                if let Some(p) = line.split("redirected to ").nth(1) {
+                    let _ = tx.send(p.split_whitespace().next().unwrap_or("").to_owned());
+                } else if let Ok(mut l) = err_log.lock() {
+                    l.extend_from_slice(line.as_bytes());
+                    l.push(b'\n');
+                }
+            }
+        });
+        let pty = match rx.recv_timeout(Duration::from_secs(10)) {
+            Ok(p) if !p.is_empty() => p,
+            _ => {
+                let _ = child.kill();
+                return Err(other("QEMU did not report its serial pty".into()));
+            }
+        };
+        Ok(Qemu { child, pty, log })
+    }
+
+    /// The host end of USART1.
+    pub fn pty(&self) -> &str {
+        &self.pty
+    }
+
+    /// Opens the link and waits until the firmware answers.
+    pub fn connect(&mut self, timeout: Duration) -> Result<Client, LinkError> {
+        let mut client = Client::open(&self.pty, Duration::from_millis(300))?;
+        let deadline = Instant::now() + Duration::from_secs(20);
+        loop {
+            if let Some(status) = self.child.try_wait()? {
+                return Err(other(format!("QEMU exited early ({status})")));
+            }
+            client.write_raw(b"\r\nVER\r\n")?;
+            let mut answered = false;
+            while let Ok(line) = client.read_line() {
+                if check_reply_line(&line).is_ok_and(|b| b.starts_with("OK PROTO=1")) {
+                    answered = true;
+                }
+            }
+            if answered {
+                break;
+            }
+            if Instant::now() > deadline {
+                return Err(LinkError::Timeout);
+            }
+        }
+        client.drain();
+        client.set_timeout(timeout);
+        Ok(client)
+    }
+
+    /// Whatever QEMU and the firmware wrote besides the pty (the defmt
+    /// frames and QEMU's own messages).
+    pub fn log(&self) -> Vec<u8> {
+        self.log.lock().map(|l| l.clone()).unwrap_or_default()
+    }
+
+    /// Waits for QEMU to exit by itself (a semihosting exit), up to `timeout`.
+    pub fn wait_exit(&mut self, timeout: Duration) -> Option<std::process::ExitStatus> {
+        let deadline = Instant::now() + timeout;
+        while Instant::now() < deadline {
+            if let Ok(Some(s)) = self.child.try_wait() {
+                return Some(s);
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        None
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
