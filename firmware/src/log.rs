@@ -65,6 +65,12 @@ pub fn init() {
     sink::init();
 }
 
+/// Writes plain text to the host's standard output (QEMU semihosting).
+#[cfg(feature = "qemu")]
+pub fn host_print(text: &str) {
+    sink::write(text.as_bytes());
+}
+
 #[cfg(feature = "qemu")]
 mod sink {
     use core::sync::atomic::{AtomicUsize, Ordering};
@@ -79,6 +85,7 @@ mod sink {
         STDOUT.store(handle, Ordering::Relaxed);
     }
 
+    /// Writes bytes to the host's standard output.
     pub fn write(bytes: &[u8]) {
         let handle = STDOUT.load(Ordering::Relaxed);
         if handle != usize::MAX {

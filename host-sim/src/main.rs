@@ -31,6 +31,9 @@ enum Command {
     /// Boot the firmware in QEMU and compare it with the f64 reference over
     /// its serial link.
     Qemu(QemuArgs),
+    /// Count the firmware's instructions per step event and per request on
+    /// the Cortex-M4, under QEMU -icount.
+    QemuBench,
     /// Serve the in-process device for a terminal or another program.
     Serve {
         /// Serve on standard input and output.
@@ -95,6 +98,7 @@ fn main() -> ExitCode {
     let result = match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
         Command::Run(args) => run(&args),
         Command::Qemu(args) => run_qemu(&args),
+        Command::QemuBench => qemu_bench(),
         Command::Serve {
             stdio: _,
             pty: true,
@@ -169,8 +173,30 @@ fn run_qemu(args: &QemuArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
         qemu.pty(),
         host_sim::link::BAUD
     );
-    let client = qemu.connect(Duration::from_secs(60))?;
+    let mut client = qemu.connect(Duration::from_secs(60))?;
+    let n = 1000;
+    let t0 = Instant::now();
+    for _ in 0..n {
+        let r = client.request("POS")?;
+        if !r.is_ok() {
+            return Err(format!("POS refused: {}", r.last).into());
+        }
+    }
+    println!(
+        "link: {:.0} request lines/s (POS round trips)",
+        f64::from(n) / t0.elapsed().as_secs_f64()
+    );
     Ok(compare_all(client, &args.scenario)?)
+}
+
+fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let elf = host_sim::qemu::build_firmware("qemu")?;
+    let bench = elf.with_file_name("bench");
+    println!("Cortex-M4 instruction counts (QEMU netduinoplus2, -icount shift=0):");
+    for line in host_sim::qemu::icount_bench(&bench)? {
+        println!("  {line}");
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn compare_all<T: Transport>(link: T, args: &ScenarioArgs) -> Result<ExitCode, LinkError> {

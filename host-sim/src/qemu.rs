@@ -38,7 +38,8 @@ fn other(msg: String) -> LinkError {
 }
 
 /// Builds the firmware for QEMU (release, `--features <features>`) if it is
-/// not up to date, and returns the ELF's path.
+/// not up to date, and returns the controller ELF's path; the `bench` ELF
+/// lies beside it.
 pub fn build_firmware(features: &str) -> Result<PathBuf, LinkError> {
     let dir = firmware_dir();
     let target_dir = dir.join("target").join(features.replace(',', "+"));
@@ -65,6 +66,11 @@ impl Qemu {
     /// Boots `elf`; `icount` makes instruction counts deterministic
     /// (`-icount shift=0`: one instruction, one nanosecond of virtual time).
     pub fn boot(elf: &Path, icount: bool) -> Result<Qemu, LinkError> {
+        Self::boot_with(elf, icount, "pty")
+    }
+
+    /// Boots `elf` with USART1 on `serial` (`pty` or `null`).
+    pub fn boot_with(elf: &Path, icount: bool, serial: &str) -> Result<Qemu, LinkError> {
         let mut cmd = Command::new(QEMU);
         cmd.args([
             "-machine",
@@ -74,7 +80,7 @@ impl Qemu {
             "-monitor",
             "none",
             "-serial",
-            "pty",
+            serial,
             "-semihosting-config",
             "enable=on,target=native",
         ]);
@@ -135,11 +141,15 @@ impl Qemu {
                 }
             }
         });
-        let pty = match rx.recv_timeout(Duration::from_secs(10)) {
-            Ok(p) if !p.is_empty() => p,
-            _ => {
-                let _ = child.kill();
-                return Err(other("QEMU did not report its serial pty".into()));
+        let pty = if serial != "pty" {
+            String::new()
+        } else {
+            match rx.recv_timeout(Duration::from_secs(10)) {
+                Ok(p) if !p.is_empty() => p,
+                _ => {
+                    let _ = child.kill();
+                    return Err(other("QEMU did not report its serial pty".into()));
+                }
             }
         };
         Ok(Qemu { child, pty, log })
@@ -201,4 +211,25 @@ impl Drop for Qemu {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// Runs the `bench` firmware under `-icount shift=0` and returns its report
+/// lines (instruction counts of the motion path on the Cortex-M4).
+pub fn icount_bench(bench_elf: &Path) -> Result<Vec<String>, LinkError> {
+    let mut q = Qemu::boot_with(bench_elf, true, "null")?;
+    let status = q
+        .wait_exit(Duration::from_secs(120))
+        .ok_or(LinkError::Timeout)?;
+    // Let the reader thread take the last bytes.
+    std::thread::sleep(Duration::from_millis(100));
+    if !status.success() {
+        return Err(other(format!("bench firmware failed ({status})")));
+    }
+    let log = q.log();
+    Ok(String::from_utf8_lossy(&log)
+        .split('\n')
+        .map(|l| l.trim_start_matches(|c: char| !c.is_ascii_graphic()))
+        .filter(|l| l.contains(": ") && l.is_ascii())
+        .map(str::to_owned)
+        .collect())
 }

@@ -1,0 +1,128 @@
+//! Instruction counts of the motion path on the Cortex-M4, under QEMU.
+//!
+//! Run by `host-sim qemu-bench` with `-icount shift=0`: every instruction
+//! advances QEMU's virtual clock by 1 ns, and TIM2, free-running at QEMU's
+//! 1 GHz timer clock with no prescaler, counts one tick per nanosecond; so a
+//! difference of TIM2 counts is a count of instructions. Prints one line per
+//! measurement and exits through semihosting.
+#![no_std]
+#![no_main]
+
+use core::fmt::Write;
+use core_nostd::impulse::Impulses;
+use core_nostd::interleave::{ImpulsePoint, LinearBlock};
+use core_nostd::protocol::{Device, Io};
+use core_nostd::stepdir::{DriveTiming, StepClock, StepDir};
+use cortex_m_rt::entry;
+use embedded_hal::delay::DelayNs;
+use firmware::board::{self, PortCPin, StepTimer};
+use firmware::{halt, log};
+use stm32f4::stm32f405 as pac;
+
+/// A line of text for the host.
+struct Line(heapless::String<160>);
+
+impl Line {
+    fn print(args: core::fmt::Arguments<'_>) {
+        let mut l = Line(heapless::String::new());
+        let _ = l.0.write_fmt(args);
+        let _ = l.0.push('\n');
+        #[cfg(feature = "qemu")]
+        log::host_print(&l.0);
+    }
+}
+
+/// No pacing and no pulse delays: what remains is the code's own cost.
+struct Free;
+impl StepClock for Free {
+    fn start(&mut self, _: u32) {}
+    fn wait_tick(&mut self) {}
+    fn stop(&mut self) {}
+}
+impl DelayNs for Free {
+    fn delay_ns(&mut self, _: u32) {}
+}
+
+/// Replies are counted, not sent.
+struct Quiet(u32);
+impl Io for Quiet {
+    fn send(&mut self, line: &[u8]) {
+        self.0 = self.0.wrapping_add(line.len() as u32);
+    }
+}
+
+fn measure(tim: &StepTimer, f: impl FnOnce()) -> u32 {
+    let t0 = tim.count();
+    f();
+    tim.count().wrapping_sub(t0)
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(dp) = pac::Peripherals::take() else {
+        halt()
+    };
+    log::init();
+    let mut b = board::init(dp);
+    b.tim2.free_run();
+    let tim = &b.tim2;
+
+    let empty = measure(tim, || {});
+    // Calibration: `asm::delay(n)` runs a known loop.
+    let delay = measure(tim, || cortex_m::asm::delay(100_000)).wrapping_sub(empty);
+    Line::print(format_args!("calibration: delay(100000) = {delay} ticks, empty = {empty}"));
+
+    let p = |x, z| ImpulsePoint {
+        x: Impulses(x),
+        z: Impulses(z),
+    };
+    let Ok(block) = LinearBlock::new(p(0, 0), p(100_000, -61_803)) else {
+        halt()
+    };
+    let n = block.events().len() as u32;
+
+    let mut sink = 0u32;
+    let t = measure(tim, || {
+        for e in block.events() {
+            sink = sink.wrapping_add(u32::from(e.bits()));
+        }
+    });
+    Line::print(format_args!(
+        "interleaver: {n} events, {t} instructions, {}.{:02} per event ({sink})",
+        t / n,
+        (t % n) * 100 / n
+    ));
+
+    let mut axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
+    let timing = DriveTiming::DEFAULT;
+    let t = measure(tim, || {
+        let _ = axes.run(&block, &timing, &mut Free, &mut Free);
+    });
+    Line::print(format_args!(
+        "step/dir outputs (GPIO writes, no waits): {t} instructions, {}.{:02} per event",
+        t / n,
+        (t % n) * 100 / n
+    ));
+
+    // The handler: a MOVE of the same block (parse, quantize, SEQ over every
+    // event), then an empty MOVE for the per-request cost.
+    let mut dev = Device::new();
+    let mut quiet = Quiet(0);
+    dev.receive_bytes(b"CFG DIAM=0\r\n", &mut quiet);
+    let t = measure(tim, || dev.receive_bytes(b"MOVE X=500 Z=-618.03\r\n", &mut quiet));
+    let t0 = measure(tim, || dev.receive_bytes(b"MOVE\r\n", &mut quiet));
+    let per = t.saturating_sub(t0);
+    Line::print(format_args!(
+        "MOVE request: {t} instructions for {n} events, {}.{:02} per event (SEQ CRC), {t0} for an empty MOVE",
+        per / n,
+        (per % n) * 100 / n
+    ));
+    let t = measure(tim, || dev.receive_bytes(b"POS\r\n", &mut quiet));
+    Line::print(format_args!("POS request: {t} instructions"));
+    let t = measure(tim, || dev.receive_bytes(b"CFG HX=0.001 HZ=0.002 DIAM=1\r\n", &mut quiet));
+    Line::print(format_args!("CFG request: {t} instructions"));
+
+    #[cfg(feature = "qemu")]
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
+    halt()
+}
