@@ -70,7 +70,9 @@ fn main() -> ! {
     let empty = measure(tim, || {});
     // Calibration: `asm::delay(n)` runs a known loop.
     let delay = measure(tim, || cortex_m::asm::delay(100_000)).wrapping_sub(empty);
-    Line::print(format_args!("calibration: delay(100000) = {delay} ticks, empty = {empty}"));
+    Line::print(format_args!(
+        "calibration: delay(100000) = {delay} ticks, empty = {empty}"
+    ));
 
     let p = |x, z| ImpulsePoint {
         x: Impulses(x),
@@ -109,7 +111,9 @@ fn main() -> ! {
     let mut dev = Device::new();
     let mut quiet = Quiet(0);
     dev.receive_bytes(b"CFG DIAM=0\r\n", &mut quiet);
-    let t = measure(tim, || dev.receive_bytes(b"MOVE X=500 Z=-618.03\r\n", &mut quiet));
+    let t = measure(tim, || {
+        dev.receive_bytes(b"MOVE X=500 Z=-618.03\r\n", &mut quiet)
+    });
     let t0 = measure(tim, || dev.receive_bytes(b"MOVE\r\n", &mut quiet));
     let per = t.saturating_sub(t0);
     Line::print(format_args!(
@@ -119,7 +123,9 @@ fn main() -> ! {
     ));
     let t = measure(tim, || dev.receive_bytes(b"POS\r\n", &mut quiet));
     Line::print(format_args!("POS request: {t} instructions"));
-    let t = measure(tim, || dev.receive_bytes(b"CFG HX=0.001 HZ=0.002 DIAM=1\r\n", &mut quiet));
+    let t = measure(tim, || {
+        dev.receive_bytes(b"CFG HX=0.001 HZ=0.002 DIAM=1\r\n", &mut quiet)
+    });
     Line::print(format_args!("CFG request: {t} instructions"));
 
     #[cfg(feature = "qemu")]

@@ -1,0 +1,25 @@
+//! Raises a STEP output and panics: under QEMU a debug build must stop the
+//! outputs and exit with a failure code; a release build must not link.
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::entry;
+use embedded_hal::digital::OutputPin;
+use firmware::board::{self, PortCPin};
+use firmware::{halt, log};
+use stm32f4::stm32f405 as pac;
+
+#[entry]
+fn main() -> ! {
+    let Some(dp) = pac::Peripherals::take() else {
+        halt()
+    };
+    log::init();
+    let _board = board::init(dp);
+    let _ = PortCPin(0).set_high();
+    // An index the optimiser cannot see through, so the bounds check stays.
+    let table = [1u8, 2, 3];
+    let i = core::hint::black_box(7usize);
+    defmt::info!("unreachable: {=u8}", table[i]);
+    halt()
+}

@@ -1,0 +1,124 @@
+//! The firmware booted in QEMU (`netduinoplus2`), reached over its USART1
+//! pseudo-terminal with the `serialport` crate: it answers exactly as the
+//! in-process device does, and its impulses equal the f64 reference's.
+//!
+//! Skipped with a message where `qemu-system-arm` is missing, except under CI
+//! (`CI` set), where a missing QEMU fails.
+
+use host_sim::compare::Comparator;
+use host_sim::device::LocalDevice;
+use host_sim::qemu::{build_firmware, firmware_dir, qemu_available, Qemu};
+use host_sim::scenario;
+use std::process::Command;
+use std::time::Duration;
+
+fn qemu_or_skip() -> bool {
+    if qemu_available() {
+        return true;
+    }
+    assert!(std::env::var_os("CI").is_none(), "CI needs qemu-system-arm");
+    eprintln!("qemu-system-arm not found: QEMU test skipped");
+    false
+}
+
+fn finals(bytes: &[u8]) -> usize {
+    String::from_utf8_lossy(bytes)
+        .split("\r\n")
+        .filter(|l| l.starts_with("OK") || l.starts_with("ERR "))
+        .count()
+}
+
+#[test]
+fn firmware_answers_the_mixed_session_like_the_in_process_device() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let session = scenario::mixed_session();
+    let expected = LocalDevice::new().feed(&session);
+    let elf = build_firmware("qemu").unwrap();
+    let mut qemu = Qemu::boot(&elf, true).unwrap();
+    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    // The whole session at once: the firmware must keep up through its
+    // receive queue, with long blocks among the requests.
+    client.write_raw(&session).unwrap();
+    let mut got = Vec::new();
+    while finals(&got) < finals(&expected) {
+        let line = client.read_line().unwrap();
+        got.extend_from_slice(line.as_bytes());
+        got.extend_from_slice(b"\r\n");
+    }
+    assert_eq!(
+        String::from_utf8_lossy(&got),
+        String::from_utf8_lossy(&expected)
+    );
+}
+
+#[test]
+fn firmware_impulses_equal_the_reference() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let elf = build_firmware("qemu").unwrap();
+    let mut qemu = Qemu::boot(&elf, true).unwrap();
+    let client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let mut cmp = Comparator::new(client).unwrap();
+    for s in [
+        scenario::table21(),
+        scenario::krylenko(),
+        scenario::random(11, 400),
+    ] {
+        cmp.run(&s, |_| {}).unwrap();
+    }
+    assert!(
+        cmp.tally.mismatches.is_empty(),
+        "{:?}",
+        cmp.tally.mismatches
+    );
+    assert_eq!(cmp.tally.blocks, 462);
+}
+
+#[test]
+fn a_debug_panic_stops_and_exits_with_failure() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let dir = firmware_dir();
+    let target = dir.join("target/panic-check");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(&cargo)
+        .current_dir(&dir)
+        .args([
+            "build",
+            "--features",
+            "qemu,panic-check",
+            "--bin",
+            "panic_check",
+            "--target-dir",
+        ])
+        .arg(&target)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let elf = target.join("thumbv7em-none-eabihf/debug/panic_check");
+    let mut qemu = Qemu::boot_with(&elf, true, "null").unwrap();
+    let status = qemu.wait_exit(Duration::from_secs(30)).expect("QEMU exits");
+    assert_eq!(status.code(), Some(1), "{status}");
+
+    // The same panic in a release build is refused at link time.
+    let out = Command::new(&cargo)
+        .current_dir(&dir)
+        .args([
+            "build",
+            "--release",
+            "--features",
+            "qemu,panic-check",
+            "--bin",
+            "panic_check",
+            "--target-dir",
+        ])
+        .arg(&target)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("release_build_has_a_reachable_panic"));
+}
