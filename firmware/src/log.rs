@@ -139,7 +139,7 @@ mod sink {
         max_up: 1,
         max_down: 0,
         up: Channel {
-            name: b"defmt\0".as_ptr(),
+            name: c"defmt".as_ptr().cast(),
             buffer: BUFFER.0.get().cast(),
             size: SIZE,
             write: AtomicUsize::new(0),
