@@ -13,6 +13,8 @@
 //!   with integer additions only, for a timer interrupt to pull.
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
+//! - [`trig`]: fixed-point sine, cosine, atan2 and square root, with error
+//!   bounds.
 //! - [`stepdir`]: step/dir outputs on `embedded-hal` pins, paced by a timer.
 //!
 //! # Numeric conventions
@@ -38,3 +40,4 @@ pub mod interleave;
 pub mod length;
 pub mod protocol;
 pub mod stepdir;
+pub mod trig;

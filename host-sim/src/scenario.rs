@@ -307,7 +307,8 @@ pub fn random(seed: u64, n: usize) -> Scenario {
     }
 }
 
-/// A mixed session of raw request bytes: calculator and motion requests,
+/// A mixed session of raw request bytes: calculator (`CONE`), motion and
+/// G-code requests (a compensated program),
 /// bad input, binary garbage, an over-long line, wrong and right checksums,
 /// every terminator. Two devices that speak the protocol alike answer it with
 /// identical bytes.
@@ -320,6 +321,9 @@ pub fn mixed_session() -> Vec<u8> {
     let mut line = |l: &str| push(&mut s, l);
     line("VER");
     line("CFG");
+    line("CONE A=45");
+    line("CONE A=2:51:51 RN=0.8");
+    line("CONE A=90");
     line("cfg hx=0.0025 tol=0.02 pass=rough");
     line("MOVE X=27.532 Z=0");
     line("MOVE X=48 Z=-10.234");
@@ -338,6 +342,10 @@ pub fn mixed_session() -> Vec<u8> {
     line("");
     line("   ");
     line("ZERO 1");
+    line("G90 G00 X30 Z10");
+    line("G42 G01 X28 Z0");
+    line("X48 Z-10");
+    line("G40 X60");
     line("CFG DIAM=0");
     line("MOVE X=0.0025 Z=0.005");
     line("POS");
