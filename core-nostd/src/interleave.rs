@@ -34,6 +34,11 @@ impl StepEvent {
     /// Z steps towards negative.
     pub const Z_NEG: u8 = 0b1000;
 
+    /// An event from its protocol byte (the caller keeps the layout).
+    pub(crate) const fn from_bits(bits: u8) -> StepEvent {
+        StepEvent(bits)
+    }
+
     /// The protocol byte of the event.
     pub const fn bits(self) -> u8 {
         self.0

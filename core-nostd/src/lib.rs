@@ -11,6 +11,8 @@
 //!   1977 residual-carry rule in closed form.
 //! - [`interleave`]: the step events of a linear block, produced one at a time
 //!   with integer additions only, for a timer interrupt to pull.
+//! - [`arc`]: arcs by chords with residual carry, and the direct
+//!   step-by-step circular interpolator of the ЭМ-907.
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
 //! - [`trig`]: fixed-point sine, cosine, atan2 and square root, with error
@@ -34,6 +36,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod arc;
 pub mod crc32;
 pub mod impulse;
 pub mod interleave;

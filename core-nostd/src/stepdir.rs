@@ -7,6 +7,7 @@
 //! pulse width, and fall. Events come from the core's iterator one at a time;
 //! a block is never materialised as a list.
 
+use crate::arc::DirectArc;
 use crate::interleave::{LinearBlock, StepEvent};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::OutputPin;
@@ -150,7 +151,40 @@ where
         clock: &mut C,
         delay: &mut D,
     ) -> Result<(), PinError> {
-        let result = self.run_inner(block, timing, clock, delay);
+        let (dx, dz) = block.delta();
+        self.run_events(dx, dz, block.events(), timing, clock, delay)
+    }
+
+    /// Issues every step event of a direct arc (one quadrant: each axis
+    /// keeps its direction).
+    pub fn run_direct<C: StepClock, D: DelayNs>(
+        &mut self,
+        arc: &DirectArc,
+        timing: &DriveTiming,
+        clock: &mut C,
+        delay: &mut D,
+    ) -> Result<(), PinError> {
+        let (dx, dz) = arc.delta();
+        self.run_events(dx, dz, arc.events(), timing, clock, delay)
+    }
+
+    /// Issues `events`, the axes moving `dx`, `dz` impulses in all (their
+    /// signs set DIR once, before the first step).
+    pub fn run_events<E, C, D>(
+        &mut self,
+        dx: i32,
+        dz: i32,
+        events: E,
+        timing: &DriveTiming,
+        clock: &mut C,
+        delay: &mut D,
+    ) -> Result<(), PinError>
+    where
+        E: Iterator<Item = StepEvent>,
+        C: StepClock,
+        D: DelayNs,
+    {
+        let result = self.run_inner(dx, dz, events, timing, clock, delay);
         clock.stop();
         if result.is_err() {
             self.stop_outputs();
@@ -158,14 +192,20 @@ where
         result
     }
 
-    fn run_inner<C: StepClock, D: DelayNs>(
+    fn run_inner<E, C, D>(
         &mut self,
-        block: &LinearBlock,
+        dx: i32,
+        dz: i32,
+        events: E,
         timing: &DriveTiming,
         clock: &mut C,
         delay: &mut D,
-    ) -> Result<(), PinError> {
-        let (dx, dz) = block.delta();
+    ) -> Result<(), PinError>
+    where
+        E: Iterator<Item = StepEvent>,
+        C: StepClock,
+        D: DelayNs,
+    {
         if dx == 0 && dz == 0 {
             return Ok(());
         }
@@ -181,7 +221,7 @@ where
         }
         delay.delay_us(timing.setup_us);
         clock.start(timing.rate_hz);
-        for event in block.events() {
+        for event in events {
             clock.wait_tick();
             self.pulse(event, timing, delay)?;
         }

@@ -101,10 +101,12 @@ const fn mul_q62(a: i64, b: i64) -> i64 {
 
 /// `a / d` for a small positive `d`, rounded half away from zero.
 const fn div_small(a: i64, d: i64) -> i64 {
-    if a >= 0 {
-        (a + d / 2) / d
-    } else {
-        -((-a + d / 2) / d)
+    // d is one of the series' constants, never zero; |a| ≤ 2⁶³ − 1.
+    let h = d / 2;
+    match (a.unsigned_abs() + h.unsigned_abs()).checked_div(d.unsigned_abs()) {
+        Some(q) if a >= 0 => q as i64,
+        Some(q) => -(q as i64),
+        None => 0,
     }
 }
 
@@ -264,7 +266,11 @@ pub const fn isqrt(n: u128) -> u64 {
     let bits = 128 - n.leading_zeros();
     let mut x: u128 = 1 << bits.div_ceil(2);
     loop {
-        let y = (x + n / x) / 2;
+        // x ≥ 1 throughout.
+        let Some(q) = n.checked_div(x) else {
+            return 0;
+        };
+        let y = (x + q) / 2;
         if y >= x {
             return x as u64;
         }

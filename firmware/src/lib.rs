@@ -16,6 +16,7 @@ pub mod board;
 pub mod log;
 
 use board::{Board, CycleDelay, PortCPin};
+use core_nostd::arc::DirectArc;
 use core_nostd::interleave::LinearBlock;
 use core_nostd::protocol::Io;
 use core_nostd::stepdir::{DriveTiming, StepDir};
@@ -44,6 +45,16 @@ impl Io for Controller {
         if self
             .axes
             .run(block, timing, &mut self.board.tim2, &mut CycleDelay)
+            .is_err()
+        {
+            defmt::error!("step outputs failed");
+        }
+    }
+
+    fn run_direct(&mut self, arc: &DirectArc, timing: &DriveTiming) {
+        if self
+            .axes
+            .run_direct(arc, timing, &mut self.board.tim2, &mut CycleDelay)
             .is_err()
         {
             defmt::error!("step outputs failed");

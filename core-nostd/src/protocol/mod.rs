@@ -12,6 +12,7 @@ mod words;
 
 pub use session::{Config, Pass, Session, TipCode, NAME, VERSION};
 
+use crate::arc::DirectArc;
 use crate::interleave::LinearBlock;
 use crate::stepdir::DriveTiming;
 use core::fmt;
@@ -72,6 +73,11 @@ pub trait Io {
     /// default does nothing (a calculator without motion).
     fn run_block(&mut self, block: &LinearBlock, timing: &DriveTiming) {
         let _ = (block, timing);
+    }
+
+    /// Runs one accepted direct (step-by-step) arc, as `run_block` does.
+    fn run_direct(&mut self, arc: &DirectArc, timing: &DriveTiming) {
+        let _ = (arc, timing);
     }
 }
 

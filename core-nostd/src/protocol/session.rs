@@ -7,6 +7,7 @@
 use super::reply::{checksum, hex_digits, ReplyLine};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
+use crate::arc::{ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
 use crate::crc32::Crc32;
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
@@ -144,6 +145,17 @@ enum Refusal<'a> {
     NoArgs(&'static str),
     Value(&'static str, &'static str),
     Range(&'static str),
+    Geometry(&'static str),
+    Missing(&'static str),
+}
+
+impl From<ArcError> for Refusal<'_> {
+    fn from(e: ArcError) -> Self {
+        match e {
+            ArcError::Geometry(why) => Refusal::Geometry(why),
+            ArcError::Range(why) => Refusal::Range(why),
+        }
+    }
 }
 
 impl<'a> From<ArgError<'a>> for Refusal<'a> {
@@ -225,6 +237,8 @@ impl Session {
             Ok(())
         } else if command.eq_ignore_ascii_case("MOVE") {
             self.move_command(words, io)
+        } else if command.eq_ignore_ascii_case("ARC") {
+            self.arc_command(words, io)
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
         } else if command.eq_ignore_ascii_case("POS") {
@@ -259,19 +273,10 @@ impl Session {
             };
         }
         if let Some(v) = tol {
-            cfg.tol = parse_bounded("TOL", v, 0, MAX_TOL_UM, "must be over 0, at most 1 mm")?;
-            if cfg.tol == Length::ZERO {
-                return Err(Refusal::Value("TOL", "must be over 0, at most 1 mm"));
-            }
+            cfg.tol = parse_tol(v)?;
         }
         if let Some(v) = pass {
-            cfg.pass = if v.eq_ignore_ascii_case("FIN") {
-                Pass::Finish
-            } else if v.eq_ignore_ascii_case("ROUGH") {
-                Pass::Rough
-            } else {
-                return Err(Refusal::Value("PASS", "must be FIN or ROUGH"));
-            };
+            cfg.pass = parse_pass(v)?;
         }
         // A new price re-expresses the registers at the same commanded point.
         let pos = ImpulsePoint {
@@ -295,6 +300,183 @@ impl Session {
             )),
         );
         Ok(())
+    }
+
+    fn arc_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [x, z, i, k, dir, tol, pass, mode, feed] = parse_args(
+            words,
+            ["X", "Z", "I", "K", "DIR", "TOL", "PASS", "MODE", "F"],
+        )?;
+        let (Some(x), Some(z), Some(i), Some(k), Some(dir)) = (x, z, i, k, dir) else {
+            return Err(Refusal::Missing("ARC needs X, Z, I, K and DIR"));
+        };
+        let dir = if dir.eq_ignore_ascii_case("CW") {
+            ArcDir::Cw
+        } else if dir.eq_ignore_ascii_case("CCW") {
+            ArcDir::Ccw
+        } else {
+            return Err(Refusal::Value("DIR", "must be CW or CCW"));
+        };
+        let tol = match tol {
+            Some(v) => parse_tol(v)?,
+            None => self.cfg.tol,
+        };
+        let finish = match pass {
+            Some(v) => parse_pass(v)? == Pass::Finish,
+            None => self.cfg.pass == Pass::Finish,
+        };
+        let direct = match mode {
+            None => false,
+            Some(v) if v.eq_ignore_ascii_case("CHORD") => false,
+            Some(v) if v.eq_ignore_ascii_case("DIRECT") => true,
+            Some(_) => return Err(Refusal::Value("MODE", "must be CHORD or DIRECT")),
+        };
+        let feed = match feed {
+            None => None,
+            Some(_) if !direct => return Err(Refusal::Missing("F needs MODE=DIRECT")),
+            Some(v) => {
+                let f = parse_length("F", v)?;
+                if f <= Length::ZERO {
+                    return Err(Refusal::Value("F", "must be over 0 mm/min"));
+                }
+                Some(f)
+            }
+        };
+        let end_x = self.x_word(parse_length("X", x)?)?;
+        let end_z = parse_length("Z", z)?;
+        let (di, dk) = (parse_length("I", i)?, parse_length("K", k)?);
+        let beyond = Refusal::Range("arc centre beyond 99999.999999 mm");
+        let centre = [
+            self.cmd[0].checked_add(di).ok_or(beyond)?,
+            self.cmd[1]
+                .checked_add(dk)
+                .ok_or(Refusal::Range("arc centre beyond 99999.999999 mm"))?,
+        ];
+        let points = ArcPoints {
+            start: self.cmd,
+            end: [end_x, end_z],
+            centre,
+        };
+        if direct {
+            self.arc_direct(&points, dir, feed, io)
+        } else {
+            self.arc_chords(&points, dir, tol, finish, io)
+        }
+    }
+
+    fn arc_chords<'a, I: Io>(
+        &mut self,
+        points: &ArcPoints,
+        dir: ArcDir,
+        tol: Length,
+        finish: bool,
+        io: &mut I,
+    ) -> Outcome<'a> {
+        let plan = ChordPlan::new(points, dir, tol, finish)?;
+        let (hx, hz) = (self.cfg.hx, self.cfg.hz);
+        let n = plan.chords();
+        // Check every chord before the first one moves.
+        let mut at = self.pos;
+        for i in 1..=n {
+            let to = plan
+                .chord_end(i, hx, hz)
+                .map_err(|_| Refusal::Range(RANGE_POS))?;
+            LinearBlock::new(at, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+            at = to;
+        }
+        let start = self.pos;
+        let mut crc = Crc32::new();
+        let mut at = self.pos;
+        for i in 1..=n {
+            let Ok(to) = plan.chord_end(i, hx, hz) else {
+                break;
+            };
+            let Ok(block) = LinearBlock::new(at, to) else {
+                break;
+            };
+            crc = block_crc(&block, crc);
+            io.run_block(&block, &self.drive);
+            let (nx, nz) = block.delta();
+            send_data(io, format_args!("I={i} NX={nx} NZ={nz}"));
+            at = to;
+        }
+        self.cmd = points.end;
+        self.pos = at;
+        let dphi = plan.dphi_arcsec();
+        // Degrees with 6 decimals, half away from zero: dphi·10⁶/3600 = dphi·2500/9.
+        let micro_deg = (u64::from(dphi) * 5000 + 9) / 18;
+        send_ok(
+            io,
+            Some(format_args!(
+                "N={n} DPHI={}.{:06} NX={} NZ={} PX={} PZ={} SEQ={:08X}",
+                micro_deg / 1_000_000,
+                micro_deg % 1_000_000,
+                at.x.get() - start.x.get(),
+                at.z.get() - start.z.get(),
+                at.x.get(),
+                at.z.get(),
+                crc.finish()
+            )),
+        );
+        Ok(())
+    }
+
+    fn arc_direct<'a, I: Io>(
+        &mut self,
+        points: &ArcPoints,
+        dir: ArcDir,
+        feed: Option<Length>,
+        io: &mut I,
+    ) -> Outcome<'a> {
+        let arc = DirectArc::new(points, dir, self.pos, self.cfg.hx, self.cfg.hz)?;
+        let mut crc = Crc32::new();
+        let mut events = 0u32;
+        for e in arc.events() {
+            crc.push(e.bits());
+            events += 1;
+        }
+        self.cmd = points.end;
+        self.pos = arc.to();
+        io.run_direct(&arc, &self.drive);
+        let (dx, dz) = arc.delta();
+        let (j, k) = arc.jk();
+        let g = match dir {
+            ArcDir::Cw => "G02",
+            ArcDir::Ccw => "G03",
+        };
+        let mut line = ReplyLine::new();
+        let _ = write!(line, "DATA {g}");
+        if dx != 0 {
+            let _ = write!(line, " X{dx:+}");
+        }
+        if dz != 0 {
+            let _ = write!(line, " Z{dz:+}");
+        }
+        let _ = write!(line, " J{j} K{k}");
+        if let Some(f) = feed {
+            let _ = write!(line, " F{}", arc.feed_word(f));
+        }
+        io.send(line.finish());
+        send_ok(
+            io,
+            Some(format_args!(
+                "N={events} NX={dx} NZ={dz} PX={} PZ={} SEQ={:08X}",
+                self.pos.x.get(),
+                self.pos.z.get(),
+                crc.finish()
+            )),
+        );
+        Ok(())
+    }
+
+    /// An X word as a radius (halved when DIAM=1).
+    fn x_word(&self, word: Length) -> Result<Length, Refusal<'static>> {
+        if self.cfg.diam {
+            word.exact_half()
+                .ok_or(Refusal::Value("X", "not an exact radius"))
+        } else {
+            Ok(word)
+        }
     }
 
     fn drive_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
@@ -400,6 +582,7 @@ impl Session {
 const RANGE_POS_X: &str = "X position beyond 999999999 impulses";
 const RANGE_POS_Z: &str = "Z position beyond 999999999 impulses";
 const RANGE_BLOCK: &str = "block beyond 1000000 impulses per axis";
+const RANGE_POS: &str = "position beyond 999999999 impulses";
 const _: () = assert!(MAX_POSITION == 999_999_999 && MAX_BLOCK_IMPULSES == 1_000_000);
 
 /// Adds the step-event bytes of a block to a running CRC.
@@ -486,6 +669,25 @@ fn parse_count(key: &'static str, v: Option<&str>, default: u32) -> Result<u32, 
     Ok(v.bytes().fold(0, |n, b| n * 10 + u32::from(b - b'0')))
 }
 
+fn parse_tol(v: &str) -> Result<Length, Refusal<'static>> {
+    let why = "must be over 0, at most 1 mm";
+    let tol = parse_bounded("TOL", v, 0, MAX_TOL_UM, why)?;
+    if tol == Length::ZERO {
+        return Err(Refusal::Value("TOL", why));
+    }
+    Ok(tol)
+}
+
+fn parse_pass(v: &str) -> Result<Pass, Refusal<'static>> {
+    if v.eq_ignore_ascii_case("FIN") {
+        Ok(Pass::Finish)
+    } else if v.eq_ignore_ascii_case("ROUGH") {
+        Ok(Pass::Rough)
+    } else {
+        Err(Refusal::Value("PASS", "must be FIN or ROUGH"))
+    }
+}
+
 fn parse_flag(key: &'static str, v: &str) -> Result<bool, Refusal<'static>> {
     match v {
         "0" => Ok(false),
@@ -547,6 +749,8 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         }
         Refusal::Value(key, why) => send_error(io, E::Value, format_args!("{key} {why}")),
         Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
+        Refusal::Geometry(what) => send_error(io, E::Geometry, format_args!("{what}")),
+        Refusal::Missing(what) => send_error(io, E::Syntax, format_args!("{what}")),
     }
 }
 
@@ -557,6 +761,13 @@ pub(crate) fn send_ok<I: Io>(io: &mut I, words: Option<fmt::Arguments<'_>>) {
     if let Some(words) = words {
         let _ = write!(line, " {words}");
     }
+    io.send(line.finish());
+}
+
+/// Sends `DATA` followed by the given words.
+pub(crate) fn send_data<I: Io>(io: &mut I, words: fmt::Arguments<'_>) {
+    let mut line = ReplyLine::new();
+    let _ = write!(line, "DATA {words}");
     io.send(line.finish());
 }
 
