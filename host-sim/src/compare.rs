@@ -7,6 +7,7 @@
 
 use crate::link::{LinkError, Reply, Transport};
 use crate::reference::{RefBlock, RefConfig, RefMachine, TieStats};
+use crate::reference_arc::{RefArc, RefArcError, RefDirect};
 use std::fmt::Write as _;
 
 /// One request of a scenario.
@@ -23,6 +24,27 @@ pub enum Step {
     },
     /// `ZERO`.
     Zero,
+    /// `ARC`, words as written.
+    Arc {
+        /// End `X=` (a diameter when DIAM=1).
+        x: String,
+        /// End `Z=`.
+        z: String,
+        /// `I=`, start to centre on X (radius value).
+        i: String,
+        /// `K=`, start to centre on Z.
+        k: String,
+        /// `DIR=CCW` (else CW).
+        ccw: bool,
+        /// `TOL=` if named.
+        tol: Option<String>,
+        /// `PASS=ROUGH` (true) or `PASS=FIN` (false) if named.
+        rough: Option<bool>,
+        /// `MODE=DIRECT`.
+        direct: bool,
+        /// `F=` (direct mode), mm/min.
+        feed: Option<String>,
+    },
     /// `MOVE`, words as written.
     Move {
         /// `X=` (a diameter when DIAM=1).
@@ -35,6 +57,11 @@ pub enum Step {
 }
 
 impl Step {
+    /// Whether the step asks for motion (`MOVE`, `ARC`).
+    pub fn is_motion(&self) -> bool {
+        matches!(self, Step::Move { .. } | Step::Arc { .. })
+    }
+
     /// An absolute move.
     pub fn to(x: impl Into<String>, z: impl Into<String>) -> Step {
         Step::Move {
@@ -61,6 +88,32 @@ impl Step {
                 }
             }
             Step::Zero => line.push_str("ZERO"),
+            Step::Arc {
+                x,
+                z,
+                i,
+                k,
+                ccw,
+                tol,
+                rough,
+                direct,
+                feed,
+            } => {
+                let dir = if *ccw { "CCW" } else { "CW" };
+                let _ = write!(line, "ARC X={x} Z={z} I={i} K={k} DIR={dir}");
+                if let Some(t) = tol {
+                    let _ = write!(line, " TOL={t}");
+                }
+                if let Some(r) = rough {
+                    line.push_str(if *r { " PASS=ROUGH" } else { " PASS=FIN" });
+                }
+                if *direct {
+                    line.push_str(" MODE=DIRECT");
+                }
+                if let Some(f) = feed {
+                    let _ = write!(line, " F={f}");
+                }
+            }
             Step::Move { x, z, inc } => {
                 line.push_str("MOVE");
                 if let Some(v) = x {
@@ -88,12 +141,9 @@ pub struct Scenario {
 }
 
 impl Scenario {
-    /// Number of `MOVE` steps.
+    /// Number of `MOVE` and `ARC` steps.
     pub fn blocks(&self) -> usize {
-        self.steps
-            .iter()
-            .filter(|s| matches!(s, Step::Move { .. }))
-            .count()
+        self.steps.iter().filter(|s| s.is_motion()).count()
     }
 }
 
@@ -113,7 +163,7 @@ pub struct Mismatch {
 }
 
 /// Running totals of a comparison.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct Tally {
     /// Blocks compared.
     pub blocks: u64,
@@ -127,6 +177,41 @@ pub struct Tally {
     pub quantizer: TieStats,
     /// Ties of the interleaver `Q(i·Δb/|Δlead|)`.
     pub interleave: TieStats,
+    /// Arcs by chords compared (each chord also counts as a block).
+    pub arcs: u64,
+    /// Direct arcs compared (each also counts as a block).
+    pub direct_arcs: u64,
+    /// Arcs refused alike by device and reference.
+    pub refused_alike: u64,
+    /// Worst chord error of a finishing arc, as a fraction of its tolerance.
+    pub worst_chord_error: f64,
+    /// Worst radial deviation of a direct-mode step, in impulses of the
+    /// coarser axis.
+    pub worst_direct_deviation: f64,
+    /// Nearest the exact Δφ came to a whole arc-second (floor/ceil decision).
+    pub dphi_margin: f64,
+    /// Nearest sweep/Δφ came to a whole number (chord count decision).
+    pub n_margin: f64,
+}
+
+impl Default for Tally {
+    fn default() -> Self {
+        Tally {
+            blocks: 0,
+            events: 0,
+            impulses: 0,
+            mismatches: Vec::new(),
+            quantizer: TieStats::new(),
+            interleave: TieStats::new(),
+            arcs: 0,
+            direct_arcs: 0,
+            refused_alike: 0,
+            worst_chord_error: 0.0,
+            worst_direct_deviation: 0.0,
+            dphi_margin: f64::INFINITY,
+            n_margin: f64::INFINITY,
+        }
+    }
 }
 
 impl Tally {
@@ -167,6 +252,9 @@ pub fn format_distance(d: f64) -> String {
 pub struct Comparator<T: Transport> {
     link: T,
     reference: RefMachine,
+    /// `TOL` and `PASS` of the session, for arcs that do not name their own.
+    default_tol: String,
+    default_rough: bool,
     /// Totals so far.
     pub tally: Tally,
 }
@@ -175,7 +263,7 @@ impl<T: Transport> Comparator<T> {
     /// Starts from power-on state on both sides. The device is brought there
     /// with `CFG` defaults and `ZERO`.
     pub fn new(mut link: T) -> Result<Self, LinkError> {
-        for line in ["CFG HX=0.005 HZ=0.01 DIAM=1", "ZERO"] {
+        for line in ["CFG HX=0.005 HZ=0.01 DIAM=1 TOL=0.01 PASS=FIN", "ZERO"] {
             let r = link.request(line)?;
             if !r.is_ok() {
                 return Err(LinkError::Io(std::io::Error::other(format!(
@@ -187,6 +275,8 @@ impl<T: Transport> Comparator<T> {
         Ok(Comparator {
             link,
             reference: RefMachine::new(RefConfig::default()),
+            default_tol: "0.01".into(),
+            default_rough: false,
             tally: Tally::default(),
         })
     }
@@ -204,7 +294,7 @@ impl<T: Transport> Comparator<T> {
     ) -> Result<(), LinkError> {
         for (index, step) in scenario.steps.iter().enumerate() {
             self.step(&scenario.name, index, step)?;
-            if matches!(step, Step::Move { .. }) {
+            if step.is_motion() {
                 progress(&self.tally);
             }
         }
@@ -248,6 +338,29 @@ impl<T: Transport> Comparator<T> {
                     self.tally.mismatches.push(mismatch("OK".into(), &reply));
                 }
             }
+            Step::Arc {
+                x,
+                z,
+                i,
+                k,
+                ccw,
+                tol,
+                rough,
+                direct,
+                feed,
+            } => {
+                let cfg = self.reference.config();
+                if *direct {
+                    let expected = self.reference.arc_direct(x, z, i, k, *ccw, feed.as_deref());
+                    self.compare_direct(&reply, expected, &cfg, &mismatch);
+                } else {
+                    let tol_s = tol.clone().unwrap_or_else(|| self.default_tol.clone());
+                    let rough = rough.unwrap_or(self.default_rough);
+                    let expected = self.reference.arc(x, z, i, k, *ccw, &tol_s, rough);
+                    let tol_mm = parse_mm(&tol_s);
+                    self.compare_chords(&reply, expected, rough, tol_mm, &mismatch);
+                }
+            }
             Step::Move { x, z, inc } => {
                 let expected = self.reference.move_block(x.as_deref(), z.as_deref(), *inc);
                 self.tally.blocks += 1;
@@ -264,6 +377,120 @@ impl<T: Transport> Comparator<T> {
         }
         Ok(())
     }
+}
+
+impl<T: Transport> Comparator<T> {
+    fn compare_chords(
+        &mut self,
+        reply: &Reply,
+        expected: Result<RefArc, RefArcError>,
+        rough: bool,
+        tol_mm: f64,
+        mismatch: &dyn Fn(String, &Reply) -> Mismatch,
+    ) {
+        let a = match expected {
+            Ok(a) => a,
+            Err(e) => {
+                self.refusal(reply, e, mismatch);
+                return;
+            }
+        };
+        self.tally.arcs += 1;
+        self.tally.blocks += u64::from(a.n);
+        self.tally.events += a.events;
+        self.tally.impulses += a.nx.unsigned_abs() + a.nz.unsigned_abs();
+        self.tally.quantizer.merge(&a.quantizer_ties);
+        self.tally.interleave.merge(&a.interleave_ties);
+        self.tally.dphi_margin = self.tally.dphi_margin.min(a.dphi_margin);
+        self.tally.n_margin = self.tally.n_margin.min(a.n_margin);
+        if !rough && tol_mm > 0.0 {
+            self.tally.worst_chord_error = self
+                .tally
+                .worst_chord_error
+                .max(a.max_chord_error_mm / tol_mm);
+        }
+        let data_ok = reply.data.len() == a.chords.len()
+            && reply
+                .data
+                .iter()
+                .zip(&a.chords)
+                .enumerate()
+                .all(|(i, (line, &(nx, nz)))| *line == format!("DATA I={} NX={nx} NZ={nz}", i + 1));
+        let expected_last = expected_arc_line(&a);
+        if !data_ok || reply.last != expected_last {
+            self.tally.mismatches.push(mismatch(expected_last, reply));
+        }
+    }
+
+    fn compare_direct(
+        &mut self,
+        reply: &Reply,
+        expected: Result<RefDirect, RefArcError>,
+        cfg: &RefConfig,
+        mismatch: &dyn Fn(String, &Reply) -> Mismatch,
+    ) {
+        let d = match expected {
+            Ok(d) => d,
+            Err(e) => {
+                self.refusal(reply, e, mismatch);
+                return;
+            }
+        };
+        self.tally.direct_arcs += 1;
+        self.tally.blocks += 1;
+        self.tally.events += d.events;
+        self.tally.impulses += d.nx.unsigned_abs() + d.nz.unsigned_abs();
+        let coarse = cfg.hx_mm.max(cfg.hz_mm);
+        self.tally.worst_direct_deviation = self
+            .tally
+            .worst_direct_deviation
+            .max(d.max_radial_dev_mm / coarse);
+        let expected_last = format!(
+            "OK N={} NX={} NZ={} PX={} PZ={} SEQ={:08X}",
+            d.events, d.nx, d.nz, d.px, d.pz, d.seq
+        );
+        let data_ok = reply.data.len() == 1 && reply.data[0] == format!("DATA {}", d.block);
+        if !data_ok || reply.last != expected_last {
+            self.tally.mismatches.push(mismatch(expected_last, reply));
+        }
+    }
+
+    fn refusal(
+        &mut self,
+        reply: &Reply,
+        e: RefArcError,
+        mismatch: &dyn Fn(String, &Reply) -> Mismatch,
+    ) {
+        let code = match e {
+            RefArcError::Geometry => "ERR GEOMETRY ",
+            RefArcError::Range => "ERR RANGE ",
+            RefArcError::Syntax => "ERR SYNTAX ",
+        };
+        if reply.last.starts_with(code) {
+            self.tally.refused_alike += 1;
+        } else {
+            self.tally
+                .mismatches
+                .push(mismatch(code.trim().to_owned(), reply));
+        }
+    }
+}
+
+/// The summary line of an arc by chords as the device should print it.
+pub fn expected_arc_line(a: &RefArc) -> String {
+    // Δφ in degrees, 6 decimals, half away from zero: Δφ″·10⁶/3600.
+    let micro_deg = (a.dphi_arcsec as u64 * 5000 + 9) / 18;
+    format!(
+        "OK N={} DPHI={}.{:06} NX={} NZ={} PX={} PZ={} SEQ={:08X}",
+        a.n,
+        micro_deg / 1_000_000,
+        micro_deg % 1_000_000,
+        a.nx,
+        a.nz,
+        a.px,
+        a.pz,
+        a.seq
+    )
 }
 
 fn parse_mm(v: &str) -> f64 {

@@ -2,6 +2,8 @@
 //!
 //! - [`reference`]: the f64 reference of the impulse rules, written from the
 //!   domain brief independently of the fixed-point core;
+//! - [`reference_arc`]: the same reference for arcs (by chords and by the
+//!   ЭМ-907 circular interpolator);
 //! - [`device`]: the core's protocol handler in this process;
 //! - [`link`]: the virtual serial link (a pseudo-terminal pair driven through
 //!   the `serialport` crate) and the host side of the protocol;
@@ -15,4 +17,5 @@ pub mod device;
 pub mod link;
 pub mod qemu;
 pub mod reference;
+pub mod reference_arc;
 pub mod scenario;

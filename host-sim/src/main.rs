@@ -202,7 +202,12 @@ fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {
 fn compare_all<T: Transport>(link: T, args: &ScenarioArgs) -> Result<ExitCode, LinkError> {
     let started = Instant::now();
     let mut cmp = Comparator::new(link)?;
-    for s in [scenario::table21(), scenario::krylenko()] {
+    for s in [
+        scenario::table21(),
+        scenario::krylenko(),
+        scenario::krylenko_arcs(),
+        scenario::random_arcs(args.seed, 600, 200),
+    ] {
         let before = cmp.tally.clone();
         cmp.run(&s, |_| {})?;
         report_scenario(&s, &before, &cmp.tally);
@@ -237,6 +242,19 @@ fn compare_all<T: Transport>(link: T, args: &ScenarioArgs) -> Result<ExitCode, L
         format_distance(t.min_tie_distance()),
         format_distance(t.quantizer.min_distance),
         format_distance(t.interleave.min_distance)
+    );
+    println!(
+        "arcs: {} by chords, {} direct, {} refused alike by device and reference",
+        t.arcs, t.direct_arcs, t.refused_alike
+    );
+    println!(
+        "arcs: worst finishing chord error {:.9} of TOL; worst direct-mode step {:.3} impulses off the circle (coarser axis)",
+        t.worst_chord_error, t.worst_direct_deviation
+    );
+    println!(
+        "arcs: nearest Δφ to a whole arc-second {}″, nearest sweep/Δφ to a whole number {}",
+        format_distance(t.dphi_margin),
+        format_distance(t.n_margin)
     );
     for m in t.mismatches.iter().take(10) {
         println!(

@@ -97,8 +97,15 @@
 
 use std::fmt;
 
+// Arcs live in `reference_arc`; their types are re-exported here so that the
+// whole reference is reachable from one module.
+pub use crate::reference_arc::{
+    em907_block_text, feed_word_circular, feed_word_linear, Em907Words, RefArc, RefArcError,
+    RefDirect,
+};
+
 /// Unit of the exact commanded coordinate: half-nanometres per mm.
-const HALF_NM_PER_MM: i64 = 2_000_000;
+pub(crate) const HALF_NM_PER_MM: i64 = 2_000_000;
 
 /// Relative tolerance `τ = 2⁻⁴⁴` under which a value counts as an exact tie.
 pub const TIE_TOLERANCE_REL: f64 = 1.0 / (1u64 << 44) as f64;
@@ -389,7 +396,7 @@ fn normalise_config(cfg: RefConfig) -> RefConfig {
 }
 
 /// `Q(P/h)` for a commanded coordinate held in half-nanometres.
-fn register(p_half_nm: i64, h_mm: f64, ties: &mut TieStats) -> i64 {
+pub(crate) fn register(p_half_nm: i64, h_mm: f64, ties: &mut TieStats) -> i64 {
     let p_mm = p_half_nm as f64 / HALF_NM_PER_MM as f64;
     quantize(p_mm / h_mm, ties)
 }
@@ -398,13 +405,15 @@ fn register(p_half_nm: i64, h_mm: f64, ties: &mut TieStats) -> i64 {
 /// registers and configuration.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RefMachine {
-    cfg: RefConfig,
+    pub(crate) cfg: RefConfig,
     /// Commanded X radius since program zero, exact, in half-nanometres.
-    cmd_x: i64,
+    pub(crate) cmd_x: i64,
     /// Commanded Z since program zero, exact, in half-nanometres.
-    cmd_z: i64,
-    px: i64,
-    pz: i64,
+    pub(crate) cmd_z: i64,
+    /// X register, impulses (`Q(cmd_x/hx)`).
+    pub(crate) px: i64,
+    /// Z register, impulses (`Q(cmd_z/hz)`).
+    pub(crate) pz: i64,
 }
 
 impl RefMachine {

@@ -197,6 +197,188 @@ pub fn krylenko() -> Scenario {
     }
 }
 
+fn arc(x: &str, z: &str, i: &str, k: &str, ccw: bool) -> Step {
+    Step::Arc {
+        x: x.into(),
+        z: z.into(),
+        i: i.into(),
+        k: k.into(),
+        ccw,
+        tol: None,
+        rough: None,
+        direct: false,
+        feed: None,
+    }
+}
+
+/// Krylenko's Fig. 22 and Fig. 24 programs with their arcs cut by chords
+/// (`R` words turned into centres: G03 X12 Z-2.4 R2.4 about X3.6 Z-2.4 on the
+/// radius, G02 X17.2 Z-17 R2.6 about X8.6 Z-14.4, G03 X38 Z-21.4 R4.4 about
+/// X14.6 Z-21.4; Fig. 24's G03 X0 Z-10.4 R10.4 about X0 Z0), finishing at
+/// 0.01 and 0.002 mm and roughing at 0.05 mm.
+pub fn krylenko_arcs() -> Scenario {
+    let mut steps = vec![
+        Step::Cfg {
+            hx: Some("0.005".into()),
+            hz: Some("0.01".into()),
+            diam: Some(true),
+        },
+        Step::Zero,
+    ];
+    for (tol, rough) in [("0.01", false), ("0.002", false), ("0.05", true)] {
+        let with = |s: Step| match s {
+            Step::Arc {
+                x, z, i, k, ccw, ..
+            } => Step::Arc {
+                x,
+                z,
+                i,
+                k,
+                ccw,
+                tol: Some(tol.into()),
+                rough: Some(rough),
+                direct: false,
+                feed: None,
+            },
+            other => other,
+        };
+        for s in [
+            Step::to("10", "10"),
+            Step::to("7.2", "0"),
+            arc("12", "-2.4", "0", "-2.4", true),
+            Step::to("12", "-14.4"),
+            arc("17.2", "-17", "2.6", "0", false),
+            Step::to("29.2", "-17"),
+            arc("38", "-21.4", "0", "-4.4", true),
+            Step::to("38", "10"),
+            Step::to("30", "10"),
+            Step::to("20.8", "0"),
+            arc("0", "-10.4", "-10.4", "0", true),
+            Step::to("0", "10"),
+        ] {
+            steps.push(with(s));
+        }
+    }
+    steps.push(Step::to("0", "0"));
+    Scenario {
+        name: "Krylenko Fig. 22, 24 with arcs by chords".into(),
+        steps,
+    }
+}
+
+/// Seeded random arcs: `chords` arcs cut by chords (full circles among
+/// them, tolerances 0.001 … 0.1 mm, finishing and roughing, diameters and
+/// radii, several impulse prices) and `direct` quadrant arcs for the direct
+/// interpolator. Each arc starts from a move to its start point; end points
+/// are the exact circle points rounded to 6 decimals, except every 40th,
+/// which ends 3 µm off its circle and must be refused.
+pub fn random_arcs(seed: u64, chords: usize, direct: usize) -> Scenario {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut steps = vec![Step::Zero];
+    let tols = ["0.001", "0.002", "0.005", "0.01", "0.02", "0.05", "0.1"];
+    let prices = [
+        ("0.005", "0.01"),
+        ("0.001", "0.002"),
+        ("0.0025", "0.005"),
+        ("0.01", "0.01"),
+    ];
+    for n in 0..chords + direct {
+        let is_direct = n >= chords;
+        if n % 50 == 0 {
+            let (hx, hz) = prices[rng.random_range(0..prices.len())];
+            steps.push(Step::Cfg {
+                hx: Some(hx.into()),
+                hz: Some(hz.into()),
+                diam: Some(rng.random_bool(0.7)),
+            });
+        }
+        let diam = steps.iter().rev().find_map(|s| match s {
+            Step::Cfg { diam, .. } => *diam,
+            _ => None,
+        });
+        let diam = diam.unwrap_or(true);
+        // Centre (X radius, Z) and radius in nm; angles in radians.
+        let cx: i64 = rng.random_range(-20_000_000..80_000_000);
+        let cz: i64 = rng.random_range(-150_000_000..20_000_000);
+        let r = rng.random_range(500_000..60_000_000) as f64;
+        let (a0, a1, ccw) = if is_direct {
+            let q = rng.random_range(0..4) as f64 * std::f64::consts::FRAC_PI_2;
+            let (p, t) = (rng.random_range(0.0..1.5), rng.random_range(0.0..1.5));
+            let ccw = rng.random_bool(0.5);
+            let (lo, hi) = if p < t { (p, t) } else { (t, p) };
+            if ccw {
+                (q + lo, q + hi, true)
+            } else {
+                (q + hi, q + lo, false)
+            }
+        } else {
+            let a0 = rng.random_range(0.0..std::f64::consts::TAU);
+            let full = rng.random_bool(0.1);
+            let sweep = if full {
+                0.0
+            } else {
+                rng.random_range(0.05..6.2)
+            };
+            let ccw = rng.random_bool(0.5);
+            (a0, if ccw { a0 + sweep } else { a0 - sweep }, ccw)
+        };
+        // On the circle, rounded to whole nm (written X words: even nm for radii).
+        let at = |a: f64| {
+            let x = cx + (r * a.sin()).round() as i64;
+            let z = cz + (r * a.cos()).round() as i64;
+            (x, z)
+        };
+        let (sx, sz) = at(a0);
+        let (mut ex, ez) = if (a1 - a0).abs() < 1e-12 {
+            (sx, sz)
+        } else {
+            at(a1)
+        };
+        // Every 40th arc ends 3 µm off its circle: both sides must refuse it.
+        if n % 40 == 39 {
+            ex += if ex > cx { 3_000 } else { -3_000 };
+        }
+        let word_x = |x: i64| nm_to_decimal(if diam { 2 * x } else { x });
+        steps.push(Step::Move {
+            x: Some(word_x(sx)),
+            z: Some(nm_to_decimal(sz)),
+            inc: false,
+        });
+        steps.push(Step::Arc {
+            x: word_x(ex),
+            z: nm_to_decimal(ez),
+            i: nm_to_decimal(cx - sx),
+            k: nm_to_decimal(cz - sz),
+            ccw,
+            tol: Some(tols[rng.random_range(0..tols.len())].into()),
+            rough: Some(rng.random_bool(0.3)),
+            direct: is_direct,
+            feed: if is_direct && rng.random_bool(0.5) {
+                Some(nm_to_decimal(rng.random_range(1_000_000..2_000_000_000)))
+            } else {
+                None
+            },
+        });
+    }
+    // Direct arcs take no TOL or PASS.
+    for s in &mut steps {
+        if let Step::Arc {
+            direct: true,
+            tol,
+            rough,
+            ..
+        } = s
+        {
+            *tol = None;
+            *rough = None;
+        }
+    }
+    Scenario {
+        name: format!("random arcs (seed {seed})"),
+        steps,
+    }
+}
+
 /// Formats a count of nanometres (10⁻⁶ mm) as an exact decimal, trailing
 /// zeros dropped.
 pub fn nm_to_decimal(nm: i64) -> String {

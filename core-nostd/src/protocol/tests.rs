@@ -112,13 +112,25 @@ fn every_error_code_is_reached_and_changes_nothing() {
         ("ARC X=30 Z=-7 I=0 K=5 DIR=UP", "ERR VALUE DIR"),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=CW MODE=FAST", "ERR VALUE MODE"),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=CW F=100", "ERR SYNTAX"),
-        ("ARC X=30 Z=-7 I=0 K=5 DIR=CW MODE=DIRECT F=0", "ERR VALUE F"),
+        (
+            "ARC X=30 Z=-7 I=0 K=5 DIR=CW MODE=DIRECT F=0",
+            "ERR VALUE F",
+        ),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=CW TOL=2", "ERR VALUE TOL"),
         ("ARC X=30 Z=-7 I=0 K=0 DIR=CW", "ERR GEOMETRY"),
         ("ARC X=40 Z=-7 I=0 K=1 DIR=CW", "ERR GEOMETRY"),
-        ("ARC X=12.345678 Z=-7.000005 I=0 K=999 DIR=CCW TOL=0.000001", "ERR RANGE"),
-        ("ARC X=12.345678 Z=-7.000005 I=-5 K=0 DIR=CCW MODE=DIRECT", "ERR GEOMETRY"),
-        ("ARC X=12.345678 Z=-7.000005 I=99999 K=0 DIR=CCW", "ERR RANGE"),
+        (
+            "ARC X=12.345678 Z=-7.000005 I=0 K=999 DIR=CCW TOL=0.000001",
+            "ERR RANGE",
+        ),
+        (
+            "ARC X=12.345678 Z=-7.000005 I=-5 K=0 DIR=CCW MODE=DIRECT",
+            "ERR GEOMETRY",
+        ),
+        (
+            "ARC X=12.345678 Z=-7.000005 I=99999 K=0 DIR=CCW",
+            "ERR RANGE",
+        ),
         ("MOVE Z=-10007.01", "ERR RANGE"),
     ];
     for &(request, expected) in cases {
@@ -217,15 +229,30 @@ fn arcs_by_chords_and_direct() {
         nz += w[3].strip_prefix("NZ=").unwrap().parse::<i32>().unwrap();
     }
     assert_eq!((nx, nz), (2000, -1000));
-    assert!(r[18].starts_with("OK N=18 DPHI=5.125000 NX=2000 NZ=-1000 PX=2000 PZ=0 SEQ="), "{}", r[18]);
+    assert!(
+        r[18].starts_with("OK N=18 DPHI=5.125000 NX=2000 NZ=-1000 PX=2000 PZ=0 SEQ="),
+        "{}",
+        r[18]
+    );
     assert_eq!(ask1(&mut dev, "POS"), "OK PX=2000 PZ=0 X=10.0000 Z=0.0000");
     // A full circle back to the same point issues nothing in total.
-    let r = ask(&mut dev, b"ARC X=10 Z=0 I=-10 K=0 DIR=CW TOL=0.1 PASS=ROUGH\n");
-    assert!(r.last().unwrap().starts_with("OK N=23 DPHI=16.219444 NX=0 NZ=0 PX=2000 PZ=0 "), "{r:?}");
+    let r = ask(
+        &mut dev,
+        b"ARC X=10 Z=0 I=-10 K=0 DIR=CW TOL=0.1 PASS=ROUGH\n",
+    );
+    assert!(
+        r.last()
+            .unwrap()
+            .starts_with("OK N=23 DPHI=16.219444 NX=0 NZ=0 PX=2000 PZ=0 "),
+        "{r:?}"
+    );
     // The ЭМ-907 block of the seed's Ø50 sphere (R25, to the top).
     assert!(ask1(&mut dev, "ZERO").starts_with("OK"));
     assert!(ask1(&mut dev, "MOVE X=21.986134 Z=11.9").starts_with("OK"));
-    let r = ask(&mut dev, b"ARC X=25 Z=0 I=-21.986134 K=-11.9 DIR=CCW MODE=DIRECT F=35.5\n");
+    let r = ask(
+        &mut dev,
+        b"ARC X=25 Z=0 I=-21.986134 K=-11.9 DIR=CCW MODE=DIRECT F=35.5\n",
+    );
     assert_eq!(r[0], "DATA G03 X+603 Z-1190 J4397 K1190 F1420");
     assert!(r[1].starts_with("OK N="), "{r:?}");
     assert!(r[1].contains(" NX=603 NZ=-1190 PX=5000 PZ=0 SEQ="), "{r:?}");
