@@ -17,7 +17,9 @@
 //!
 //! # Direct (ЭМ-907)
 //! In impulses: `J`, `K` the unsigned distances from the centre to the start;
-//! the arc must stay within one quadrant (as the ЭМ-907 requires). Each step
+//! the arc must stay within one quadrant (as the ЭМ-907 requires): a full
+//! circle, or a centre within half an impulse of the start, is refused. An
+//! arc too short to issue an impulse is an empty motion, as a short `MOVE` is. Each step
 //! moves X, Z or both in the fixed directions of that quadrant, choosing the
 //! candidate nearest the circle by `|F|`, `F = (a·hx)² + (b·hz)² − R²`
 //! (a, b the position relative to the centre in impulses, R from the start),
@@ -292,20 +294,25 @@ impl DirectArc {
         {
             return Err(ArcError::Range("block beyond 1000000 impulses per axis"));
         }
-        // One quadrant: a and b keep their signs (zero allowed at an end).
-        let qa = if a0 != 0 { a0.signum() } else { a1.signum() };
-        let qb = if b0 != 0 { b0.signum() } else { b1.signum() };
         let quadrant = "a direct arc must stay within one quadrant";
-        if qa == 0 || qb == 0 || a0 * qa < 0 || a1 * qa < 0 || b0 * qb < 0 || b1 * qb < 0 {
+        // A full circle spans four quadrants; a centre within half an impulse
+        // of the start has none.
+        if p.end == p.start || (j == 0 && k == 0) {
             return Err(ArcError::Geometry(quadrant));
         }
+        // One quadrant: a and b keep their signs (zero allowed at an end).
+        if a0.signum() * a1.signum() < 0 || b0.signum() * b1.signum() < 0 {
+            return Err(ArcError::Geometry(quadrant));
+        }
+        let qa = if a0 != 0 { a0.signum() } else { a1.signum() };
+        let qb = if b0 != 0 { b0.signum() } else { b1.signum() };
         // Counter-clockwise in (Z, X): X moves with sign(b), Z with −sign(a).
         let d = match dir {
             ArcDir::Ccw => 1,
             ArcDir::Cw => -1,
         };
-        let ok = |delta: i64, want: i64| delta == 0 || delta.signum() == want;
-        if !ok(dx, qb * d) || !ok(dz, -qa * d) || (dx == 0 && dz == 0) {
+        let agrees = |delta: i64, want: i64| delta == 0 || delta.signum() == want;
+        if !agrees(dx, qb * d) || !agrees(dz, -qa * d) {
             return Err(ArcError::Geometry(quadrant));
         }
         let (hxa, hza) = (i128::from(hx.as_angstrom()), i128::from(hz.as_angstrom()));

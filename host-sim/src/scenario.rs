@@ -323,21 +323,19 @@ pub fn random_arcs(seed: u64, chords: usize, direct: usize) -> Scenario {
             (a0, if ccw { a0 + sweep } else { a0 - sweep }, ccw)
         };
         // On the circle, rounded to whole nm (written X words: even nm for radii).
-        let at = |a: f64| {
+        let at = |a: f64, r: f64| {
             let x = cx + (r * a.sin()).round() as i64;
             let z = cz + (r * a.cos()).round() as i64;
             (x, z)
         };
-        let (sx, sz) = at(a0);
-        let (mut ex, ez) = if (a1 - a0).abs() < 1e-12 {
+        let (sx, sz) = at(a0, r);
+        // Every 40th arc ends 3 µm outside its circle: both sides must refuse it.
+        let off = if n % 40 == 39 { 3_000.0 } else { 0.0 };
+        let (ex, ez) = if (a1 - a0).abs() < 1e-12 && off == 0.0 {
             (sx, sz)
         } else {
-            at(a1)
+            at(a1, r + off)
         };
-        // Every 40th arc ends 3 µm off its circle: both sides must refuse it.
-        if n % 40 == 39 {
-            ex += if ex > cx { 3_000 } else { -3_000 };
-        }
         let word_x = |x: i64| nm_to_decimal(if diam { 2 * x } else { x });
         steps.push(Step::Move {
             x: Some(word_x(sx)),
