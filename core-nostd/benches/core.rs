@@ -97,5 +97,58 @@ fn protocol(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, interleaver, quantizer, protocol);
+fn arcs(c: &mut Criterion) {
+    use core_nostd::arc::{ArcDir, ArcPoints, ChordPlan, DirectArc};
+    let mm = |s| Length::from_mm_str(s).unwrap();
+    let (hx, hz) = (ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z);
+    // A full circle of R 37.5 at σ 0.001: 1084 chords.
+    let p = ArcPoints {
+        start: [mm("37.5"), mm("-20")],
+        end: [mm("37.5"), mm("-20")],
+        centre: [mm("0"), mm("-20")],
+    };
+    let plan = ChordPlan::new(&p, ArcDir::Ccw, mm("0.001"), true).unwrap();
+    let n = plan.chords();
+    let mut g = c.benchmark_group("arc");
+    g.throughput(Throughput::Elements(u64::from(n)));
+    g.bench_function("chord end (rotation + carry quantizer)", |b| {
+        b.iter(|| {
+            let mut acc = 0i64;
+            for i in 1..=n {
+                let e = black_box(&plan).chord_end(i, hx, hz).unwrap();
+                acc += i64::from(e.x.get());
+            }
+            acc
+        })
+    });
+    g.throughput(Throughput::Elements(1));
+    g.bench_function("chord plan (radii, Δφ, sweep)", |b| {
+        b.iter(|| ChordPlan::new(black_box(&p), ArcDir::Ccw, mm("0.001"), true).unwrap())
+    });
+    // A quadrant of R 60 for the direct interpolator: 12 000 + 6 000 steps.
+    let q = ArcPoints {
+        start: [mm("0"), mm("60")],
+        end: [mm("60"), mm("0")],
+        centre: [mm("0"), mm("0")],
+    };
+    let from = ImpulsePoint {
+        x: Impulses(0),
+        z: Impulses(6000),
+    };
+    let arc = DirectArc::new(&q, ArcDir::Ccw, from, hx, hz).unwrap();
+    let events = arc.events().count() as u64;
+    g.throughput(Throughput::Elements(events));
+    g.bench_function("direct step event", |b| {
+        b.iter(|| {
+            let mut acc = 0u32;
+            for e in black_box(&arc).events() {
+                acc = acc.wrapping_add(u32::from(e.bits()));
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, interleaver, quantizer, protocol, arcs);
 criterion_main!(benches);

@@ -99,6 +99,71 @@ fn radii(p: &ArcPoints) -> Result<Radii, ArcError> {
     Ok(Radii { u, v, r0_q20: r0 })
 }
 
+/// The centre of an arc given by its radius (G-code `R`, lecture 13 method 3).
+///
+/// Sign convention (as on Fanuc and Haas lathes): `R > 0` takes the arc of at
+/// most 180°, `R < 0` the longer one. For G03 (counter-clockwise) with
+/// `R > 0` the centre lies left of the chord from start to end, seen in the
+/// (Z to the right, X up) plane; G02 or a negative `R` takes the other side.
+/// The centre is rounded once, to the nearest ångström (10⁻⁷ mm); the arc
+/// then runs as if given by that centre.
+///
+/// ```
+/// use core_nostd::arc::{centre_from_radius, ArcDir};
+/// use core_nostd::length::Length;
+/// let mm = |s| Length::from_mm_str(s).unwrap();
+/// // Krylenko Fig. 22: G03 X12 Z-2.4 R2.4 from X7.2 Z0 (radii 3.6 → 6).
+/// let c = centre_from_radius([mm("3.6"), mm("0")], [mm("6"), mm("-2.4")], mm("2.4"), ArcDir::Ccw).unwrap();
+/// assert_eq!(c, [mm("3.6"), mm("-2.4")]);
+/// ```
+pub fn centre_from_radius(
+    start: [Length; 2],
+    end: [Length; 2],
+    r: Length,
+    dir: ArcDir,
+) -> Result<[Length; 2], ArcError> {
+    let a = |l: Length| i128::from(l.as_angstrom());
+    let (dx, dz) = (a(end[0]) - a(start[0]), a(end[1]) - a(start[1]));
+    let d2 = dx * dx + dz * dz;
+    if d2 == 0 {
+        return Err(ArcError::Geometry(
+            "an R arc needs an end point apart from its start",
+        ));
+    }
+    let rr = a(r);
+    let h2 = 4 * rr * rr - d2;
+    if h2 < 0 {
+        return Err(ArcError::Geometry(
+            "radius smaller than half the distance to the end point",
+        ));
+    }
+    // Centre = midpoint ± (left normal of the chord)·√(4R² − d²)/(2d).
+    let num = i128::from(isqrt((h2 as u128) << 40));
+    let den = i128::from(isqrt((d2 as u128) << 40));
+    let left = match (dir, rr > 0) {
+        (ArcDir::Ccw, true) | (ArcDir::Cw, false) => 1,
+        _ => -1,
+    };
+    // Left of (dz, dx) in the (Z, X) plane is (−dx, dz).
+    let round = |n: i128, d: i128| -> Option<i64> {
+        let q = n.checked_div(d)?;
+        let r = n.checked_rem(d)?;
+        let q = if 2 * r.unsigned_abs() >= d.unsigned_abs() {
+            q + n.signum() * d.signum()
+        } else {
+            q
+        };
+        i64::try_from(q).ok()
+    };
+    let beyond = ArcError::Range("arc centre beyond 99999.999999 mm");
+    let cx = round((a(start[0]) + a(end[0])) * den + left * dz * num, 2 * den).ok_or(beyond)?;
+    let cz = round((a(start[1]) + a(end[1])) * den - left * dx * num, 2 * den).ok_or(beyond)?;
+    Ok([
+        Length::from_angstrom(cx).ok_or(beyond)?,
+        Length::from_angstrom(cz).ok_or(beyond)?,
+    ])
+}
+
 /// An arc cut into chords, ready to give its chord ends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ChordPlan {

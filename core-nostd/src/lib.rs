@@ -13,6 +13,7 @@
 //!   with integer additions only, for a timer interrupt to pull.
 //! - [`arc`]: arcs by chords with residual carry, and the direct
 //!   step-by-step circular interpolator of the ЭМ-907.
+//! - [`gcode`]: G-code blocks parsed and checked before any motion.
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
 //! - [`trig`]: fixed-point sine, cosine, atan2 and square root, with error
@@ -38,6 +39,7 @@
 
 pub mod arc;
 pub mod crc32;
+pub mod gcode;
 pub mod impulse;
 pub mod interleave;
 pub mod length;

@@ -7,8 +7,9 @@
 use super::reply::{checksum, hex_digits, ReplyLine};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
-use crate::arc::{ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
+use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
 use crate::crc32::Crc32;
+use crate::gcode::{is_block, parse_block, BlockError, Compensation, Motion};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::{div_round_half_away, write_mm4, Length};
@@ -126,6 +127,25 @@ pub struct Session {
     pos: ImpulsePoint,
     /// Step/dir output timing.
     drive: DriveTiming,
+    /// Modal G-code state.
+    modal: Modal,
+}
+
+/// The modal state of the G-code path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Modal {
+    motion: Motion,
+    incremental: bool,
+    compensation: Compensation,
+}
+
+impl Modal {
+    /// Power-on: G00, G90, G40.
+    const POWER_ON: Modal = Modal {
+        motion: Motion::Rapid,
+        incremental: false,
+        compensation: Compensation::Off,
+    };
 }
 
 impl Default for Session {
@@ -147,6 +167,7 @@ enum Refusal<'a> {
     Range(&'static str),
     Geometry(&'static str),
     Missing(&'static str),
+    Block(BlockError),
 }
 
 impl From<ArcError> for Refusal<'_> {
@@ -177,6 +198,7 @@ impl Session {
                 z: Impulses(0),
             },
             drive: DriveTiming::DEFAULT,
+            modal: Modal::POWER_ON,
         }
     }
 
@@ -220,7 +242,9 @@ impl Session {
         let text = core::str::from_utf8(body).map_err(|_| Refusal::Control)?;
         let mut words = Words::new(text);
         let command = words.next().ok_or(Refusal::Empty)?;
-        if command.eq_ignore_ascii_case("VER") {
+        if is_block(text) {
+            self.gcode(text, io)
+        } else if command.eq_ignore_ascii_case("VER") {
             no_args(words, "VER")?;
             send_ok(
                 io,
@@ -373,35 +397,11 @@ impl Session {
         io: &mut I,
     ) -> Outcome<'a> {
         let plan = ChordPlan::new(points, dir, tol, finish)?;
-        let (hx, hz) = (self.cfg.hx, self.cfg.hz);
         let n = plan.chords();
-        // Check every chord before the first one moves.
-        let mut at = self.pos;
-        for i in 1..=n {
-            let to = plan
-                .chord_end(i, hx, hz)
-                .map_err(|_| Refusal::Range(RANGE_POS))?;
-            LinearBlock::new(at, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
-            at = to;
-        }
+        self.check_chords(&plan)?;
         let start = self.pos;
-        let mut crc = Crc32::new();
-        let mut at = self.pos;
-        for i in 1..=n {
-            let Ok(to) = plan.chord_end(i, hx, hz) else {
-                break;
-            };
-            let Ok(block) = LinearBlock::new(at, to) else {
-                break;
-            };
-            crc = block_crc(&block, crc);
-            io.run_block(&block, &self.drive);
-            let (nx, nz) = block.delta();
-            send_data(io, format_args!("I={i} NX={nx} NZ={nz}"));
-            at = to;
-        }
-        self.cmd = points.end;
-        self.pos = at;
+        let crc = self.run_chords(&plan, points, io, true);
+        let at = self.pos;
         let dphi = plan.dphi_arcsec();
         // Degrees with 6 decimals, half away from zero: dphi·10⁶/3600 = dphi·2500/9.
         let micro_deg = (u64::from(dphi) * 5000 + 9) / 18;
@@ -469,6 +469,175 @@ impl Session {
         Ok(())
     }
 
+    /// Runs one G-code block in the session's modal state.
+    fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
+        let b = parse_block(text).map_err(Refusal::Block)?;
+        let modal = Modal {
+            motion: b.motion.unwrap_or(self.modal.motion),
+            incremental: b.incremental.unwrap_or(self.modal.incremental),
+            compensation: b.compensation.unwrap_or(self.modal.compensation),
+        };
+        if modal.compensation != Compensation::Off {
+            return Err(Refusal::Value("G", "G41 and G42 are not available"));
+        }
+        let mut target = self.cmd;
+        if let Some(x) = b.x {
+            let radius = self.x_word(x)?;
+            target[0] = self.target(0, radius, modal.incremental, "X beyond 99999.999999 mm")?;
+        }
+        if let Some(z) = b.z {
+            target[1] = self.target(1, z, modal.incremental, "Z beyond 99999.999999 mm")?;
+        }
+        let has_end = b.x.is_some() || b.z.is_some();
+        let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
+        let start = self.pos;
+        let mut crc = Crc32::new();
+        match modal.motion {
+            Motion::Rapid | Motion::Linear => {
+                if arc_words {
+                    return Err(Refusal::Missing("I, K and R need G02 or G03"));
+                }
+                if has_end {
+                    let block = self.linear_block(target)?;
+                    crc = block_crc(&block, crc);
+                    self.cmd = target;
+                    self.pos = block.to();
+                    io.run_block(&block, &self.drive);
+                    self.send_block_data(io, modal.motion, None);
+                }
+            }
+            Motion::ArcCw | Motion::ArcCcw => {
+                if has_end || arc_words {
+                    let dir = if modal.motion == Motion::ArcCw {
+                        ArcDir::Cw
+                    } else {
+                        ArcDir::Ccw
+                    };
+                    let centre = match (b.i.is_some() || b.k.is_some(), b.r) {
+                        (true, Some(_)) => {
+                            return Err(Refusal::Missing("give I and K or R, not both"))
+                        }
+                        (false, None) => {
+                            return Err(Refusal::Missing("an arc needs I and K, or R"))
+                        }
+                        (false, Some(r)) => centre_from_radius(self.cmd, target, r, dir)?,
+                        (true, None) => {
+                            let beyond = "arc centre beyond 99999.999999 mm";
+                            [
+                                self.cmd[0]
+                                    .checked_add(b.i.unwrap_or(Length::ZERO))
+                                    .ok_or(Refusal::Range(beyond))?,
+                                self.cmd[1]
+                                    .checked_add(b.k.unwrap_or(Length::ZERO))
+                                    .ok_or(Refusal::Range(beyond))?,
+                            ]
+                        }
+                    };
+                    let points = ArcPoints {
+                        start: self.cmd,
+                        end: target,
+                        centre,
+                    };
+                    let plan =
+                        ChordPlan::new(&points, dir, self.cfg.tol, self.cfg.pass == Pass::Finish)?;
+                    self.check_chords(&plan)?;
+                    crc = self.run_chords(&plan, &points, io, false);
+                    self.send_block_data(
+                        io,
+                        modal.motion,
+                        Some(centre_minus(centre, points.start)),
+                    );
+                }
+            }
+        }
+        self.modal = modal;
+        let at = self.pos;
+        send_ok(
+            io,
+            Some(format_args!(
+                "NX={} NZ={} PX={} PZ={} SEQ={:08X}",
+                at.x.get() - start.x.get(),
+                at.z.get() - start.z.get(),
+                at.x.get(),
+                at.z.get(),
+                crc.finish()
+            )),
+        );
+        Ok(())
+    }
+
+    /// `DATA G0n X… Z… [I… K…]` for the block just run (its end is the
+    /// commanded point; X a diameter when DIAM=1).
+    fn send_block_data<I: Io>(&self, io: &mut I, motion: Motion, ik: Option<[i64; 2]>) {
+        let factor = if self.cfg.diam { 2 } else { 1 };
+        let x = div_round_half_away(self.cmd[0].as_angstrom() * factor, 1_000);
+        let mut line = ReplyLine::new();
+        let _ = write!(line, "DATA {} X", motion.word());
+        let _ = write_mm4(&mut line, x);
+        let _ = write!(line, " Z{}", self.cmd[1]);
+        if let Some([i, k]) = ik {
+            let _ = line.write_str(" I");
+            let _ = write_mm4(&mut line, div_round_half_away(i, 1_000));
+            let _ = line.write_str(" K");
+            let _ = write_mm4(&mut line, div_round_half_away(k, 1_000));
+        }
+        io.send(line.finish());
+    }
+
+    /// The linear block from the registers to a commanded point.
+    fn linear_block(&self, target: [Length; 2]) -> Result<LinearBlock, Refusal<'static>> {
+        let to = ImpulsePoint {
+            x: quantize(target[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
+            z: quantize(target[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
+        };
+        LinearBlock::new(self.pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))
+    }
+
+    /// Checks every chord of a plan before the first one moves.
+    fn check_chords(&self, plan: &ChordPlan) -> Result<(), Refusal<'static>> {
+        let mut at = self.pos;
+        for i in 1..=plan.chords() {
+            let to = plan
+                .chord_end(i, self.cfg.hx, self.cfg.hz)
+                .map_err(|_| Refusal::Range(RANGE_POS))?;
+            LinearBlock::new(at, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+            at = to;
+        }
+        Ok(())
+    }
+
+    /// Runs the chords of a checked plan, commits the end point, and returns
+    /// the CRC of all their step events; `data` sends a `DATA I= NX= NZ=`
+    /// line per chord.
+    fn run_chords<I: Io>(
+        &mut self,
+        plan: &ChordPlan,
+        points: &ArcPoints,
+        io: &mut I,
+        data: bool,
+    ) -> Crc32 {
+        let mut crc = Crc32::new();
+        let mut at = self.pos;
+        for i in 1..=plan.chords() {
+            let Ok(to) = plan.chord_end(i, self.cfg.hx, self.cfg.hz) else {
+                break;
+            };
+            let Ok(block) = LinearBlock::new(at, to) else {
+                break;
+            };
+            crc = block_crc(&block, crc);
+            io.run_block(&block, &self.drive);
+            if data {
+                let (nx, nz) = block.delta();
+                send_data(io, format_args!("I={i} NX={nx} NZ={nz}"));
+            }
+            at = to;
+        }
+        self.cmd = points.end;
+        self.pos = at;
+        crc
+    }
+
     /// An X word as a radius (halved when DIAM=1).
     fn x_word(&self, word: Length) -> Result<Length, Refusal<'static>> {
         if self.cfg.diam {
@@ -524,11 +693,8 @@ impl Session {
             let word = parse_length("Z", v)?;
             target[1] = self.target(1, word, inc, "Z beyond 99999.999999 mm")?;
         }
-        let to = ImpulsePoint {
-            x: quantize(target[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
-            z: quantize(target[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
-        };
-        let block = LinearBlock::new(self.pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+        let block = self.linear_block(target)?;
+        let to = block.to();
         let seq = block_crc(&block, Crc32::new()).finish();
         self.cmd = target;
         self.pos = to;
@@ -584,6 +750,12 @@ const RANGE_POS_Z: &str = "Z position beyond 999999999 impulses";
 const RANGE_BLOCK: &str = "block beyond 1000000 impulses per axis";
 const RANGE_POS: &str = "position beyond 999999999 impulses";
 const _: () = assert!(MAX_POSITION == 999_999_999 && MAX_BLOCK_IMPULSES == 1_000_000);
+
+/// `centre − start` in ångström: the I and K words of an arc.
+fn centre_minus(centre: [Length; 2], start: [Length; 2]) -> [i64; 2] {
+    let d = |a: Length, b: Length| a.as_angstrom() - b.as_angstrom();
+    [d(centre[0], start[0]), d(centre[1], start[1])]
+}
 
 /// Adds the step-event bytes of a block to a running CRC.
 pub(crate) fn block_crc(block: &LinearBlock, mut crc: Crc32) -> Crc32 {
@@ -751,6 +923,24 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
         Refusal::Geometry(what) => send_error(io, E::Geometry, format_args!("{what}")),
         Refusal::Missing(what) => send_error(io, E::Syntax, format_args!("{what}")),
+        Refusal::Block(e) => {
+            let (code, what, letter) = match e {
+                BlockError::UnknownAddress(l) => (E::Syntax, "unknown address", l),
+                BlockError::Repeated(l) => (E::Syntax, "address given twice:", l),
+                BlockError::NotAWord => (E::Syntax, "not an address word", b' '),
+                BlockError::Comment => (E::Syntax, "unclosed comment", b' '),
+                BlockError::UnsupportedG => (E::Value, "G code not supported", b'G'),
+                BlockError::Value(l, why) => {
+                    send_error(
+                        io,
+                        E::Value,
+                        format_args!("{} {}", char::from(l), why.as_str()),
+                    );
+                    return;
+                }
+            };
+            send_error(io, code, format_args!("{what} {}", char::from(letter)))
+        }
     }
 }
 

@@ -109,6 +109,19 @@ fn every_error_code_is_reached_and_changes_nothing() {
         ("DRIVE SETUP=12345678", "ERR VALUE SETUP"),
         ("DRIVE HZ=5", "ERR SYNTAX"),
         ("ARC X=1 Z=1", "ERR SYNTAX"),
+        ("G01 X1 X2", "ERR SYNTAX"),
+        ("G01 Q5", "ERR SYNTAX"),
+        ("G04 X1", "ERR VALUE"),
+        ("G01 X1.1234567", "ERR VALUE X"),
+        ("G01 X30 I1", "ERR SYNTAX"),
+        ("G02 X30 Z-7", "ERR SYNTAX"),
+        ("G02 X30 Z-7 I1 R2", "ERR SYNTAX"),
+        ("G03 X30 Z-7 R0.1", "ERR GEOMETRY"),
+        ("G02 X12.345678 Z-7.000005 R3", "ERR GEOMETRY"),
+        ("G42 G01 X20", "ERR VALUE G"),
+        ("G91 X100000", "ERR VALUE X"),
+        ("G91 X99999", "ERR RANGE"),
+        ("G91 Z-99990", "ERR RANGE"),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=UP", "ERR VALUE DIR"),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=CW MODE=FAST", "ERR VALUE MODE"),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=CW F=100", "ERR SYNTAX"),
@@ -256,6 +269,76 @@ fn arcs_by_chords_and_direct() {
     assert_eq!(r[0], "DATA G03 X+603 Z-1190 J4397 K1190 F1420");
     assert!(r[1].starts_with("OK N="), "{r:?}");
     assert!(r[1].contains(" NX=603 NZ=-1190 PX=5000 PZ=0 SEQ="), "{r:?}");
+}
+
+#[test]
+fn gcode_blocks_run_in_modal_state() {
+    let mut dev = Device::new();
+    // Krylenko Fig. 22 as written (diameters), with its R arcs.
+    let program = [
+        ("G00 X10 Z10", "DATA G00 X10.0000 Z10.0000"),
+        ("N9 G01 X7.2 Z0 ; point 2", "DATA G01 X7.2000 Z0.0000"),
+        (
+            "G03 X12 Z-2.4 R2.4",
+            "DATA G03 X12.0000 Z-2.4000 I0.0000 K-2.4000",
+        ),
+        ("G01 Z-14.4", "DATA G01 X12.0000 Z-14.4000"),
+        (
+            "G02 X17.2 Z-17 R2.6",
+            "DATA G02 X17.2000 Z-17.0000 I2.6000 K0.0000",
+        ),
+        ("G01 X29.2", "DATA G01 X29.2000 Z-17.0000"),
+        (
+            "G03 X38 Z-21.4 R4.4",
+            "DATA G03 X38.0000 Z-21.4000 I0.0000 K-4.4000",
+        ),
+        ("X40", "DATA G03 X40.0000 Z-21.4000 I0.0000 K0.0000"),
+    ];
+    for (i, (block, data)) in program.iter().enumerate().take(7) {
+        let r = ask(&mut dev, std::format!("{block}\n").as_bytes());
+        assert_eq!(r.len(), 2, "{block}: {r:?}");
+        assert_eq!(r[0], *data, "block {i}");
+        assert!(r[1].starts_with("OK NX="), "{r:?}");
+    }
+    // G03 stays modal: a block with only X and no centre is refused.
+    assert!(ask1(&mut dev, program[7].0).starts_with("ERR SYNTAX"));
+    // G91: increments; G90 back to absolute.
+    assert!(ask(&mut dev, b"G91 G01 Z-1\n")[0].starts_with("DATA G01 X38.0000 Z-22.4000"));
+    assert!(ask(&mut dev, b"G90 Z0\n")[0].starts_with("DATA G01 X38.0000 Z0.0000"));
+    // A block with no motion words only changes the modal state.
+    assert!(ask1(&mut dev, "N100 G01 M03 S500 T0101").starts_with("OK NX=0 NZ=0 "));
+}
+
+#[test]
+fn gcode_arcs_equal_arc_requests() {
+    // The same arc as G03 with I/K, as G03 with R, and as ARC: same chords.
+    let run = |setup: &str, arc: &str| {
+        let mut dev = Device::new();
+        for l in ["CFG DIAM=0 TOL=0.002", setup] {
+            assert!(ask1(&mut dev, l).starts_with("OK"), "{l}");
+        }
+        let r = ask(&mut dev, std::format!("{arc}\n").as_bytes());
+        let last = r.last().unwrap().clone();
+        let keys: Vec<String> = last
+            .split(' ')
+            .filter(|w| {
+                ["NX=", "NZ=", "PX=", "PZ=", "SEQ="]
+                    .iter()
+                    .any(|k| w.starts_with(k))
+            })
+            .map(String::from)
+            .collect();
+        (keys, ask1(&mut dev, "POS"))
+    };
+    let by_arc = run("MOVE X=14.6 Z=-17", "ARC X=19 Z=-21.4 I=0 K=-4.4 DIR=CCW");
+    let by_ik = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 I0 K-4.4");
+    let by_r = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 R4.4");
+    assert_eq!(by_arc, by_ik);
+    assert_eq!(by_arc, by_r);
+    // The long way round with a negative R: 270° instead of 90°.
+    let long = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 R-4.4");
+    assert_ne!(long.0, by_r.0);
+    assert_eq!(long.1, by_r.1);
 }
 
 #[test]

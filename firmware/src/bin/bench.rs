@@ -57,6 +57,67 @@ fn measure(tim: &StepTimer, f: impl FnOnce()) -> u32 {
     tim.count().wrapping_sub(t0)
 }
 
+fn arcs(tim: &StepTimer) {
+    use core_nostd::arc::{ArcDir, ArcPoints, ChordPlan, DirectArc};
+    use core_nostd::impulse::ImpulsePrice;
+    use core_nostd::length::Length;
+    let mm = |a: i64| Length::from_angstrom(a * 10_000).unwrap_or(Length::ZERO);
+    let (hx, hz) = (ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z);
+    // Full circle R 37.5 mm at σ 0.001 mm; quadrant R 60 mm for direct steps.
+    let p = ArcPoints {
+        start: [mm(37_500), mm(-20_000)],
+        end: [mm(37_500), mm(-20_000)],
+        centre: [mm(0), mm(-20_000)],
+    };
+    let mut plan = None;
+    let t = measure(tim, || {
+        plan = ChordPlan::new(&p, ArcDir::Ccw, mm(1), true).ok()
+    });
+    let Some(plan) = plan else { return };
+    Line::print(format_args!(
+        "chord plan: {t} instructions ({} chords)",
+        plan.chords()
+    ));
+    let n = plan.chords();
+    let mut acc = 0i32;
+    let t = measure(tim, || {
+        for i in 1..=n {
+            if let Ok(e) = plan.chord_end(i, hx, hz) {
+                acc = acc.wrapping_add(e.x.get());
+            }
+        }
+    });
+    Line::print(format_args!(
+        "chord end: {} instructions per chord ({acc})",
+        t / n.max(1)
+    ));
+    let q = ArcPoints {
+        start: [mm(0), mm(60_000)],
+        end: [mm(60_000), mm(0)],
+        centre: [mm(0), mm(0)],
+    };
+    let from = ImpulsePoint {
+        x: Impulses(0),
+        z: Impulses(6000),
+    };
+    let Ok(arc) = DirectArc::new(&q, ArcDir::Ccw, from, hx, hz) else {
+        return;
+    };
+    let mut events = 0u32;
+    let mut sink = 0u32;
+    let t = measure(tim, || {
+        for e in arc.events() {
+            events += 1;
+            sink = sink.wrapping_add(u32::from(e.bits()));
+        }
+    });
+    Line::print(format_args!(
+        "direct arc: {events} step events, {}.{:02} instructions per event ({sink})",
+        t / events.max(1),
+        (t % events.max(1)) * 100 / events.max(1)
+    ));
+}
+
 #[entry]
 fn main() -> ! {
     let Some(dp) = pac::Peripherals::take() else {
@@ -127,6 +188,8 @@ fn main() -> ! {
         dev.receive_bytes(b"CFG HX=0.001 HZ=0.002 DIAM=1\r\n", &mut quiet)
     });
     Line::print(format_args!("CFG request: {t} instructions"));
+
+    arcs(tim);
 
     #[cfg(feature = "qemu")]
     cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
