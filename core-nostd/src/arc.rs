@@ -447,7 +447,7 @@ fn feed_word(s: Length, r_q20: u128) -> u64 {
         return 0;
     }
     // S·1000/R with S and R in the same unit: (s·1000·2²⁰)/r_q20.
-    let num = s * 1000 << 20;
+    let num = (s * 1000) << 20;
     (2 * num + r_q20).checked_div(2 * r_q20).unwrap_or(0) as u64
 }
 
@@ -675,7 +675,7 @@ mod tests {
         /// coarse impulse and a half).
         #[test]
         fn direct_steps_hug_the_circle(r_um in 1_000i64..100_000, a0 in 0.0f64..1.5, sweep in 0.05f64..1.5, ccw: bool) {
-            let a1 = if ccw { (a0 + sweep).min(1.5707) } else { (a0 - sweep).max(0.0) };
+            let a1 = if ccw { (a0 + sweep).min(core::f64::consts::FRAC_PI_2 - 1e-4) } else { (a0 - sweep).max(0.0) };
             let r = r_um as f64 / 1000.0;
             let at = |a: f64| [
                 Length::from_angstrom((r * libm::sin(a) * 1e4).round() as i64 * 1000).unwrap(),
