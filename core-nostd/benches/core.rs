@@ -101,7 +101,7 @@ fn arcs(c: &mut Criterion) {
     use core_nostd::arc::{ArcDir, ArcPoints, ChordPlan, DirectArc};
     let mm = |s| Length::from_mm_str(s).unwrap();
     let (hx, hz) = (ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z);
-    // A full circle of R 37.5 at σ 0.001: 1084 chords.
+    // A full circle of R 37.5 at σ 0.001: Δφ = 3010″, 431 chords.
     let p = ArcPoints {
         start: [mm("37.5"), mm("-20")],
         end: [mm("37.5"), mm("-20")],
