@@ -670,9 +670,10 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(300))]
 
         /// Direct arcs end on the end point, move monotonically, and stay
-        /// within about an impulse of the circle (the end point itself is
-        /// quantized, so the last steps may be forced off it by up to one
-        /// coarse impulse and a half).
+        /// within two coarse impulses of the circle: the start register, J,
+        /// K and the end register are each rounded, so the end may lie up to
+        /// about 1.5 impulses per axis off the impulse circle, and the last
+        /// steps are forced towards it.
         #[test]
         fn direct_steps_hug_the_circle(r_um in 1_000i64..100_000, a0 in 0.0f64..1.5, sweep in 0.05f64..1.5, ccw: bool) {
             let a1 = if ccw { (a0 + sweep).min(core::f64::consts::FRAC_PI_2 - 1e-4) } else { (a0 - sweep).max(0.0) };
@@ -696,7 +697,7 @@ mod tests {
                 if e.x_steps() { x += if e.x_negative() { -1 } else { 1 }; }
                 if e.z_steps() { z += if e.z_negative() { -1 } else { 1 }; }
                 let dev = (libm::hypot((x - cx) as f64 * 0.005, (z - cz) as f64 * 0.01) - r0).abs();
-                prop_assert!(dev <= 0.015, "{dev}");
+                prop_assert!(dev <= 0.02, "{dev}");
                 prop_assert!(x >= cx && z >= cz);
             }
             prop_assert_eq!((x, z), (i64::from(arc.to().x.get()), i64::from(arc.to().z.get())));

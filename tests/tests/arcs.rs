@@ -32,7 +32,10 @@ proptest! {
         prop_assert!(t.arcs + t.direct_arcs + t.refused_alike == 55);
         // Measured by the reference, not assumed.
         prop_assert!(t.worst_chord_error <= 1.0, "{}", t.worst_chord_error);
-        prop_assert!(t.worst_direct_deviation <= 1.5, "{}", t.worst_direct_deviation);
+        // Rounded start, J/K and end put the end up to ~1.5 impulses per axis
+        // off the impulse circle; the steps stay within half an impulse of
+        // the circle or of that offset (about 1.75 impulses at worst).
+        prop_assert!(t.worst_direct_deviation <= 2.0, "{}", t.worst_direct_deviation);
     }
 
     /// A full circle, in either direction, at any tolerance and pass, issues
