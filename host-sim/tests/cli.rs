@@ -50,7 +50,7 @@ fn main_job_reports_a_result_line() {
     // The per-scenario lines add up to the RESULT line's count.
     let per_scenario: u64 = text
         .lines()
-        .filter(|l| !l.starts_with("RESULT"))
+        .filter(|l| l.contains(" blocks ") && l.contains(" events ") && !l.starts_with("RESULT"))
         .filter_map(|l| {
             l.split(" blocks ")
                 .next()?
