@@ -50,14 +50,13 @@ fn main_job_reports_a_result_line() {
     // The per-scenario lines add up to the RESULT line's count.
     let per_scenario: u64 = text
         .lines()
-        .filter(|l| l.contains(" blocks ") && l.contains(" events ") && !l.starts_with("RESULT"))
+        .filter(|l| !l.starts_with("RESULT"))
         .filter_map(|l| {
-            l.split(" blocks ")
-                .next()?
-                .rsplit(' ')
-                .next()?
-                .parse::<u64>()
-                .ok()
+            let t: Vec<&str> = l.split_whitespace().collect();
+            t.windows(4).find_map(|w| match w {
+                [n, "blocks", m, "events"] if m.parse::<u64>().is_ok() => n.parse::<u64>().ok(),
+                _ => None,
+            })
         })
         .sum();
     assert!(per_scenario > 300, "{text}");
