@@ -195,6 +195,8 @@ impl Board {
         });
         if byte.is_none() && RX_PAUSED.swap(false, Ordering::AcqRel) {
             self.usart.cr1().modify(|_, w| w.rxneie().set_bit());
+            // SAFETY: the handler shares only the protected queue and atomics.
+            unsafe { pac::NVIC::unmask(Interrupt::USART1) };
         }
         byte
     }
@@ -225,8 +227,11 @@ fn USART1() {
         let full =
             critical_section::with(|cs| RX.borrow(cs).try_borrow().map_or(true, |q| q.is_full()));
         if full {
-            // Leave the byte in DR; stop asking until there is room.
+            // Leave the byte in DR; stop asking until there is room. The NVIC
+            // line is masked too: QEMU 7.2 keeps the USART's interrupt raised
+            // while RXNE is set, whatever RXNEIE says.
             usart.cr1().modify(|_, w| w.rxneie().clear_bit());
+            pac::NVIC::mask(Interrupt::USART1);
             RX_PAUSED.store(true, Ordering::Release);
         } else {
             let byte = usart.dr().read().bits() as u8;
