@@ -42,6 +42,11 @@ impl ReplyLine {
         }
     }
 
+    /// The bytes written so far.
+    pub fn as_bytes(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+
     /// Appends `*HH\r\n` and returns the finished line.
     ///
     /// ```

@@ -4,7 +4,7 @@
 //! Every command first computes its whole outcome from the current state and
 //! only then commits it, so a refused request changes nothing.
 
-use super::reply::{checksum, hex_digits, ReplyLine};
+use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
@@ -129,6 +129,11 @@ pub struct Session {
     drive: DriveTiming,
     /// Modal G-code state.
     modal: Modal,
+    /// The host's session token (`SESSION`); 0 after power-on.
+    token: u32,
+    /// The id of the last request that carried one, and its final reply.
+    last_id: Option<u32>,
+    last_final: heapless::Vec<u8, REPLY_CAPACITY>,
 }
 
 /// The modal state of the G-code path.
@@ -168,6 +173,7 @@ enum Refusal<'a> {
     Geometry(&'static str),
     Missing(&'static str),
     Block(BlockError),
+    Crc,
 }
 
 impl From<ArcError> for Refusal<'_> {
@@ -199,6 +205,9 @@ impl Session {
             },
             drive: DriveTiming::DEFAULT,
             modal: Modal::POWER_ON,
+            token: 0,
+            last_id: None,
+            last_final: heapless::Vec::new(),
         }
     }
 
@@ -224,14 +233,45 @@ impl Session {
 
     /// Runs one request line (terminator excluded) and answers it through
     /// `io`: exactly one final line, `OK …` or `ERR …`.
+    ///
+    /// A request that fails its `*HH` or `~CCCCCCCC` check is answered
+    /// `ERR CHECKSUM` without the id and CRC words (nothing in it can be
+    /// trusted). A request whose `@id` equals the last one's is not run
+    /// again: its remembered final line is sent instead.
     pub fn handle_line<I: Io>(&mut self, line: &[u8], io: &mut I) {
-        if let Err(refusal) = self.run(line, io) {
-            send_refusal(io, refusal);
+        let (body, crc) = match check_integrity(line) {
+            Ok(v) => v,
+            Err(refusal) => return send_refusal(io, refusal),
+        };
+        let mut out = Suffixed {
+            inner: io,
+            id: None,
+            crc,
+            last: heapless::Vec::new(),
+        };
+        let body = match split_id(body) {
+            Ok((id, rest)) => {
+                out.id = id;
+                rest
+            }
+            Err(refusal) => return send_refusal(&mut out, refusal),
+        };
+        if let Some(id) = out.id {
+            if self.last_id == Some(id) {
+                out.send_body(&self.last_final);
+                return;
+            }
+        }
+        if let Err(refusal) = self.run(body, &mut out) {
+            send_refusal(&mut out, refusal);
+        }
+        if let Some(id) = out.id {
+            self.last_id = Some(id);
+            self.last_final = out.last;
         }
     }
 
-    fn run<'a, I: Io>(&mut self, line: &'a [u8], io: &mut I) -> Outcome<'a> {
-        let body = strip_checksum(line)?;
+    fn run<'a, I: Io>(&mut self, body: &'a [u8], io: &mut I) -> Outcome<'a> {
         if !body
             .iter()
             .all(|&b| b == b'\t' || (0x20..0x7F).contains(&b))
@@ -254,10 +294,16 @@ impl Session {
         } else if command.eq_ignore_ascii_case("CFG") {
             self.cfg_command(words, io)
         } else if command.eq_ignore_ascii_case("ZERO") {
-            no_args(words, "ZERO")?;
-            self.cmd = [Length::ZERO; 2];
-            self.pos = ImpulsePoint::default();
-            send_ok(io, None);
+            self.zero_command(words, io)
+        } else if command.eq_ignore_ascii_case("SESSION") {
+            let [token] = parse_args(words, ["TOKEN"])?;
+            if let Some(v) = token {
+                self.token = match v.parse::<u32>() {
+                    Ok(t) if v.bytes().all(|b| b.is_ascii_digit()) => t,
+                    _ => return Err(Refusal::Value("TOKEN", "must be 0 to 4294967295")),
+                };
+            }
+            send_ok(io, Some(format_args!("TOKEN={}", self.token)));
             Ok(())
         } else if command.eq_ignore_ascii_case("MOVE") {
             self.move_command(words, io)
@@ -272,6 +318,30 @@ impl Session {
         } else {
             Err(Refusal::Unknown(command))
         }
+    }
+
+    /// `ZERO [X=] [Z=]`: the current point becomes X, Z (0 when omitted) in
+    /// program coordinates; nothing moves.
+    fn zero_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [x, z] = parse_args(words, ["X", "Z"])?;
+        let cmd = [
+            match x {
+                Some(v) => self.x_word(parse_length("X", v)?)?,
+                None => Length::ZERO,
+            },
+            match z {
+                Some(v) => parse_length("Z", v)?,
+                None => Length::ZERO,
+            },
+        ];
+        let pos = ImpulsePoint {
+            x: quantize(cmd[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
+            z: quantize(cmd[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
+        };
+        self.cmd = cmd;
+        self.pos = pos;
+        send_ok(io, None);
+        Ok(())
     }
 
     fn cfg_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
@@ -765,6 +835,111 @@ pub(crate) fn block_crc(block: &LinearBlock, mut crc: Crc32) -> Crc32 {
     crc
 }
 
+/// Checks a request's `*HH` and, if present, its `~CCCCCCCC` word (CRC-32 of
+/// every byte before the `~`); returns the request without them and whether
+/// the CRC word was there.
+fn check_integrity(line: &[u8]) -> Result<(&[u8], bool), Refusal<'static>> {
+    let body = strip_checksum(line)?;
+    let Some(tilde) = body.iter().rposition(|&b| b == b'~') else {
+        return Ok((body, false));
+    };
+    let (before, word) = body.split_at(tilde);
+    let hex = word.get(1..).unwrap_or(&[]);
+    // A CRC word stands alone at the end: after a space, eight hex digits.
+    let alone = before.last().is_none_or(|&b| b == b' ' || b == b'\t');
+    if !alone || hex.len() != 8 || !hex.iter().all(u8::is_ascii_hexdigit) {
+        return Ok((body, false));
+    }
+    let given = hex
+        .iter()
+        .fold(0u32, |n, &b| n << 4 | u32::from(hex_value(b).unwrap_or(0)));
+    let mut crc = Crc32::new();
+    crc.update(before);
+    if crc.finish() != given {
+        return Err(Refusal::Crc);
+    }
+    Ok((before, true))
+}
+
+/// Splits off a leading `@id` word (1 … 4294967295).
+fn split_id(body: &[u8]) -> Result<(Option<u32>, &[u8]), Refusal<'static>> {
+    let start = body
+        .iter()
+        .position(|&b| b != b' ' && b != b'\t')
+        .unwrap_or(body.len());
+    let rest = body.get(start..).unwrap_or(&[]);
+    let Some((b'@', after)) = rest.split_first() else {
+        return Ok((None, body));
+    };
+    let end = after
+        .iter()
+        .position(|&b| b == b' ' || b == b'\t')
+        .unwrap_or(after.len());
+    let (digits, rest) = after.split_at(end);
+    let bad = Refusal::Value("@", "request id must be 1 to 4294967295");
+    if digits.is_empty() || digits.len() > 10 || !digits.iter().all(u8::is_ascii_digit) {
+        return Err(bad);
+    }
+    let id = digits
+        .iter()
+        .fold(0u64, |n, &b| n * 10 + u64::from(b - b'0'));
+    match u32::try_from(id) {
+        Ok(id) if id > 0 => Ok((Some(id), rest)),
+        _ => Err(bad),
+    }
+}
+
+/// Adds the request's id (` @n`) and CRC (` ~CCCCCCCC`) words to every reply
+/// line, and remembers the final line for a repeated id.
+struct Suffixed<'a, I: Io> {
+    inner: &'a mut I,
+    id: Option<u32>,
+    crc: bool,
+    last: heapless::Vec<u8, REPLY_CAPACITY>,
+}
+
+impl<I: Io> Suffixed<'_, I> {
+    /// Sends a reply body (no `*HH`) with the suffix words.
+    fn send_body(&mut self, body: &[u8]) {
+        let mut line = ReplyLine::new();
+        line.push_bytes(body);
+        if let Some(id) = self.id {
+            let _ = write!(line, " @{id}");
+        }
+        if self.crc {
+            let mut crc = Crc32::new();
+            crc.update(line.as_bytes());
+            crc.push(b' ');
+            let _ = write!(line, " ~{:08X}", crc.finish());
+        }
+        self.inner.send(line.finish());
+    }
+}
+
+impl<I: Io> Io for Suffixed<'_, I> {
+    fn send(&mut self, line: &[u8]) {
+        // Every line the handler composes ends in `*HH\r\n`.
+        let body = line.get(..line.len().saturating_sub(5)).unwrap_or(&[]);
+        if body.starts_with(b"OK") || body.starts_with(b"ERR") {
+            self.last.clear();
+            let _ = self.last.extend_from_slice(body);
+        }
+        if self.id.is_none() && !self.crc {
+            self.inner.send(line);
+        } else {
+            self.send_body(body);
+        }
+    }
+
+    fn run_block(&mut self, block: &LinearBlock, timing: &DriveTiming) {
+        self.inner.run_block(block, timing);
+    }
+
+    fn run_direct(&mut self, arc: &DirectArc, timing: &DriveTiming) {
+        self.inner.run_direct(arc, timing);
+    }
+}
+
 /// Splits off and checks a trailing `*HH`; returns the bytes before it.
 fn strip_checksum(line: &[u8]) -> Result<&[u8], Refusal<'static>> {
     let Some(star) = line.iter().rposition(|&b| b == b'*') else {
@@ -891,6 +1066,7 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
                 ),
             )
         }
+        Refusal::Crc => send_error(io, E::Checksum, format_args!("CRC word mismatch")),
         Refusal::ChecksumForm => send_error(
             io,
             E::Checksum,

@@ -341,6 +341,83 @@ fn gcode_arcs_equal_arc_requests() {
     assert_eq!(long.1, by_r.1);
 }
 
+/// Appends ` ~CCCCCCCC`, the CRC-32 of everything before the `~`.
+fn with_crc(body: &str) -> String {
+    let mut c = crate::crc32::Crc32::new();
+    c.update(body.as_bytes());
+    c.push(b' ');
+    std::format!("{body} ~{:08X}", c.finish())
+}
+
+#[test]
+fn request_ids_make_retries_idempotent() {
+    let mut dev = Device::new();
+    let first = ask1(&mut dev, "@7 MOVE X=1 INC=1");
+    assert_eq!(first, "OK NX=100 NZ=0 PX=100 PZ=0 SEQ=E058315F @7");
+    // The same id again: the remembered reply, no second motion.
+    let mut io = Lines::default();
+    dev.receive_bytes(b"@7 MOVE X=1 INC=1\n", &mut io);
+    assert_eq!(io.out, [first.clone()]);
+    assert_eq!(io.blocks, 0);
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=100 "));
+    // A new id runs again.
+    assert!(ask1(&mut dev, "@8 MOVE X=1 INC=1").starts_with("OK NX=100 NZ=0 PX=200 "));
+    // Refusals are remembered too, and ids are checked.
+    assert!(ask1(&mut dev, "@9 MOVE X=abc").starts_with("ERR VALUE X"));
+    assert!(ask1(&mut dev, "@9 MOVE X=1").starts_with("ERR VALUE X"));
+    assert!(ask1(&mut dev, "@0 POS").starts_with("ERR VALUE @"));
+    assert!(ask1(&mut dev, "@4294967296 POS").starts_with("ERR VALUE @"));
+    assert!(ask1(&mut dev, "@x POS").starts_with("ERR VALUE @"));
+    // G-code blocks take ids as well.
+    let r = ask(&mut dev, b"@10 G01 X4\n");
+    assert_eq!(r[0], "DATA G01 X4.0000 Z0.0000 @10");
+    assert!(r[1].ends_with(" @10"));
+}
+
+#[test]
+fn crc_words_guard_requests_and_replies() {
+    let mut dev = Device::new();
+    let line = with_crc("@1 MOVE X=10 Z=-5");
+    let reply = ask1(&mut dev, &with_checksum(&line));
+    let (body, crc) = reply.rsplit_once(" ~").unwrap();
+    let mut c = crate::crc32::Crc32::new();
+    c.update(body.as_bytes());
+    c.push(b' ');
+    assert_eq!(crc, std::format!("{:08X}", c.finish()));
+    assert!(body.starts_with("OK NX=1000 NZ=-500 PX=1000 PZ=-500 SEQ=34F89895 @1"));
+    // Two flipped bits that the XOR cannot see: the CRC refuses the line.
+    let before = state(&mut dev);
+    let bad = line.replace("X=10", "X=1\u{30}").replace("Z=-5", "Z=-5");
+    let bad = bad.replacen("MOVE X=10", "MOVE X=01", 1); // same XOR, other value
+    let mut io = Lines::default();
+    dev.receive_bytes(std::format!("{bad}\n").as_bytes(), &mut io);
+    assert_eq!(io.out.len(), 1);
+    assert!(io.out[0].starts_with("ERR CHECKSUM CRC"), "{:?}", io.out);
+    assert_eq!(io.blocks, 0);
+    assert_eq!(state(&mut dev), before);
+    // A word that only looks like a CRC is part of the request.
+    assert!(ask1(&mut dev, "MOVE X=1~0000").starts_with("ERR VALUE X"));
+}
+
+#[test]
+fn session_token_and_zero_at_a_point() {
+    let mut dev = Device::new();
+    assert_eq!(ask1(&mut dev, "SESSION"), "OK TOKEN=0");
+    assert_eq!(
+        ask1(&mut dev, "SESSION TOKEN=4294967295"),
+        "OK TOKEN=4294967295"
+    );
+    assert!(ask1(&mut dev, "SESSION TOKEN=4294967296").starts_with("ERR VALUE TOKEN"));
+    assert!(ask1(&mut dev, "SESSION TOKEN=+1").starts_with("ERR VALUE TOKEN"));
+    assert_eq!(ask1(&mut dev, "ZERO X=27.5325 Z=-0.015"), "OK");
+    // 13.76625 / 0.005 = 2753.25 → 2753; −0.015 / 0.01 = −1.5 → −2.
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=2753 PZ=-2 X=27.5325 Z=-0.0150"
+    );
+    assert!(ask1(&mut dev, "ZERO Y=1").starts_with("ERR SYNTAX"));
+}
+
 #[test]
 fn price_change_re_expresses_registers() {
     let mut dev = Device::new();
