@@ -250,6 +250,14 @@ impl Session {
             last: heapless::Vec::new(),
         };
         let body = match split_id(body) {
+            // An id promises a retry; only a CRC-guarded request may be retried
+            // (a line broken by noise must not run as its head).
+            Ok((Some(_), _)) if !crc => {
+                return send_refusal(
+                    &mut out,
+                    Refusal::Missing("a request with @id needs a ~CRC word"),
+                )
+            }
             Ok((id, rest)) => {
                 out.id = id;
                 rest

@@ -352,26 +352,37 @@ fn with_crc(body: &str) -> String {
 #[test]
 fn request_ids_make_retries_idempotent() {
     let mut dev = Device::new();
-    let first = ask1(&mut dev, "@7 MOVE X=1 INC=1");
+    let strip = |l: String| l.rsplit_once(" ~").unwrap().0.to_string();
+    let first = strip(ask1(&mut dev, &with_crc("@7 MOVE X=1 INC=1")));
     assert_eq!(first, "OK NX=100 NZ=0 PX=100 PZ=0 SEQ=E058315F @7");
     // The same id again: the remembered reply, no second motion.
     let mut io = Lines::default();
-    dev.receive_bytes(b"@7 MOVE X=1 INC=1\n", &mut io);
-    assert_eq!(io.out, [first.clone()]);
+    dev.receive_bytes(
+        std::format!("{}\n", with_crc("@7 MOVE X=1 INC=1")).as_bytes(),
+        &mut io,
+    );
+    assert_eq!(io.out.len(), 1);
+    assert_eq!(strip(io.out[0].clone()), first);
     assert_eq!(io.blocks, 0);
     assert!(ask1(&mut dev, "POS").starts_with("OK PX=100 "));
     // A new id runs again.
-    assert!(ask1(&mut dev, "@8 MOVE X=1 INC=1").starts_with("OK NX=100 NZ=0 PX=200 "));
+    assert!(ask1(&mut dev, &with_crc("@8 MOVE X=1 INC=1")).starts_with("OK NX=100 NZ=0 PX=200 "));
     // Refusals are remembered too, and ids are checked.
-    assert!(ask1(&mut dev, "@9 MOVE X=abc").starts_with("ERR VALUE X"));
-    assert!(ask1(&mut dev, "@9 MOVE X=1").starts_with("ERR VALUE X"));
-    assert!(ask1(&mut dev, "@0 POS").starts_with("ERR VALUE @"));
-    assert!(ask1(&mut dev, "@4294967296 POS").starts_with("ERR VALUE @"));
-    assert!(ask1(&mut dev, "@x POS").starts_with("ERR VALUE @"));
+    assert!(ask1(&mut dev, &with_crc("@9 MOVE X=abc")).starts_with("ERR VALUE X"));
+    assert!(ask1(&mut dev, &with_crc("@9 MOVE X=1")).starts_with("ERR VALUE X"));
+    assert!(ask1(&mut dev, &with_crc("@0 POS")).starts_with("ERR VALUE @"));
+    assert!(ask1(&mut dev, &with_crc("@4294967296 POS")).starts_with("ERR VALUE @"));
+    assert!(ask1(&mut dev, &with_crc("@x POS")).starts_with("ERR VALUE @"));
+    // An id without a CRC word is refused: a broken line must not run.
+    assert!(ask1(&mut dev, "@11 MOVE X=1 INC=1").starts_with("ERR SYNTAX"));
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=200 "));
     // G-code blocks take ids as well.
-    let r = ask(&mut dev, b"@10 G01 X4\n");
-    assert_eq!(r[0], "DATA G01 X4.0000 Z0.0000 @10");
-    assert!(r[1].ends_with(" @10"));
+    let r = ask(
+        &mut dev,
+        std::format!("{}\n", with_crc("@10 G01 X4")).as_bytes(),
+    );
+    assert!(r[0].starts_with("DATA G01 X4.0000 Z0.0000 @10 ~"), "{r:?}");
+    assert!(r[1].contains(" @10 ~"));
 }
 
 #[test]
