@@ -10,6 +10,8 @@
 //! - [`qemu`]: the firmware booted in QEMU, reached over its serial pty;
 //! - [`compare`]: the bit-for-bit comparison of device replies against the
 //!   reference;
+//! - [`reliable`]: requests that survive a faulty link, and the fault
+//!   injector; [`soak`]: long faulted sessions against the reference;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod compare;
@@ -18,4 +20,6 @@ pub mod link;
 pub mod qemu;
 pub mod reference;
 pub mod reference_arc;
+pub mod reliable;
 pub mod scenario;
+pub mod soak;

@@ -31,6 +31,9 @@ enum Command {
     /// Boot the firmware in QEMU and compare it with the f64 reference over
     /// its serial link.
     Qemu(QemuArgs),
+    /// A long seeded session over a faulty link: bit flips, dropped and
+    /// duplicated bytes, noise, device resets.
+    Soak(SoakArgs),
     /// Count the firmware's instructions per step event and per request on
     /// the Cortex-M4, under QEMU -icount.
     QemuBench,
@@ -77,6 +80,22 @@ impl Default for RunArgs {
 }
 
 #[derive(clap::Args, Clone)]
+struct SoakArgs {
+    /// Blocks to run (with their price, mode and zero changes).
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
+    blocks: u32,
+    /// Seed of the blocks and of the faults.
+    #[arg(long, default_value_t = 1977)]
+    seed: u64,
+    /// Run against the firmware in QEMU instead of the in-process device.
+    #[arg(long)]
+    qemu: bool,
+    /// No faults (a baseline for the speed).
+    #[arg(long)]
+    clean: bool,
+}
+
+#[derive(clap::Args, Clone)]
 struct QemuArgs {
     #[command(flatten)]
     scenario: ScenarioArgs,
@@ -99,6 +118,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run(&args),
         Command::Qemu(args) => run_qemu(&args),
         Command::QemuBench => qemu_bench(),
+        Command::Soak(args) => run_soak(&args),
         Command::Serve {
             stdio: _,
             pty: true,
@@ -187,6 +207,75 @@ fn run_qemu(args: &QemuArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
         f64::from(n) / t0.elapsed().as_secs_f64()
     );
     Ok(compare_all(client, &args.scenario)?)
+}
+
+fn run_soak(args: &SoakArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    use host_sim::reliable::{FaultInjector, Faults, LocalLink};
+    let faults = if args.clean {
+        Faults {
+            flip: 0.0,
+            drop: 0.0,
+            dup: 0.0,
+            noise: 0.0,
+            reset: 0.0,
+        }
+    } else {
+        Faults::HARSH
+    };
+    let bar = ProgressBar::new(u64::from(args.blocks)).with_style(
+        ProgressStyle::with_template("  {bar:40} {pos}/{len} blocks {per_sec} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let (report, stats, corrupted) = if args.qemu {
+        println!(
+            "soak: firmware in QEMU over a faulty link, seed {}",
+            args.seed
+        );
+        let elf = host_sim::qemu::build_firmware("qemu")?;
+        let link = host_sim::qemu::QemuLink::boot(&elf)?;
+        let injector = FaultInjector::new(link, faults, args.seed);
+        let (report, link) = host_sim::soak::soak(
+            injector,
+            args.seed,
+            args.blocks as usize,
+            Duration::from_millis(300),
+            |n| bar.set_position(n),
+        )?;
+        (report, link.stats, None)
+    } else {
+        println!(
+            "soak: in-process device over a faulty link, seed {}",
+            args.seed
+        );
+        let injector = FaultInjector::new(LocalLink::new(), faults, args.seed);
+        let (report, link) = host_sim::soak::soak(
+            injector,
+            args.seed,
+            args.blocks as usize,
+            Duration::from_millis(1),
+            |n| bar.set_position(n),
+        )?;
+        let corrupted = link.inner().executed_corrupted;
+        (report, link.stats, Some(corrupted))
+    };
+    bar.finish_and_clear();
+    host_sim::soak::print_report(&report, &stats, corrupted);
+    let ok = report.passed() && corrupted.unwrap_or(0) == 0;
+    println!(
+        "SOAK: {} blocks, {} mismatches, registers {}",
+        report.blocks,
+        report.mismatches,
+        if report.device_end == report.reference_end {
+            "equal"
+        } else {
+            "DIFFER"
+        }
+    );
+    Ok(if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }
 
 fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {

@@ -69,8 +69,19 @@ impl Qemu {
         Self::boot_with(elf, icount, "pty")
     }
 
+    /// Boots `elf` with USART1 on a pty and the QEMU monitor on a unix
+    /// socket (for `system_reset`).
+    pub fn boot_monitor(elf: &Path, socket: &Path) -> Result<Qemu, LinkError> {
+        let monitor = format!("unix:{},server,nowait", socket.display());
+        Self::boot_full(elf, true, "pty", &monitor)
+    }
+
     /// Boots `elf` with USART1 on `serial` (`pty` or `null`).
     pub fn boot_with(elf: &Path, icount: bool, serial: &str) -> Result<Qemu, LinkError> {
+        Self::boot_full(elf, icount, serial, "none")
+    }
+
+    fn boot_full(elf: &Path, icount: bool, serial: &str, monitor: &str) -> Result<Qemu, LinkError> {
         let mut cmd = Command::new(QEMU);
         cmd.args([
             "-machine",
@@ -78,7 +89,7 @@ impl Qemu {
             "-display",
             "none",
             "-monitor",
-            "none",
+            monitor,
             "-serial",
             serial,
             "-semihosting-config",
@@ -232,4 +243,62 @@ pub fn icount_bench(bench_elf: &Path) -> Result<Vec<String>, LinkError> {
         .filter(|l| l.contains(": ") && l.is_ascii())
         .map(str::to_owned)
         .collect())
+}
+
+/// The firmware in QEMU as a byte link that can be power-cycled (QEMU's
+/// `system_reset` through its monitor socket).
+pub struct QemuLink {
+    qemu: Qemu,
+    client: Client,
+    monitor: std::os::unix::net::UnixStream,
+    /// Resets done.
+    pub resets: u64,
+}
+
+impl QemuLink {
+    /// Boots the firmware with a monitor socket and opens its UART.
+    pub fn boot(elf: &Path) -> Result<QemuLink, LinkError> {
+        let sock = std::env::temp_dir().join(format!("lathe-qemu-{}.sock", std::process::id()));
+        let _ = std::fs::remove_file(&sock);
+        let mut qemu = Qemu::boot_monitor(elf, &sock)?;
+        let client = qemu.connect(Duration::from_secs(30))?;
+        let mut monitor = None;
+        for _ in 0..100 {
+            if let Ok(m) = std::os::unix::net::UnixStream::connect(&sock) {
+                monitor = Some(m);
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let monitor = monitor.ok_or_else(|| other("no QEMU monitor socket".into()))?;
+        Ok(QemuLink {
+            qemu,
+            client,
+            monitor,
+            resets: 0,
+        })
+    }
+
+    /// QEMU and the firmware's log.
+    pub fn qemu(&self) -> &Qemu {
+        &self.qemu
+    }
+}
+
+impl crate::reliable::ByteLink for QemuLink {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.client.write_raw(bytes)
+    }
+
+    fn recv_line(&mut self, timeout: Duration) -> Result<Option<Vec<u8>>, LinkError> {
+        crate::reliable::ByteLink::recv_line(&mut self.client, timeout)
+    }
+
+    fn reset_device(&mut self) -> Result<bool, LinkError> {
+        use std::io::Write;
+        self.monitor.write_all(b"system_reset\n")?;
+        self.monitor.flush()?;
+        self.resets += 1;
+        Ok(true)
+    }
 }

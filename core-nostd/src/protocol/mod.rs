@@ -38,6 +38,9 @@ pub enum ErrorCode {
     Range,
     /// Impossible geometry.
     Geometry,
+    /// A numbered request (`@id`) while no session token is set: the device
+    /// was reset since the host set it (an extension).
+    Session,
 }
 
 impl ErrorCode {
@@ -52,6 +55,7 @@ impl ErrorCode {
             ErrorCode::Value => "VALUE",
             ErrorCode::Range => "RANGE",
             ErrorCode::Geometry => "GEOMETRY",
+            ErrorCode::Session => "SESSION",
         }
     }
 }

@@ -174,6 +174,7 @@ enum Refusal<'a> {
     Missing(&'static str),
     Block(BlockError),
     Crc,
+    NoSession,
 }
 
 impl From<ArcError> for Refusal<'_> {
@@ -268,6 +269,15 @@ impl Session {
             if self.last_id == Some(id) {
                 out.send_body(&self.last_final);
                 return;
+            }
+            // After power-on no session token is set: a numbered request from
+            // a session the device no longer remembers is refused, so the host
+            // learns of the reset before anything runs.
+            let session = Words::new(core::str::from_utf8(body).unwrap_or(""))
+                .next()
+                .is_some_and(|w| w.eq_ignore_ascii_case("SESSION"));
+            if self.token == 0 && !session {
+                return send_refusal(&mut out, Refusal::NoSession);
             }
         }
         if let Err(refusal) = self.run(body, &mut out) {
@@ -1075,6 +1085,11 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
             )
         }
         Refusal::Crc => send_error(io, E::Checksum, format_args!("CRC word mismatch")),
+        Refusal::NoSession => send_error(
+            io,
+            E::Session,
+            format_args!("no session token set (device reset); set SESSION TOKEN"),
+        ),
         Refusal::ChecksumForm => send_error(
             io,
             E::Checksum,

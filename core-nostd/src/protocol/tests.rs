@@ -353,6 +353,9 @@ fn with_crc(body: &str) -> String {
 fn request_ids_make_retries_idempotent() {
     let mut dev = Device::new();
     let strip = |l: String| l.rsplit_once(" ~").unwrap().0.to_string();
+    // No session yet: a numbered request is refused before it runs.
+    assert!(ask1(&mut dev, &with_crc("@3 MOVE X=1 INC=1")).starts_with("ERR SESSION"));
+    assert!(ask1(&mut dev, &with_crc("@4 SESSION TOKEN=77")).starts_with("OK TOKEN=77 @4"));
     let first = strip(ask1(&mut dev, &with_crc("@7 MOVE X=1 INC=1")));
     assert_eq!(first, "OK NX=100 NZ=0 PX=100 PZ=0 SEQ=E058315F @7");
     // The same id again: the remembered reply, no second motion.
@@ -388,6 +391,7 @@ fn request_ids_make_retries_idempotent() {
 #[test]
 fn crc_words_guard_requests_and_replies() {
     let mut dev = Device::new();
+    assert!(ask1(&mut dev, "SESSION TOKEN=1").starts_with("OK"));
     let line = with_crc("@1 MOVE X=10 Z=-5");
     let reply = ask1(&mut dev, &with_checksum(&line));
     let (body, crc) = reply.rsplit_once(" ~").unwrap();

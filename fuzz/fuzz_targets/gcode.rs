@@ -1,0 +1,185 @@
+//! Arbitrary UTF-8 into the G-code block parser, and block lines through the
+//! device as requests.
+//!
+//! Checked:
+//! - `parse_block` agrees with an independent reading of the block grammar
+//!   (same words, same values to the ångström, same refusal);
+//! - an accepted block written back canonically parses to the same block;
+//! - `is_block` agrees with the reference;
+//! - a block line sent to devices in four different states (power-on;
+//!   moved with a fine X price; radius mode, G91 G01; G03 modal after an arc)
+//!   gets exactly one final line, with the checks of `fuzz_oracle::request`
+//!   (an `ERR` changes nothing, registers hold `Q(P/h)`, motion agrees);
+//! - a block the parser refuses is refused by the device with the matching
+//!   code (`SYNTAX` for word errors, `VALUE` for numbers and G codes);
+//! - an accepted block leaves the commanded point at the block's end point in
+//!   the modal distance mode (X a diameter when `DIAM=1`).
+#![no_main]
+
+use core_nostd::gcode::{
+    is_block, parse_block, Block, BlockError, Compensation, Motion,
+};
+use core_nostd::length::LengthError;
+use core_nostd::protocol::Device;
+use fuzz_oracle::{
+    device_after, exact_mm, reference_block, reference_is_block, request, LengthRefusal,
+    RefBlock, RefBlockError, LIMIT_ANGSTROM, MAX_LINE,
+};
+use libfuzzer_sys::fuzz_target;
+use std::sync::OnceLock;
+
+/// Devices in known states, with their modal distance mode (G91 = true).
+fn preludes() -> &'static [(Device, bool)] {
+    static P: OnceLock<Vec<(Device, bool)>> = OnceLock::new();
+    P.get_or_init(|| {
+        vec![
+            (Device::new(), false),
+            (
+                device_after(&[
+                    "CFG HX=0.0025 TOL=0.02 PASS=ROUGH",
+                    "MOVE X=12.345678 Z=-7.000005",
+                ]),
+                false,
+            ),
+            (
+                device_after(&["CFG DIAM=0 HX=0.001 HZ=0.001", "G91 G01 X10 Z-3"]),
+                true,
+            ),
+            (
+                device_after(&["G00 X10 Z10", "G01 X7.2 Z0", "G03 X12 Z-2.4 R2.4"]),
+                false,
+            ),
+        ]
+    })
+}
+
+fn as_reference(b: &Block) -> RefBlock {
+    let a = |l: Option<core_nostd::length::Length>| l.map(|l| l.as_angstrom());
+    RefBlock {
+        motion: b.motion.map(|m| match m {
+            Motion::Rapid => 0,
+            Motion::Linear => 1,
+            Motion::ArcCw => 2,
+            Motion::ArcCcw => 3,
+        }),
+        compensation: b.compensation.map(|c| match c {
+            Compensation::Off => 40,
+            Compensation::Left => 41,
+            Compensation::Right => 42,
+        }),
+        distance: b.incremental.map(|i| if i { 91 } else { 90 }),
+        xzikr: [a(b.x), a(b.z), a(b.i), a(b.k), a(b.r)],
+    }
+}
+
+fn as_reference_error(e: BlockError) -> RefBlockError {
+    match e {
+        BlockError::UnknownAddress(l) => RefBlockError::UnknownAddress(l),
+        BlockError::Repeated(l) => RefBlockError::Repeated(l),
+        BlockError::NotAWord => RefBlockError::NotAWord,
+        BlockError::Comment => RefBlockError::Comment,
+        BlockError::UnsupportedG => RefBlockError::UnsupportedG,
+        BlockError::Value(l, e) => RefBlockError::Value(
+            l,
+            match e {
+                LengthError::Malformed => LengthRefusal::Malformed,
+                LengthError::TooManyDecimals => LengthRefusal::TooManyDecimals,
+                LengthError::OutOfRange => LengthRefusal::OutOfRange,
+            },
+        ),
+    }
+}
+
+/// The block written back in canonical form.
+fn canonical(b: &RefBlock) -> String {
+    let mut words = Vec::new();
+    for g in [b.motion, b.compensation, b.distance].into_iter().flatten() {
+        words.push(format!("G{g:02}"));
+    }
+    for (letter, v) in ['X', 'Z', 'I', 'K', 'R'].iter().zip(b.xzikr) {
+        if let Some(v) = v {
+            words.push(format!("{letter}{}", exact_mm(v)));
+        }
+    }
+    words.join(" ")
+}
+
+fuzz_target!(|text: &str| {
+    let parsed = parse_block(text);
+    let reference = reference_block(text);
+    match (&parsed, &reference) {
+        (Ok(b), Ok(r)) => {
+            assert_eq!(as_reference(b), *r, "{text:?}");
+            let again = canonical(r);
+            assert_eq!(
+                parse_block(&again).map(|b| as_reference(&b)),
+                Ok(r.clone()),
+                "{text:?} written back as {again:?}"
+            );
+        }
+        (Err(e), Err(r)) => assert_eq!(as_reference_error(*e), *r, "{text:?}"),
+        _ => panic!("{text:?}: core {parsed:?}, reference {reference:?}"),
+    }
+    assert_eq!(is_block(text), reference_is_block(text), "{text:?}");
+
+    let line = text.split(['\r', '\n']).next().unwrap_or("");
+    if !is_block(line) {
+        return;
+    }
+    let plain = line.len() <= MAX_LINE
+        && !line.contains('*')
+        && line.bytes().all(|b| b == b'\t' || (0x20..0x7F).contains(&b));
+    let parsed = parse_block(line);
+    for (prelude, incremental) in preludes() {
+        let mut dev = prelude.clone();
+        let (x0, z0) = dev.session().commanded();
+        let diam = dev.session().config().diam;
+        let answer = request(&mut dev, format!("{line}\n").as_bytes());
+        if !plain {
+            continue;
+        }
+        match (&parsed, answer.err()) {
+            (Err(e), code) => {
+                let want = match e {
+                    BlockError::Value(..) | BlockError::UnsupportedG => "VALUE",
+                    _ => "SYNTAX",
+                };
+                assert_eq!(code, Some(want), "{line:?} ({e:?}) -> {:?}", answer.lines);
+            }
+            (Ok(b), None) => {
+                let inc = b.incremental.unwrap_or(*incremental);
+                let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
+                let moves = b.x.is_some() || b.z.is_some() || arc_words;
+                let end = |word: Option<core_nostd::length::Length>, now: i64, half: bool| {
+                    word.map_or(now, |w| {
+                        let w = w.as_angstrom();
+                        let w = if half { w / 2 } else { w };
+                        if inc {
+                            now + w
+                        } else {
+                            w
+                        }
+                    })
+                };
+                let (x0, z0) = (x0.as_angstrom(), z0.as_angstrom());
+                let want = if moves {
+                    (end(b.x, x0, diam), end(b.z, z0, false))
+                } else {
+                    (x0, z0)
+                };
+                assert!(want.0.abs() <= LIMIT_ANGSTROM && want.1.abs() <= LIMIT_ANGSTROM);
+                let (x, z) = dev.session().commanded();
+                assert_eq!(
+                    (x.as_angstrom(), z.as_angstrom()),
+                    want,
+                    "{line:?} -> {:?}",
+                    answer.lines
+                );
+                if b.compensation.is_some_and(|c| c != Compensation::Off) {
+                    panic!("{line:?}: nose compensation accepted");
+                }
+            }
+            (Ok(_), Some(_)) => {}
+        }
+    }
+});

@@ -1,0 +1,42 @@
+//! Arbitrary UTF-8 into `Length::from_mm_str`.
+//!
+//! Checked against an independent reading of `[+-]?[0-9]+(\.[0-9]{1,6})?`
+//! with magnitude below 100 000 mm (exact integer arithmetic):
+//! - accepted exactly when the reference accepts, with exactly the same
+//!   number of ångström; a refusal names the same reason (malformed before
+//!   too many decimals before out of range);
+//! - `to_string()` is the value in 0.0001 mm rounded half away from zero,
+//!   and re-parses to within 0.00005 mm of the value.
+#![no_main]
+
+use core_nostd::length::{Length, LengthError};
+use fuzz_oracle::{mm4_of, parse_mm, LengthRefusal};
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|text: &str| {
+    let got = Length::from_mm_str(text);
+    let want = parse_mm(text);
+    match (got, want) {
+        (Ok(l), Ok(a)) => {
+            assert_eq!(l.as_angstrom(), a, "{text:?}");
+            let printed = l.to_string();
+            assert_eq!(printed, mm4_of(a.into()), "{text:?}");
+            let back = Length::from_mm_str(&printed)
+                .unwrap_or_else(|e| panic!("{text:?} prints {printed:?}, which is refused: {e:?}"));
+            assert!(
+                (back.as_angstrom() - a).abs() <= 500,
+                "{text:?} prints {printed:?}, which reads back {} Å away",
+                back.as_angstrom() - a
+            );
+        }
+        (Err(e), Err(r)) => {
+            let e = match e {
+                LengthError::Malformed => LengthRefusal::Malformed,
+                LengthError::TooManyDecimals => LengthRefusal::TooManyDecimals,
+                LengthError::OutOfRange => LengthRefusal::OutOfRange,
+            };
+            assert_eq!(e, r, "{text:?}");
+        }
+        (got, want) => panic!("{text:?}: core {got:?}, reference {want:?}"),
+    }
+});
