@@ -167,34 +167,202 @@ impl Crc32 {
 // Framing
 // ---------------------------------------------------------------------------
 
-/// The index of the byte that completes each request the framing sees:
-/// a terminator (LF, CR; CRLF counts once) ends a request, and the 121st byte
-/// of a line ends an over-long one (the rest up to its terminator is
-/// discarded and is not a request).
-pub fn request_ends(bytes: &[u8]) -> Vec<usize> {
-    let mut ends = Vec::new();
-    let mut run = 0usize;
-    let mut over = false;
-    let mut prev_cr = false;
-    for (i, &b) in bytes.iter().enumerate() {
+/// One request as the framing sees it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Framed {
+    /// A line (terminator excluded).
+    Line(Vec<u8>),
+    /// A line that grew beyond 120 bytes; reported once, its rest discarded.
+    TooLong,
+}
+
+/// Request framing per PROTOCOL.md: LF, CR or CRLF (one terminator) end a
+/// line; the 121st byte of a line makes it over-long, reported once, and
+/// everything up to its terminator is discarded.
+#[derive(Clone, Debug, Default)]
+pub struct Framer {
+    buf: Vec<u8>,
+    over: bool,
+    prev_cr: bool,
+}
+
+impl Framer {
+    /// Takes one byte; returns the request it completes, if any.
+    pub fn push(&mut self, b: u8) -> Option<Framed> {
+        let prev_cr = std::mem::replace(&mut self.prev_cr, b == b'\r');
         if b == b'\n' && prev_cr {
-            // Second half of CRLF.
-        } else if b == b'\r' || b == b'\n' {
-            if !over {
-                ends.push(i);
+            return None;
+        }
+        if b == b'\r' || b == b'\n' {
+            let line = std::mem::take(&mut self.buf);
+            return if std::mem::replace(&mut self.over, false) {
+                None
+            } else {
+                Some(Framed::Line(line))
+            };
+        }
+        if self.over {
+            return None;
+        }
+        self.buf.push(b);
+        if self.buf.len() > MAX_LINE {
+            self.buf.clear();
+            self.over = true;
+            return Some(Framed::TooLong);
+        }
+        None
+    }
+}
+
+/// The index of the byte that completes each request in `bytes` (from a
+/// fresh framer), with the request.
+pub fn requests(bytes: &[u8]) -> Vec<(usize, Framed)> {
+    let mut f = Framer::default();
+    bytes
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &b)| f.push(b).map(|r| (i, r)))
+        .collect()
+}
+
+// ---------------------------------------------------------------------------
+// Request integrity and ids (the reliable-link extension)
+// ---------------------------------------------------------------------------
+
+/// What the integrity words of a request line say, read from the right:
+/// `*HH` (XOR of the bytes before `*`), then an optional ` ~CCCCCCCC` word
+/// standing alone at the end (CRC-32 of every byte before `~`), then an
+/// optional leading `@id` word (1 … 4294967295).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Link {
+    /// A wrong or malformed `*HH`, or a wrong CRC word: `ERR CHECKSUM`
+    /// without id or CRC words.
+    Corrupt,
+    /// Integrity checked.
+    Pass {
+        /// The request without its integrity words and id.
+        body: Vec<u8>,
+        /// A CRC word was there (replies carry one too).
+        crc: bool,
+        /// The `@id` word.
+        id: IdWord,
+    },
+}
+
+/// The leading `@id` word of a request.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IdWord {
+    /// None.
+    Absent,
+    /// A valid id.
+    Id(u32),
+    /// `@` followed by anything but 1 … 4294967295.
+    Invalid,
+}
+
+/// Reads the integrity words of a request line.
+pub fn link(line: &[u8]) -> Link {
+    let hex = |b: u8| (b as char).to_digit(16);
+    let mut body = line;
+    if let Some(star) = line.iter().rposition(|&b| b == b'*') {
+        let tail = &line[star + 1..];
+        let given = match tail {
+            [h, l] => match (hex(*h), hex(*l)) {
+                (Some(h), Some(l)) => h * 16 + l,
+                _ => return Link::Corrupt,
+            },
+            _ => return Link::Corrupt,
+        };
+        if given != u32::from(xor(&line[..star])) {
+            return Link::Corrupt;
+        }
+        body = &line[..star];
+    }
+    let mut crc = false;
+    if let Some(tilde) = body.iter().rposition(|&b| b == b'~') {
+        let word = &body[tilde + 1..];
+        let alone = tilde == 0 || matches!(body[tilde - 1], b' ' | b'\t');
+        if alone && word.len() == 8 && word.iter().all(u8::is_ascii_hexdigit) {
+            let given = u32::from_str_radix(std::str::from_utf8(word).unwrap(), 16).unwrap();
+            let mut c = Crc32::default();
+            for &b in &body[..tilde] {
+                c.push(b);
             }
-            over = false;
-            run = 0;
-        } else if !over {
-            run += 1;
-            if run > MAX_LINE {
-                ends.push(i);
-                over = true;
+            if c.finish() != given {
+                return Link::Corrupt;
+            }
+            crc = true;
+            body = &body[..tilde];
+        }
+    }
+    let trimmed = {
+        let start = body
+            .iter()
+            .position(|&b| b != b' ' && b != b'\t')
+            .unwrap_or(body.len());
+        &body[start..]
+    };
+    let (id, rest) = match trimmed.split_first() {
+        Some((b'@', after)) => {
+            let end = after
+                .iter()
+                .position(|&b| b == b' ' || b == b'\t')
+                .unwrap_or(after.len());
+            let digits = &after[..end];
+            let id = if !digits.is_empty()
+                && digits.len() <= 10
+                && digits.iter().all(u8::is_ascii_digit)
+            {
+                std::str::from_utf8(digits)
+                    .unwrap()
+                    .parse::<u64>()
+                    .ok()
+                    .and_then(|v| u32::try_from(v).ok())
+                    .filter(|&v| v > 0)
+            } else {
+                None
+            };
+            match id {
+                Some(id) => (IdWord::Id(id), &after[end..]),
+                None => (IdWord::Invalid, body),
             }
         }
-        prev_cr = b == b'\r';
+        _ => (IdWord::Absent, body),
+    };
+    Link::Pass {
+        body: rest.to_vec(),
+        crc,
+        id,
     }
-    ends
+}
+
+/// Strips and checks the suffix words a reply line carries for a request
+/// with an id and/or a CRC word: ` @id`, then ` ~CCCCCCCC`, the CRC-32 of
+/// every byte of the line before the `~`.
+pub fn strip_suffix(body: &str, id: Option<u32>, crc: bool) -> String {
+    let mut b = body;
+    if crc {
+        let (head, word) = b
+            .rsplit_once(" ~")
+            .unwrap_or_else(|| panic!("reply without CRC word: {body:?}"));
+        assert!(
+            word.len() == 8 && word.bytes().all(|c| c.is_ascii_digit() || (b'A'..=b'F').contains(&c)),
+            "CRC word of {body:?}"
+        );
+        let mut c = Crc32::default();
+        for &x in head.as_bytes() {
+            c.push(x);
+        }
+        c.push(b' ');
+        assert_eq!(word, format!("{:08X}", c.finish()), "reply CRC of {body:?}");
+        b = head;
+    }
+    if let Some(id) = id {
+        b = b
+            .strip_suffix(&format!(" @{id}"))
+            .unwrap_or_else(|| panic!("reply without @{id}: {body:?}"));
+    }
+    b.to_string()
 }
 
 // ---------------------------------------------------------------------------
@@ -341,8 +509,10 @@ fn int(body: &str, key: &str) -> Option<i64> {
 }
 
 /// Everything a request could change, as the device reports it: the
-/// `POS`, `CFG` and `DRIVE` replies of a copy, and the whole session state.
-pub fn snapshot(s: &Session) -> [String; 4] {
+/// `POS`, `CFG`, `DRIVE` and `SESSION` replies of a copy, and the whole
+/// session state apart from the retry memory (the last request id and its
+/// reply, which every numbered request updates, refused or not).
+pub fn snapshot(s: &Session) -> [String; 5] {
     let ask = |req: &[u8]| {
         let mut copy = s.clone();
         let mut io = Collect::default();
@@ -351,7 +521,18 @@ pub fn snapshot(s: &Session) -> [String; 4] {
         assert!(io.lines[0].starts_with("OK "), "{:?} -> {:?}", req, io.lines);
         io.lines.remove(0)
     };
-    [ask(b"POS"), ask(b"CFG"), ask(b"DRIVE"), format!("{s:?}")]
+    let debug = format!("{s:?}");
+    let debug = match debug.find(", last_id:") {
+        Some(at) => debug[..at].to_string(),
+        None => debug,
+    };
+    [
+        ask(b"POS"),
+        ask(b"CFG"),
+        ask(b"DRIVE"),
+        ask(b"SESSION"),
+        debug,
+    ]
 }
 
 /// The session's registers hold `Q(P/h)` of its exact commanded point, within
@@ -382,10 +563,12 @@ pub fn check_position(s: &Session) {
 /// The outcome of one request.
 #[derive(Debug)]
 pub struct Answer {
-    /// Reply bodies, the final one last.
+    /// Reply bodies (id and CRC words stripped), the final one last.
     pub lines: Vec<String>,
     /// Increments handed to the drive.
     pub moves: Vec<(i32, i32)>,
+    /// The final line repeats a remembered reply (same `@id` again).
+    pub replay: bool,
 }
 
 impl Answer {
@@ -401,117 +584,219 @@ impl Answer {
     }
 }
 
-/// Feeds bytes that hold exactly one request (as [`request_ends`] frames
-/// them) and checks the protocol's promises for it:
-/// - exactly one final line, last, after zero or more `DATA` lines;
-/// - an `ERR` carries a known code, comes alone, moves nothing and changes
-///   no state (`POS`, `CFG`, `DRIVE` and the whole session as before);
-/// - an `OK` with `NX NZ PX PZ SEQ` agrees with the motion handed to the
-///   drive and with the registers; chords of `ARC` are numbered and add up;
-/// - afterwards the registers hold `Q(P/h)` of the commanded point.
-pub fn request(dev: &mut Device, bytes: &[u8]) -> Answer {
-    let before = dev.clone();
-    let start = before.session().position();
-    let mut io = Collect::default();
-    dev.receive_bytes(bytes, &mut io);
-    let finals = io.lines.iter().filter(|l| is_final(l)).count();
-    assert_eq!(finals, 1, "{bytes:?} -> {:?}", io.lines);
-    let last = io.lines.last().unwrap().clone();
-    assert!(is_final(&last), "{bytes:?} -> {:?}", io.lines);
-    for l in &io.lines[..io.lines.len() - 1] {
-        assert!(l.starts_with("DATA "), "{bytes:?} -> {:?}", io.lines);
+/// A device and what the checks need to remember between its requests:
+/// the framing state and the last request id with its final reply.
+#[derive(Clone)]
+pub struct Checker {
+    /// The device under test.
+    pub dev: Device,
+    framer: Framer,
+    last: Option<(u32, String)>,
+}
+
+impl Checker {
+    /// Checks a device (which must be at a line boundary, with no request id
+    /// remembered).
+    pub fn new(dev: Device) -> Self {
+        Checker {
+            dev,
+            framer: Framer::default(),
+            last: None,
+        }
     }
-    if let Some(rest) = last.strip_prefix("ERR ") {
-        let code = rest.split(' ').next().unwrap_or("");
-        assert!(ERROR_CODES.contains(&code), "unknown code in {last:?}");
-        assert!(
-            rest.len() > code.len() + 1,
-            "ERR without text: {last:?}"
-        );
-        assert_eq!(io.lines.len(), 1, "DATA before ERR: {bytes:?} -> {:?}", io.lines);
-        assert!(io.moves.is_empty(), "refused request moved: {bytes:?} -> {last:?}");
-        assert_eq!(
-            snapshot(before.session()),
-            snapshot(dev.session()),
-            "refused request changed state: {:?} -> {last:?}",
-            String::from_utf8_lossy(bytes)
-        );
-    } else {
-        let at = dev.session().position();
-        if let (Some(px), Some(pz)) = (int(&last, "PX"), int(&last, "PZ")) {
+
+    /// Feeds any bytes, request by request as the framing sees them,
+    /// checking each with [`Checker::request`]; bytes after the last request
+    /// must produce nothing.
+    pub fn feed(&mut self, bytes: &[u8]) -> Vec<Answer> {
+        let mut out = Vec::new();
+        let mut start = 0;
+        for (i, &b) in bytes.iter().enumerate() {
+            if let Some(r) = self.framer.push(b) {
+                out.push(self.request(&bytes[start..=i], &r));
+                start = i + 1;
+            }
+        }
+        let mut io = Collect::default();
+        self.dev.receive_bytes(&bytes[start..], &mut io);
+        assert!(io.lines.is_empty(), "reply without a request: {:?}", io.lines);
+        assert!(io.moves.is_empty());
+        out
+    }
+
+    /// Feeds one request line with a terminator; returns its answer.
+    pub fn line(&mut self, line: &str, crlf: bool) -> Answer {
+        let term = if crlf { "\r\n" } else { "\n" };
+        let mut a = self.feed(format!("{line}{term}").as_bytes());
+        assert_eq!(a.len(), 1, "{line:?} is not one request");
+        a.remove(0)
+    }
+
+    /// Feeds bytes that complete exactly the request `framed` and checks the
+    /// protocol's promises for it:
+    /// - exactly one final line, last, after zero or more `DATA` lines;
+    /// - a line with a wrong `*HH` or CRC word gets a bare `ERR CHECKSUM`;
+    ///   otherwise replies carry the request's `@id` and, when it had a CRC
+    ///   word, a correct CRC word of their own;
+    /// - the same id again repeats the remembered final line and runs
+    ///   nothing; an id needs a CRC word; a numbered request before a session
+    ///   token is set gets `ERR SESSION`;
+    /// - an `ERR` carries a known code, comes alone, moves nothing and changes
+    ///   no state (`POS`, `CFG`, `DRIVE`, `SESSION` and the session as
+    ///   before);
+    /// - an `OK` with `NX NZ PX PZ SEQ` agrees with the motion handed to the
+    ///   drive and with the registers; chords of `ARC` are numbered and add
+    ///   up;
+    /// - afterwards the registers hold `Q(P/h)` of the commanded point.
+    pub fn request(&mut self, bytes: &[u8], framed: &Framed) -> Answer {
+        let before = self.dev.clone();
+        let snap = snapshot(before.session());
+        let start = before.session().position();
+        let mut io = Collect::default();
+        self.dev.receive_bytes(bytes, &mut io);
+        let shown = String::from_utf8_lossy(bytes);
+        let finals = io.lines.iter().filter(|l| is_final(l)).count();
+        assert_eq!(finals, 1, "{shown:?} -> {:?}", io.lines);
+        assert!(is_final(io.lines.last().unwrap()), "{shown:?} -> {:?}", io.lines);
+
+        // The integrity layer, and what it predicts.
+        let verdict = match framed {
+            Framed::TooLong => None,
+            Framed::Line(l) => Some(link(l)),
+        };
+        let (id, crc) = match &verdict {
+            Some(Link::Pass { id, crc, .. }) => (
+                match id {
+                    IdWord::Id(n) => Some(*n),
+                    _ => None,
+                },
+                *crc,
+            ),
+            _ => (None, false),
+        };
+        // A numbered request without a CRC word is refused before the id is
+        // taken: its replies carry neither.
+        let suffix_id = if crc { id } else { None };
+        let lines: Vec<String> = io
+            .lines
+            .iter()
+            .map(|l| strip_suffix(l, suffix_id, crc))
+            .collect();
+        let last = lines.last().unwrap().clone();
+        for l in &lines[..lines.len() - 1] {
+            assert!(l.starts_with("DATA "), "{shown:?} -> {:?}", io.lines);
+        }
+        let token = snap[3].strip_prefix("OK TOKEN=").map(|t| t.split(' ').next().unwrap_or(""));
+        let mut replay = false;
+        match &verdict {
+            None => assert!(last.starts_with("ERR LINE_TOO_LONG "), "{last:?}"),
+            Some(Link::Corrupt) => {
+                assert!(last.starts_with("ERR CHECKSUM "), "{shown:?} -> {last:?}");
+                assert_eq!(io.lines.len(), 1);
+            }
+            Some(Link::Pass { body, id, crc }) => match id {
+                IdWord::Invalid => {
+                    assert!(last.starts_with("ERR VALUE @"), "{shown:?} -> {last:?}")
+                }
+                IdWord::Id(_) if !crc => {
+                    assert!(last.starts_with("ERR SYNTAX "), "{shown:?} -> {last:?}")
+                }
+                IdWord::Id(n) => {
+                    if let Some((prev, reply)) = self.last.as_ref().filter(|(p, _)| p == n) {
+                        // A retry: the remembered final line, nothing runs.
+                        let _ = prev;
+                        assert_eq!(lines.len(), 1, "{shown:?} -> {:?}", io.lines);
+                        assert_eq!(last, *reply, "replay of @{n}");
+                        assert!(io.moves.is_empty(), "replay of @{n} moved");
+                        assert_eq!(snap, snapshot(self.dev.session()), "replay of @{n} changed state");
+                        replay = true;
+                    } else {
+                        let first = body
+                            .split(|&b| b == b' ' || b == b'\t')
+                            .find(|w| !w.is_empty())
+                            .unwrap_or(b"");
+                        if token == Some("0") && !first.eq_ignore_ascii_case(b"SESSION") {
+                            assert!(last.starts_with("ERR SESSION "), "{shown:?} -> {last:?}");
+                        }
+                    }
+                    self.last = Some((*n, last.clone()));
+                }
+                IdWord::Absent => {}
+            },
+        }
+
+        if let Some(rest) = last.strip_prefix("ERR ") {
+            let code = rest.split(' ').next().unwrap_or("");
+            assert!(ERROR_CODES.contains(&code) || code == "SESSION", "unknown code in {last:?}");
+            assert!(rest.len() > code.len() + 1, "ERR without text: {last:?}");
+            assert_eq!(lines.len(), 1, "DATA before ERR: {shown:?} -> {:?}", io.lines);
+            assert!(io.moves.is_empty(), "refused request moved: {shown:?} -> {last:?}");
             assert_eq!(
-                (px, pz),
-                (i64::from(at.x.get()), i64::from(at.z.get())),
-                "{last:?}"
+                snap,
+                snapshot(self.dev.session()),
+                "refused request changed state: {shown:?} -> {last:?}"
             );
-        }
-        if let (Some(nx), Some(nz)) = (int(&last, "NX"), int(&last, "NZ")) {
-            let sum = io.moves.iter().fold((0i64, 0i64), |a, m| {
-                (a.0 + i64::from(m.0), a.1 + i64::from(m.1))
-            });
-            assert_eq!((nx, nz), sum, "{last:?} vs motion {:?}", io.moves);
-            assert_eq!(
-                (nx, nz),
-                (
-                    i64::from(at.x.get()) - i64::from(start.x.get()),
-                    i64::from(at.z.get()) - i64::from(start.z.get())
-                ),
-                "{last:?} vs registers"
-            );
-        } else {
-            assert!(io.moves.is_empty(), "motion without NX/NZ: {last:?}");
-        }
-        if let Some(seq) = value(&last, "SEQ") {
-            assert_eq!(seq, format!("{:08X}", io.crc.finish()), "{last:?}");
-        }
-        if let Some(n) = int(&last, "N") {
-            if value(&last, "DPHI").is_some() {
-                // Arc by chords: one DATA line per chord, numbered from 1.
-                assert_eq!(n as usize, io.moves.len(), "{last:?}");
-                assert_eq!(io.lines.len(), io.moves.len() + 1);
-                for (k, (l, m)) in io.lines.iter().zip(&io.moves).enumerate() {
-                    assert_eq!(
-                        *l,
-                        format!("DATA I={} NX={} NZ={}", k + 1, m.0, m.1),
-                        "chord line"
-                    );
+        } else if !replay {
+            let at = self.dev.session().position();
+            if let (Some(px), Some(pz)) = (int(&last, "PX"), int(&last, "PZ")) {
+                assert_eq!(
+                    (px, pz),
+                    (i64::from(at.x.get()), i64::from(at.z.get())),
+                    "{last:?}"
+                );
+            }
+            if let (Some(nx), Some(nz)) = (int(&last, "NX"), int(&last, "NZ")) {
+                let sum = io.moves.iter().fold((0i64, 0i64), |a, m| {
+                    (a.0 + i64::from(m.0), a.1 + i64::from(m.1))
+                });
+                assert_eq!((nx, nz), sum, "{last:?} vs motion {:?}", io.moves);
+                assert_eq!(
+                    (nx, nz),
+                    (
+                        i64::from(at.x.get()) - i64::from(start.x.get()),
+                        i64::from(at.z.get()) - i64::from(start.z.get())
+                    ),
+                    "{last:?} vs registers"
+                );
+            } else {
+                assert!(io.moves.is_empty(), "motion without NX/NZ: {last:?}");
+            }
+            if let Some(seq) = value(&last, "SEQ") {
+                assert_eq!(seq, format!("{:08X}", io.crc.finish()), "{last:?}");
+            }
+            if let Some(n) = int(&last, "N") {
+                if value(&last, "DPHI").is_some() {
+                    // Arc by chords: one DATA line per chord, numbered from 1.
+                    assert_eq!(n as usize, io.moves.len(), "{last:?}");
+                    assert_eq!(lines.len(), io.moves.len() + 1);
+                    for (k, (l, m)) in lines.iter().zip(&io.moves).enumerate() {
+                        assert_eq!(
+                            *l,
+                            format!("DATA I={} NX={} NZ={}", k + 1, m.0, m.1),
+                            "chord line"
+                        );
+                    }
                 }
             }
         }
+        check_position(self.dev.session());
+        Answer {
+            lines,
+            moves: io.moves,
+            replay,
+        }
     }
-    check_position(dev.session());
-    Answer {
-        lines: io.lines,
-        moves: io.moves,
-    }
-}
-
-/// Feeds any bytes, request by request as [`request_ends`] frames them,
-/// checking every request with [`request`]; trailing bytes without a
-/// terminator must produce nothing.
-pub fn session(dev: &mut Device, bytes: &[u8]) -> Vec<Answer> {
-    let mut out = Vec::new();
-    let mut start = 0;
-    for end in request_ends(bytes) {
-        out.push(request(dev, &bytes[start..=end]));
-        start = end + 1;
-    }
-    let mut io = Collect::default();
-    dev.receive_bytes(&bytes[start..], &mut io);
-    assert!(io.lines.is_empty(), "reply without a request: {:?}", io.lines);
-    assert!(io.moves.is_empty());
-    out
 }
 
 /// Runs request lines (terminator added) on a device, asserting they are
 /// accepted: a prelude that puts a device in a known state.
 pub fn device_after(lines: &[&str]) -> Device {
-    let mut dev = Device::new();
+    let mut c = Checker::new(Device::new());
     for l in lines {
-        let a = request(&mut dev, format!("{l}\r\n").as_bytes());
+        let a = c.line(l, true);
         assert!(a.err().is_none(), "{l} -> {:?}", a.lines);
     }
-    dev
+    c.dev
 }
 
 // ---------------------------------------------------------------------------
