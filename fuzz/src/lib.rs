@@ -716,10 +716,12 @@ impl Checker {
                             .find(|w| !w.is_empty())
                             .unwrap_or(b"");
                         if token == Some("0") && !first.eq_ignore_ascii_case(b"SESSION") {
+                            // Refused before it runs, and not remembered.
                             assert!(last.starts_with("ERR SESSION "), "{shown:?} -> {last:?}");
+                        } else {
+                            self.last = Some((*n, last.clone()));
                         }
                     }
-                    self.last = Some((*n, last.clone()));
                 }
                 IdWord::Absent => {}
             },
