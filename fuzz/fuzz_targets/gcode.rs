@@ -22,7 +22,7 @@ use core_nostd::gcode::{
 use core_nostd::length::LengthError;
 use core_nostd::protocol::Device;
 use fuzz_oracle::{
-    device_after, exact_mm, reference_block, reference_is_block, request, LengthRefusal,
+    device_after, exact_mm, reference_block, reference_is_block, Checker, LengthRefusal,
     RefBlock, RefBlockError, LIMIT_ANGSTROM, MAX_LINE,
 };
 use libfuzzer_sys::fuzz_target;
@@ -127,14 +127,15 @@ fuzz_target!(|text: &str| {
         return;
     }
     let plain = line.len() <= MAX_LINE
-        && !line.contains('*')
+        && !line.contains(['*', '~'])
         && line.bytes().all(|b| b == b'\t' || (0x20..0x7F).contains(&b));
     let parsed = parse_block(line);
     for (prelude, incremental) in preludes() {
-        let mut dev = prelude.clone();
-        let (x0, z0) = dev.session().commanded();
-        let diam = dev.session().config().diam;
-        let answer = request(&mut dev, format!("{line}\n").as_bytes());
+        let mut c = Checker::new(prelude.clone());
+        let (x0, z0) = c.dev.session().commanded();
+        let diam = c.dev.session().config().diam;
+        let answer = c.line(line, false);
+        let dev = &c.dev;
         if !plain {
             continue;
         }
