@@ -116,10 +116,16 @@ impl Transport for LocalDevice {
     }
 }
 
-fn split_reply<'a>(lines: impl Iterator<Item = &'a str>) -> Result<Reply, LinkError> {
+fn split_reply<'a>(mut lines: impl Iterator<Item = &'a str>) -> Result<Reply, LinkError> {
+    collect_reply(|| lines.next().map(str::to_owned).ok_or(LinkError::Timeout))
+}
+
+/// Reads checked reply lines up to and including the final `OK`/`ERR` line.
+fn collect_reply(mut next: impl FnMut() -> Result<String, LinkError>) -> Result<Reply, LinkError> {
     let mut data = Vec::new();
-    for line in lines {
-        let body = check_reply_line(line)?;
+    loop {
+        let line = next()?;
+        let body = check_reply_line(&line)?;
         if body.starts_with("DATA") {
             data.push(body.to_owned());
         } else {
@@ -129,7 +135,6 @@ fn split_reply<'a>(lines: impl Iterator<Item = &'a str>) -> Result<Reply, LinkEr
             });
         }
     }
-    Err(LinkError::Timeout)
 }
 
 /// The host end of a serial link: requests out, replies in.
@@ -189,19 +194,7 @@ impl Client {
 
     /// Reads reply lines up to and including a final `OK`/`ERR` line.
     pub fn read_reply(&mut self) -> Result<Reply, LinkError> {
-        let mut data = Vec::new();
-        loop {
-            let line = self.read_line()?;
-            let body = check_reply_line(&line)?;
-            if body.starts_with("DATA") {
-                data.push(body.to_owned());
-            } else {
-                return Ok(Reply {
-                    data,
-                    last: body.to_owned(),
-                });
-            }
-        }
+        collect_reply(|| self.read_line())
     }
 
     /// How long to wait for a reply line.

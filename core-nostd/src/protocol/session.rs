@@ -496,14 +496,10 @@ impl Session {
         send_ok(
             io,
             Some(format_args!(
-                "N={n} DPHI={}.{:06} NX={} NZ={} PX={} PZ={} SEQ={:08X}",
+                "N={n} DPHI={}.{:06} {}",
                 micro_deg / 1_000_000,
                 micro_deg % 1_000_000,
-                at.x.get() - start.x.get(),
-                at.z.get() - start.z.get(),
-                at.x.get(),
-                at.z.get(),
-                crc.finish()
+                MotionSummary::new(start, at, &crc)
             )),
         );
         Ok(())
@@ -523,6 +519,7 @@ impl Session {
             crc.push(e.bits());
             events += 1;
         }
+        let start = self.pos;
         self.cmd = points.end;
         self.pos = arc.to();
         io.run_direct(&arc, &self.drive);
@@ -548,10 +545,8 @@ impl Session {
         send_ok(
             io,
             Some(format_args!(
-                "N={events} NX={dx} NZ={dz} PX={} PZ={} SEQ={:08X}",
-                self.pos.x.get(),
-                self.pos.z.get(),
-                crc.finish()
+                "N={events} {}",
+                MotionSummary::new(start, self.pos, &crc)
             )),
         );
         Ok(())
@@ -639,16 +634,11 @@ impl Session {
             }
         }
         self.modal = modal;
-        let at = self.pos;
         send_ok(
             io,
             Some(format_args!(
-                "NX={} NZ={} PX={} PZ={} SEQ={:08X}",
-                at.x.get() - start.x.get(),
-                at.z.get() - start.z.get(),
-                at.x.get(),
-                at.z.get(),
-                crc.finish()
+                "{}",
+                MotionSummary::new(start, self.pos, &crc)
             )),
         );
         Ok(())
@@ -782,18 +772,15 @@ impl Session {
             target[1] = self.target(1, word, inc, "Z beyond 99999.999999 mm")?;
         }
         let block = self.linear_block(target)?;
-        let to = block.to();
-        let seq = block_crc(&block, Crc32::new()).finish();
+        let crc = block_crc(&block, Crc32::new());
         self.cmd = target;
-        self.pos = to;
+        self.pos = block.to();
         io.run_block(&block, &self.drive);
-        let (nx, nz) = block.delta();
         send_ok(
             io,
             Some(format_args!(
-                "NX={nx} NZ={nz} PX={} PZ={} SEQ={seq:08X}",
-                to.x.get(),
-                to.z.get()
+                "{}",
+                MotionSummary::new(block.from(), block.to(), &crc)
             )),
         );
         Ok(())
@@ -838,6 +825,39 @@ const RANGE_POS_Z: &str = "Z position beyond 999999999 impulses";
 const RANGE_BLOCK: &str = "block beyond 1000000 impulses per axis";
 const RANGE_POS: &str = "position beyond 999999999 impulses";
 const _: () = assert!(MAX_POSITION == 999_999_999 && MAX_BLOCK_IMPULSES == 1_000_000);
+
+/// `NX= NZ= PX= PZ= SEQ=`: the impulses a request issued, the registers
+/// after it, and the CRC of its step events.
+struct MotionSummary {
+    from: ImpulsePoint,
+    to: ImpulsePoint,
+    seq: u32,
+}
+
+impl MotionSummary {
+    fn new(from: ImpulsePoint, to: ImpulsePoint, crc: &Crc32) -> Self {
+        MotionSummary {
+            from,
+            to,
+            seq: crc.finish(),
+        }
+    }
+}
+
+impl fmt::Display for MotionSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Registers stay within ±999 999 999: the differences fit in i32.
+        write!(
+            f,
+            "NX={} NZ={} PX={} PZ={} SEQ={:08X}",
+            self.to.x.get() - self.from.x.get(),
+            self.to.z.get() - self.from.z.get(),
+            self.to.x.get(),
+            self.to.z.get(),
+            self.seq
+        )
+    }
+}
 
 /// `centre − start` in ångström: the I and K words of an arc.
 fn centre_minus(centre: [Length; 2], start: [Length; 2]) -> [i64; 2] {
