@@ -14,6 +14,7 @@
 //! - [`arc`]: arcs by chords with residual carry, and the direct
 //!   step-by-step circular interpolator of the ЭМ-907.
 //! - [`gcode`]: G-code blocks parsed and checked before any motion.
+//! - [`cone`]: taper corrections for a tool nose radius (Krylenko, Nomura).
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
 //! - [`trig`]: fixed-point sine, cosine, atan2 and square root, with error
@@ -38,6 +39,7 @@
 #![warn(missing_docs)]
 
 pub mod arc;
+pub mod cone;
 pub mod crc32;
 pub mod gcode;
 pub mod impulse;

@@ -8,6 +8,7 @@ use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
+use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{is_block, parse_block, BlockError, Compensation, Motion};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
@@ -325,6 +326,8 @@ impl Session {
             Ok(())
         } else if command.eq_ignore_ascii_case("MOVE") {
             self.move_command(words, io)
+        } else if command.eq_ignore_ascii_case("CONE") {
+            self.cone_command(words, io)
         } else if command.eq_ignore_ascii_case("ARC") {
             self.arc_command(words, io)
         } else if command.eq_ignore_ascii_case("DRIVE") {
@@ -411,6 +414,51 @@ impl Session {
                 c.pass.as_str()
             )),
         );
+        Ok(())
+    }
+
+    /// `CONE A= [RN=]`: Krylenko's Xc, Zc, Xc on the diameter and Nomura's
+    /// A, B, C; `NEAR=` names any value within 10⁻⁹ mm of a printing tie.
+    fn cone_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [a, rn] = parse_args(words, ["A", "RN"])?;
+        let a = a.ok_or(Refusal::Missing("CONE needs A"))?;
+        let alpha = Angle::from_degrees_str(a).map_err(|e| {
+            Refusal::Value(
+                "A",
+                match e {
+                    AngleError::Malformed => "not degrees (45, 2.8642) or D:M:S (2:51:51)",
+                    AngleError::OutOfRange => "must lie between 0 and 90 degrees",
+                },
+            )
+        })?;
+        let r = match rn {
+            Some(v) => parse_bounded("RN", v, 0, MAX_NOSE_RADIUS_UM, "must be 0 to 25 mm")?,
+            None => self.cfg.rn,
+        };
+        let k = cone(alpha, r);
+        let xcd = k.xc.doubled();
+        let values = [
+            ("XC", k.xc),
+            ("ZC", k.zc),
+            ("XCD", xcd),
+            ("NA", k.xc),
+            ("NB", k.zc),
+            ("NC", k.c),
+        ];
+        let mut line = ReplyLine::new();
+        let _ = line.write_str("OK");
+        for (key, v) in values {
+            let _ = write!(line, " {key}=");
+            let _ = write_mm4(&mut line, v.tenth_um());
+        }
+        let mut first = true;
+        for (key, v) in values {
+            if v.near_tie() {
+                let _ = write!(line, "{}{key}", if first { " NEAR=" } else { "," });
+                first = false;
+            }
+        }
+        io.send(line.finish());
         Ok(())
     }
 
