@@ -72,12 +72,11 @@ impl Angle {
     pub fn from_degrees_str(text: &str) -> Result<Angle, AngleError> {
         let text = text.strip_prefix('+').unwrap_or(text);
         let uas = if text.contains(':') {
-            let mut parts = text.split(':');
-            let (Some(d), Some(m), Some(s), None) =
-                (parts.next(), parts.next(), parts.next(), parts.next())
-            else {
+            let (d, rest) = text.split_once(':').ok_or(AngleError::Malformed)?;
+            let (m, s) = rest.split_once(':').ok_or(AngleError::Malformed)?;
+            if s.contains(':') {
                 return Err(AngleError::Malformed);
-            };
+            }
             let whole = |p: &str| -> Option<i64> {
                 if p.is_empty() || p.len() > 3 || !p.bytes().all(|b| b.is_ascii_digit()) {
                     return None;

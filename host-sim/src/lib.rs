@@ -20,6 +20,7 @@ pub mod link;
 pub mod qemu;
 pub mod reference;
 pub mod reference_arc;
+pub mod reference_cone;
 pub mod reliable;
 pub mod scenario;
 pub mod soak;

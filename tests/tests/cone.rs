@@ -84,3 +84,46 @@ fn krylenko_example_and_notations() {
         assert!(r.last.starts_with("ERR VALUE A"), "{bad}: {}", r.last);
     }
 }
+
+/// Random angles in both notations and random nose radii: the device's reply
+/// equals the f64 reference's, unless the reference finds a value within
+/// 10⁻⁹ mm of a printing tie, where the device must say so (`NEAR=`).
+#[test]
+fn cone_equals_the_reference_on_random_angles() {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1977);
+    let mut dev = LocalDevice::new();
+    let mut near = 0;
+    for n in 0..20_000 {
+        // Whole micro-degrees or whole (fractional) arc-seconds.
+        let (word, rn) = if n % 2 == 0 {
+            let ud: u64 = rng.random_range(1..90_000_000);
+            (
+                format!("{}.{:06}", ud / 1_000_000, ud % 1_000_000),
+                rng.random_range(0..=25_000_000u64),
+            )
+        } else {
+            let s: u64 = rng.random_range(1..32_400_000); // hundredths of an arc-second
+            let (d, rest) = (s / 360_000, s % 360_000);
+            (
+                format!(
+                    "{d}:{}:{}.{:02}",
+                    rest / 6000,
+                    rest % 6000 / 100,
+                    rest % 100
+                ),
+                rng.random_range(0..=25_000_000u64),
+            )
+        };
+        let rn = format!("{}.{:06}", rn / 1_000_000, rn % 1_000_000);
+        let expected = host_sim::reference_cone::cone(&word, rn.parse().unwrap()).expect(&word);
+        let got = Transport::request(&mut dev, &format!("CONE A={word} RN={rn}")).unwrap();
+        if expected.min_tie_distance_mm < 1e-9 {
+            near += 1;
+            assert!(got.last.contains(" NEAR="), "{word} {rn}: {}", got.last);
+        } else {
+            assert_eq!(got.last, expected.reply_line(), "A={word} RN={rn}");
+        }
+    }
+    assert!(near < 10, "{near}");
+}
