@@ -21,6 +21,13 @@ fuzz_target!(|text: &str| {
             assert_eq!(l.as_angstrom(), a, "{text:?}");
             let printed = l.to_string();
             assert_eq!(printed, mm4_of(a.into()), "{text:?}");
+            if printed.trim_start_matches('-') == "100000.0000" {
+                // From 99999.99995 mm up the 4-decimal figure rounds to
+                // 100000.0000, one past the largest word (documented; see
+                // tests/tests/fuzz_regressions.rs, `printed_length_at_the_limit`).
+                // The figure itself is checked above.
+                return;
+            }
             let back = Length::from_mm_str(&printed)
                 .unwrap_or_else(|e| panic!("{text:?} prints {printed:?}, which is refused: {e:?}"));
             assert!(
