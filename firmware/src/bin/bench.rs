@@ -184,6 +184,12 @@ fn main() -> ! {
     ));
     let t = measure(tim, || dev.receive_bytes(b"POS\r\n", &mut quiet));
     Line::print(format_args!("POS request: {t} instructions"));
+    let t = measure(tim, || dev.receive_bytes(b"CONE A=45\r\n", &mut quiet));
+    Line::print(format_args!("CONE request (A=45): {t} instructions"));
+    let t = measure(tim, || {
+        dev.receive_bytes(b"CONE A=2:51:51 RN=0.8\r\n", &mut quiet)
+    });
+    Line::print(format_args!("CONE request (A=2:51:51): {t} instructions"));
     let t = measure(tim, || {
         dev.receive_bytes(b"CFG HX=0.001 HZ=0.002 DIAM=1\r\n", &mut quiet)
     });
