@@ -102,7 +102,7 @@ for t in $TARGETS; do
     echo "$line"
     if [ "$status" -ne 0 ]; then
         grep -a -m 1 -E "panicked at|ERROR: libFuzzer|ERROR: AddressSanitizer" -A 3 "$log" | sed 's/^/    /'
-        grep -a -E "Failing input|Test unit written to" "$log" | sed 's/^/    /'
+        grep -a -o -E "Test unit written to .*" "$log" | sed 's/^/    /'
         echo "    log: $log"
     fi
 done
