@@ -68,6 +68,14 @@ pub struct ArcPoints {
     pub centre: [Length; 2],
 }
 
+impl ArcPoints {
+    /// Checks that start and end lie on one circle about the centre (radii
+    /// not zero, apart by at most 0.002 mm).
+    pub fn check_radii(&self) -> Result<(), ArcError> {
+        radii(self).map(|_| ())
+    }
+}
+
 /// Vectors from the centre, in ångström, and their checked radii.
 struct Radii {
     u: [i64; 2],

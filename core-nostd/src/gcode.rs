@@ -7,8 +7,8 @@
 //!
 //! | address | meaning | value |
 //! |---|---|---|
-//! | `N` | sequence number | ignored |
-//! | `G` | 00 01 02 03 (motion), 40 41 42 (nose compensation), 90 91 (absolute, incremental) | whole number |
+//! | `N` | sequence number | kept to name the block in refusals |
+//! | `G` | 00 01 02 03 (motion), 40 41 42 (nose compensation), 90 91 (absolute, incremental), 450 451 (outside corners: transition arc, intersection) | whole number |
 //! | `X` | X end point: a diameter when `DIAM=1` | length |
 //! | `Z` | Z end point | length |
 //! | `I`, `K` | arc centre minus start point, radius values | length |
@@ -55,6 +55,16 @@ pub enum Compensation {
     Right,
 }
 
+/// How compensation closes outside corners (group 18).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Corner {
+    /// G450: a transition arc of the nose radius about the corner.
+    Arc,
+    /// G451: the offset elements (their tangents, for arcs) are intersected.
+    Intersection,
+}
+
 /// One parsed block.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Block {
@@ -64,6 +74,10 @@ pub struct Block {
     pub compensation: Option<Compensation>,
     /// G90 (false) or G91 (true) if given.
     pub incremental: Option<bool>,
+    /// G450 or G451 if given.
+    pub corner: Option<Corner>,
+    /// The sequence number, when written as a whole number below 2³².
+    pub n: Option<u32>,
     /// X word.
     pub x: Option<Length>,
     /// Z word.
@@ -179,8 +193,12 @@ fn word(
         b'I' => block.i = Some(length()?),
         b'K' => block.k = Some(length()?),
         b'R' => block.r = Some(length()?),
+        b'N' => {
+            length()?;
+            block.n = number.parse().ok();
+        }
         // Accepted and checked as numbers, not acted on.
-        b'N' | b'F' | b'S' | b'T' | b'M' => {
+        b'F' | b'S' | b'T' | b'M' => {
             length()?;
         }
         _ => return Err(BlockError::UnknownAddress(letter)),
@@ -224,6 +242,16 @@ fn g_word(block: &mut Block, number: &str) -> Result<(), BlockError> {
             }
             block.incremental = Some(code == 91);
         }
+        450 | 451 => {
+            if block.corner.is_some() {
+                return repeated;
+            }
+            block.corner = Some(if code == 450 {
+                Corner::Arc
+            } else {
+                Corner::Intersection
+            });
+        }
         _ => return Err(BlockError::UnsupportedG),
     }
     Ok(())
@@ -248,6 +276,13 @@ mod tests {
             (Some(true), Some(Compensation::Right))
         );
         assert_eq!(parse_block("").unwrap(), Block::default());
+        let b = parse_block("N30 G450 G42").unwrap();
+        assert_eq!((b.n, b.corner), (Some(30), Some(Corner::Arc)));
+        assert_eq!(
+            parse_block("G451").unwrap().corner,
+            Some(Corner::Intersection)
+        );
+        assert_eq!(parse_block("N1.5").unwrap().n, None);
     }
 
     #[test]
@@ -255,6 +290,7 @@ mod tests {
         assert_eq!(parse_block("G01 X1 X2"), Err(BlockError::Repeated(b'X')));
         assert_eq!(parse_block("G01 G02"), Err(BlockError::Repeated(b'G')));
         assert_eq!(parse_block("G04 X1"), Err(BlockError::UnsupportedG));
+        assert_eq!(parse_block("G450 G451"), Err(BlockError::Repeated(b'G')));
         assert_eq!(parse_block("G1.5"), Err(BlockError::UnsupportedG));
         assert_eq!(parse_block("Q5"), Err(BlockError::UnknownAddress(b'Q')));
         assert_eq!(parse_block("G01 X"), Err(BlockError::NotAWord));

@@ -13,6 +13,7 @@
 //!   with integer additions only, for a timer interrupt to pull.
 //! - [`arc`]: arcs by chords with residual carry, and the direct
 //!   step-by-step circular interpolator of the ЭМ-907.
+//! - [`comp`]: tool nose radius compensation over G41/G42 contours.
 //! - [`gcode`]: G-code blocks parsed and checked before any motion.
 //! - [`cone`]: taper corrections for a tool nose radius (Krylenko, Nomura).
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
@@ -39,6 +40,7 @@
 #![warn(missing_docs)]
 
 pub mod arc;
+pub mod comp;
 pub mod cone;
 pub mod crc32;
 pub mod gcode;

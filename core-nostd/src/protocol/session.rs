@@ -8,6 +8,7 @@ use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
+use crate::comp::{CompError, Contour, Element, Move, MoveKind, Shape, Tool};
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{is_block, parse_block, BlockError, Compensation, Motion};
@@ -130,6 +131,11 @@ pub struct Session {
     drive: DriveTiming,
     /// Modal G-code state.
     modal: Modal,
+    /// The programmed contour point: where the last G-code block ended, as
+    /// written. Equal to `cmd` except while nose compensation is on.
+    prog: [Length; 2],
+    /// Nose radius compensation.
+    contour: Contour,
     /// The host's session token (`SESSION`); 0 after power-on.
     token: u32,
     /// The id of the last request that carried one, and its final reply.
@@ -137,20 +143,19 @@ pub struct Session {
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
 }
 
-/// The modal state of the G-code path.
+/// The modal state of the G-code path (compensation lives in the contour
+/// engine).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Modal {
     motion: Motion,
     incremental: bool,
-    compensation: Compensation,
 }
 
 impl Modal {
-    /// Power-on: G00, G90, G40.
+    /// Power-on: G00, G90.
     const POWER_ON: Modal = Modal {
         motion: Motion::Rapid,
         incremental: false,
-        compensation: Compensation::Off,
     };
 }
 
@@ -174,6 +179,8 @@ enum Refusal<'a> {
     Geometry(&'static str),
     Missing(&'static str),
     Block(BlockError),
+    Contour(CompError),
+    Busy(&'static str),
     Crc,
     NoSession,
 }
@@ -207,6 +214,8 @@ impl Session {
             },
             drive: DriveTiming::DEFAULT,
             modal: Modal::POWER_ON,
+            prog: [Length::ZERO; 2],
+            contour: Contour::new(),
             token: 0,
             last_id: None,
             last_final: heapless::Vec::new(),
@@ -345,6 +354,7 @@ impl Session {
     /// program coordinates; nothing moves.
     fn zero_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [x, z] = parse_args(words, ["X", "Z"])?;
+        self.not_compensating("ZERO")?;
         let cmd = [
             match x {
                 Some(v) => self.x_word(parse_length("X", v)?)?,
@@ -360,6 +370,7 @@ impl Session {
             z: quantize(cmd[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
         };
         self.cmd = cmd;
+        self.prog = cmd;
         self.pos = pos;
         send_ok(io, None);
         Ok(())
@@ -377,6 +388,9 @@ impl Session {
         }
         if let Some(v) = diam {
             cfg.diam = parse_flag("DIAM", v)?;
+        }
+        if rn.is_some() || tip.is_some() {
+            self.not_compensating("CFG RN or TIP")?;
         }
         if let Some(v) = rn {
             cfg.rn = parse_bounded("RN", v, 0, MAX_NOSE_RADIUS_UM, "must be 0 to 25 mm")?;
@@ -467,6 +481,7 @@ impl Session {
             words,
             ["X", "Z", "I", "K", "DIR", "TOL", "PASS", "MODE", "F"],
         )?;
+        self.not_compensating("ARC")?;
         let (Some(x), Some(z), Some(i), Some(k), Some(dir)) = (x, z, i, k, dir) else {
             return Err(Refusal::Missing("ARC needs X, Z, I, K and DIR"));
         };
@@ -534,9 +549,9 @@ impl Session {
     ) -> Outcome<'a> {
         let plan = ChordPlan::new(points, dir, tol, finish)?;
         let n = plan.chords();
-        self.check_chords(&plan)?;
+        self.check_chords(&plan, self.pos)?;
         let start = self.pos;
-        let crc = self.run_chords(&plan, points, io, true);
+        let crc = self.run_chords(&plan, points, io, true, Crc32::new());
         let at = self.pos;
         let dphi = plan.dphi_arcsec();
         // Degrees with 6 decimals, half away from zero: dphi·10⁶/3600 = dphi·2500/9.
@@ -569,6 +584,7 @@ impl Session {
         }
         let start = self.pos;
         self.cmd = points.end;
+        self.prog = points.end;
         self.pos = arc.to();
         io.run_direct(&arc, &self.drive);
         let (dx, dz) = arc.delta();
@@ -600,18 +616,15 @@ impl Session {
         Ok(())
     }
 
-    /// Runs one G-code block in the session's modal state.
+    /// Runs one G-code block in the session's modal state, through the
+    /// contour engine (compensation off: the block itself).
     fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
         let b = parse_block(text).map_err(Refusal::Block)?;
         let modal = Modal {
             motion: b.motion.unwrap_or(self.modal.motion),
             incremental: b.incremental.unwrap_or(self.modal.incremental),
-            compensation: b.compensation.unwrap_or(self.modal.compensation),
         };
-        if modal.compensation != Compensation::Off {
-            return Err(Refusal::Value("G", "G41 and G42 are not available"));
-        }
-        let mut target = self.cmd;
+        let mut target = self.prog;
         if let Some(x) = b.x {
             let radius = self.x_word(x)?;
             target[0] = self.target(0, radius, modal.incremental, "X beyond 99999.999999 mm")?;
@@ -621,67 +634,84 @@ impl Session {
         }
         let has_end = b.x.is_some() || b.z.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
-        let start = self.pos;
-        let mut crc = Crc32::new();
-        match modal.motion {
+        let a = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
+        let shape = match modal.motion {
             Motion::Rapid | Motion::Linear => {
                 if arc_words {
                     return Err(Refusal::Missing("I, K and R need G02 or G03"));
                 }
-                if has_end {
-                    let block = self.linear_block(target)?;
-                    crc = block_crc(&block, crc);
-                    self.cmd = target;
-                    self.pos = block.to();
-                    io.run_block(&block, &self.drive);
-                    self.send_block_data(io, modal.motion, None);
-                }
+                has_end.then_some(Shape::Line {
+                    rapid: modal.motion == Motion::Rapid,
+                })
             }
-            Motion::ArcCw | Motion::ArcCcw => {
-                if has_end || arc_words {
-                    let dir = if modal.motion == Motion::ArcCw {
-                        ArcDir::Cw
-                    } else {
-                        ArcDir::Ccw
-                    };
-                    let centre = match (b.i.is_some() || b.k.is_some(), b.r) {
-                        (true, Some(_)) => {
-                            return Err(Refusal::Missing("give I and K or R, not both"))
-                        }
-                        (false, None) => {
-                            return Err(Refusal::Missing("an arc needs I and K, or R"))
-                        }
-                        (false, Some(r)) => centre_from_radius(self.cmd, target, r, dir)?,
-                        (true, None) => {
-                            let beyond = "arc centre beyond 99999.999999 mm";
-                            [
-                                self.cmd[0]
-                                    .checked_add(b.i.unwrap_or(Length::ZERO))
-                                    .ok_or(Refusal::Range(beyond))?,
-                                self.cmd[1]
-                                    .checked_add(b.k.unwrap_or(Length::ZERO))
-                                    .ok_or(Refusal::Range(beyond))?,
-                            ]
-                        }
-                    };
-                    let points = ArcPoints {
-                        start: self.cmd,
-                        end: target,
-                        centre,
-                    };
-                    let plan =
-                        ChordPlan::new(&points, dir, self.cfg.tol, self.cfg.pass == Pass::Finish)?;
-                    self.check_chords(&plan)?;
-                    crc = self.run_chords(&plan, &points, io, false);
-                    self.send_block_data(
-                        io,
-                        modal.motion,
-                        Some(centre_minus(centre, points.start)),
-                    );
+            Motion::ArcCw | Motion::ArcCcw if has_end || arc_words => {
+                let dir = if modal.motion == Motion::ArcCw {
+                    ArcDir::Cw
+                } else {
+                    ArcDir::Ccw
+                };
+                let centre = match (b.i.is_some() || b.k.is_some(), b.r) {
+                    (true, Some(_)) => return Err(Refusal::Missing("give I and K or R, not both")),
+                    (false, None) => return Err(Refusal::Missing("an arc needs I and K, or R")),
+                    (false, Some(r)) => centre_from_radius(self.prog, target, r, dir)?,
+                    (true, None) => {
+                        let beyond = "arc centre beyond 99999.999999 mm";
+                        [
+                            self.prog[0]
+                                .checked_add(b.i.unwrap_or(Length::ZERO))
+                                .ok_or(Refusal::Range(beyond))?,
+                            self.prog[1]
+                                .checked_add(b.k.unwrap_or(Length::ZERO))
+                                .ok_or(Refusal::Range(beyond))?,
+                        ]
+                    }
+                };
+                ArcPoints {
+                    start: self.prog,
+                    end: target,
+                    centre,
                 }
+                .check_radii()?;
+                Some(Shape::Arc {
+                    centre: a(centre),
+                    dir,
+                })
             }
+            Motion::ArcCw | Motion::ArcCcw => None,
+        };
+        let element = shape.map(|shape| Element {
+            from: a(self.prog),
+            to: a(target),
+            shape,
+            n: b.n,
+        });
+        // With compensation on, a line that does not move is not an element.
+        let compensating =
+            self.contour.active() || b.compensation.is_some_and(|c| c != Compensation::Off);
+        let element = element
+            .filter(|e| !(compensating && e.from == e.to && matches!(e.shape, Shape::Line { .. })));
+        let tool = Tool::new(self.cfg.rn, self.cfg.tip);
+        let (contour, moves) = self
+            .contour
+            .block(&tool, b.compensation, b.corner, element)
+            .map_err(Refusal::Contour)?;
+        // Check every block before the first one moves.
+        let mut cmd = self.cmd;
+        let mut pos = self.pos;
+        for m in &moves {
+            pos = self.check_move(cmd, pos, m)?;
+            cmd = point(m.to)?;
+        }
+        let start = self.pos;
+        let mut crc = Crc32::new();
+        for m in &moves {
+            crc = self.run_move(m, crc, io);
+        }
+        if element.is_some() || has_end {
+            self.prog = target;
         }
         self.modal = modal;
+        self.contour = contour;
         send_ok(
             io,
             Some(format_args!(
@@ -690,6 +720,86 @@ impl Session {
             )),
         );
         Ok(())
+    }
+
+    /// The arc of a move from the commanded point `from`.
+    fn move_arc(
+        from: [Length; 2],
+        m: &Move,
+    ) -> Result<Option<(ArcPoints, ArcDir)>, Refusal<'static>> {
+        Ok(match m.kind {
+            MoveKind::Line { .. } => None,
+            MoveKind::Arc { centre, dir } => Some((
+                ArcPoints {
+                    start: from,
+                    end: point(m.to)?,
+                    centre: point(centre)?,
+                },
+                dir,
+            )),
+        })
+    }
+
+    /// Checks one move from the commanded point `cmd` and registers `pos`;
+    /// returns the registers after it.
+    fn check_move(
+        &self,
+        cmd: [Length; 2],
+        pos: ImpulsePoint,
+        m: &Move,
+    ) -> Result<ImpulsePoint, Refusal<'static>> {
+        match Self::move_arc(cmd, m)? {
+            None => {
+                let to = point(m.to)?;
+                let to = ImpulsePoint {
+                    x: quantize(to[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
+                    z: quantize(to[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
+                };
+                LinearBlock::new(pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+                Ok(to)
+            }
+            Some((points, dir)) => {
+                let plan =
+                    ChordPlan::new(&points, dir, self.cfg.tol, self.cfg.pass == Pass::Finish)?;
+                self.check_chords(&plan, pos)
+            }
+        }
+    }
+
+    /// Runs one checked move, sends its `DATA` line, and adds its step
+    /// events to `crc`.
+    fn run_move<I: Io>(&mut self, m: &Move, mut crc: Crc32, io: &mut I) -> Crc32 {
+        let Ok(to) = point(m.to) else {
+            return crc;
+        };
+        match Self::move_arc(self.cmd, m) {
+            Ok(None) => {
+                if let Ok(block) = self.linear_block(to) {
+                    crc = block_crc(&block, crc);
+                    self.cmd = to;
+                    self.pos = block.to();
+                    io.run_block(&block, &self.drive);
+                }
+                let rapid = matches!(m.kind, MoveKind::Line { rapid: true });
+                let word = if rapid { Motion::Rapid } else { Motion::Linear };
+                self.send_block_data(io, word, None);
+            }
+            Ok(Some((points, dir))) => {
+                let Ok(plan) =
+                    ChordPlan::new(&points, dir, self.cfg.tol, self.cfg.pass == Pass::Finish)
+                else {
+                    return crc;
+                };
+                crc = self.run_chords(&plan, &points, io, false, crc);
+                let word = match dir {
+                    ArcDir::Cw => Motion::ArcCw,
+                    ArcDir::Ccw => Motion::ArcCcw,
+                };
+                self.send_block_data(io, word, Some(centre_minus(points.centre, points.start)));
+            }
+            Err(_) => {}
+        }
+        crc
     }
 
     /// `DATA G0n X… Z… [I… K…]` for the block just run (its end is the
@@ -720,8 +830,12 @@ impl Session {
     }
 
     /// Checks every chord of a plan before the first one moves.
-    fn check_chords(&self, plan: &ChordPlan) -> Result<(), Refusal<'static>> {
-        let mut at = self.pos;
+    fn check_chords(
+        &self,
+        plan: &ChordPlan,
+        from: ImpulsePoint,
+    ) -> Result<ImpulsePoint, Refusal<'static>> {
+        let mut at = from;
         for i in 1..=plan.chords() {
             let to = plan
                 .chord_end(i, self.cfg.hx, self.cfg.hz)
@@ -729,7 +843,7 @@ impl Session {
             LinearBlock::new(at, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
             at = to;
         }
-        Ok(())
+        Ok(at)
     }
 
     /// Runs the chords of a checked plan, commits the end point, and returns
@@ -741,8 +855,8 @@ impl Session {
         points: &ArcPoints,
         io: &mut I,
         data: bool,
+        mut crc: Crc32,
     ) -> Crc32 {
-        let mut crc = Crc32::new();
         let mut at = self.pos;
         for i in 1..=plan.chords() {
             let Ok(to) = plan.chord_end(i, self.cfg.hx, self.cfg.hz) else {
@@ -762,6 +876,15 @@ impl Session {
         self.cmd = points.end;
         self.pos = at;
         crc
+    }
+
+    /// Refuses a command that would move or re-zero the machine behind the
+    /// contour engine's back.
+    fn not_compensating(&self, what: &'static str) -> Result<(), Refusal<'static>> {
+        if self.contour.active() {
+            return Err(Refusal::Busy(what));
+        }
+        Ok(())
     }
 
     /// An X word as a radius (halved when DIAM=1).
@@ -800,6 +923,7 @@ impl Session {
 
     fn move_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [x, z, inc] = parse_args(words, ["X", "Z", "INC"])?;
+        self.not_compensating("MOVE")?;
         let inc = match inc {
             None => false,
             Some(v) => parse_flag("INC", v)?,
@@ -822,6 +946,7 @@ impl Session {
         let block = self.linear_block(target)?;
         let crc = block_crc(&block, Crc32::new());
         self.cmd = target;
+        self.prog = target;
         self.pos = block.to();
         io.run_block(&block, &self.drive);
         send_ok(
@@ -1190,6 +1315,12 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
         Refusal::Geometry(what) => send_error(io, E::Geometry, format_args!("{what}")),
         Refusal::Missing(what) => send_error(io, E::Syntax, format_args!("{what}")),
+        Refusal::Busy(what) => send_error(
+            io,
+            E::Geometry,
+            format_args!("{what} not allowed while G41/G42 is on; cancel with G40 first"),
+        ),
+        Refusal::Contour(e) => send_contour_refusal(io, e),
         Refusal::Block(e) => {
             let (code, what, letter) = match e {
                 BlockError::UnknownAddress(l) => (E::Syntax, "unknown address", l),
@@ -1208,6 +1339,81 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
             };
             send_error(io, code, format_args!("{what} {}", char::from(letter)))
         }
+    }
+}
+
+/// A block named by its `N` number, or by its place.
+struct BlockName(Option<u32>, &'static str);
+
+impl fmt::Display for BlockName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(n) => write!(f, "N{n}"),
+            None => f.write_str(self.1),
+        }
+    }
+}
+
+fn send_contour_refusal<I: Io>(io: &mut I, e: CompError) {
+    use ErrorCode as E;
+    let this = |n| BlockName(n, "this block");
+    let last = |n| BlockName(n, "the previous block");
+    match e {
+        CompError::ConcaveRadius(n) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "{}: concave arc radius not larger than the nose radius",
+                this(n)
+            ),
+        ),
+        CompError::TooShort(a, b) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "{} too short for the nose radius: it reverses at its corner with {}",
+                last(a),
+                this(b)
+            ),
+        ),
+        CompError::NoCorner(a, b) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "the nose does not fit the corner of {} and {}",
+                last(a),
+                this(b)
+            ),
+        ),
+        CompError::OnInArc(n) => send_error(
+            io,
+            E::Geometry,
+            format_args!("{}: compensation switched on in an arc block", this(n)),
+        ),
+        CompError::OffInArc(n) => send_error(
+            io,
+            E::Geometry,
+            format_args!("{}: compensation switched off in an arc block", this(n)),
+        ),
+        CompError::SideChange(n) => send_error(
+            io,
+            E::Geometry,
+            format_args!("{}: change between G41 and G42 through G40", this(n)),
+        ),
+        CompError::Range(n) => send_error(
+            io,
+            E::Range,
+            format_args!("{}: compensated point beyond 99999.999999 mm", this(n)),
+        ),
+    }
+}
+
+/// A point in ångström as lengths, or `ERR RANGE`.
+fn point(p: [i64; 2]) -> Result<[Length; 2], Refusal<'static>> {
+    let beyond = Refusal::Range("compensated point beyond 99999.999999 mm");
+    match (Length::from_angstrom(p[0]), Length::from_angstrom(p[1])) {
+        (Some(x), Some(z)) => Ok([x, z]),
+        _ => Err(beyond),
     }
 }
 

@@ -1,0 +1,840 @@
+//! Tool nose radius compensation over whole contours (G41/G42/G40).
+//!
+//! The rules are in `docs/compensation.md`; in short: the nose centre runs on
+//! the programmed contour offset by the nose radius `r`, corners are closed by
+//! intersecting the offset elements (inside corners), by tangent-line
+//! intersection or a square-off (outside corners, `G451`) or by a transition
+//! arc (`G450`), and the output is the theoretical tool tip (TTT): the nose
+//! centre plus the tip vector of the `TIP` code. [`Contour`] keeps one
+//! programmed element of look-ahead and nothing else.
+//!
+//! # Arithmetic
+//! Coordinates are whole ångström (10⁻⁷ mm, `|v| < 10¹²`). Corner geometry is
+//! computed relative to the programmed corner point, in ångström with 16
+//! fractional bits, with unit vectors in Q62; every product fits `i128`, and
+//! intersections far from the corner (beyond 2⁴⁰ Å) are treated as having no
+//! intersection. A unit vector is within 2⁻⁶⁰ of exact, so a compensated
+//! point carries far less than 10⁻³ Å of arithmetic error before it is
+//! rounded, half away from zero, to the ångström grid.
+//!
+//! ```
+//! use core_nostd::comp::{Contour, Element, Tool};
+//! use core_nostd::gcode::Compensation;
+//! use core_nostd::length::Length;
+//! # use core_nostd::protocol::TipCode;
+//! let mm = |s| Length::from_mm_str(s).unwrap().as_angstrom();
+//! let tool = Tool::new(Length::from_mm_str("0.4").unwrap(), TipCode::EXTERNAL_RIGHT);
+//! let line = |from: [&str; 2], to: [&str; 2]| Element::line([mm(from[0]), mm(from[1])], [mm(to[0]), mm(to[1])], false, None);
+//! let mut c = Contour::new();
+//! // Krylenko Fig. 12 on the radius: the face Z0 up to X14, then the 45° taper.
+//! c = c.block(&tool, Some(Compensation::Right), None, Some(line(["0", "0"], ["10", "0"]))).unwrap().0;
+//! c = c.block(&tool, None, None, Some(line(["10", "0"], ["14", "0"]))).unwrap().0;
+//! let (_, moves) = c.block(&tool, None, None, Some(line(["14", "0"], ["24", "-10"]))).unwrap();
+//! // The face ends on the taper's offset: X = 14 − 0.4·(1 − tan 22.5°).
+//! assert_eq!(moves[0].to, [mm("13.7656854"), 0]);
+//! ```
+
+use crate::arc::ArcDir;
+use crate::gcode::{Compensation, Corner};
+use crate::length::{Length, LENGTH_LIMIT};
+use crate::protocol::TipCode;
+use crate::trig::{atan2, isqrt};
+
+/// Fractional bits of an ångström in corner arithmetic.
+const FRAC: u32 = 16;
+/// 1 in Q62.
+const ONE: i128 = 1 << 62;
+/// A corner is smooth when `|sin θ| < 2⁻²²` (and `cos θ > 0`).
+const SMOOTH_SIN: i128 = 1 << 40;
+/// Intersections farther than 2⁴⁰ Å from the corner do not count.
+const FAR: i128 = 1 << (40 + FRAC);
+/// Sweep slack for rounding when comparing an arc's compensated sweep with
+/// its programmed one: 2⁻²⁴ turn.
+const SWEEP_SLACK: u64 = 1 << 40;
+
+/// A vector `(X, Z)`; its unit depends on use (ångström · 2¹⁶, or Q62).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct V {
+    x: i128,
+    z: i128,
+}
+
+impl V {
+    const ZERO: V = V { x: 0, z: 0 };
+
+    const fn of(p: [i64; 2]) -> V {
+        V {
+            x: p[0] as i128,
+            z: p[1] as i128,
+        }
+    }
+
+    const fn add(self, o: V) -> V {
+        V {
+            x: self.x + o.x,
+            z: self.z + o.z,
+        }
+    }
+
+    const fn sub(self, o: V) -> V {
+        V {
+            x: self.x - o.x,
+            z: self.z - o.z,
+        }
+    }
+
+    /// `self · k / 2⁶²` for a Q62 factor `k`, `None` on overflow.
+    fn scale(self, k: i128) -> Option<V> {
+        Some(V {
+            x: self.x.checked_mul(k)? >> 62,
+            z: self.z.checked_mul(k)? >> 62,
+        })
+    }
+
+    /// Rotated by +90° in the (Z right, X up) plane: the left normal.
+    const fn left(self) -> V {
+        V {
+            x: self.z,
+            z: -self.x,
+        }
+    }
+
+    fn norm2(self) -> Option<i128> {
+        self.x
+            .checked_mul(self.x)?
+            .checked_add(self.z.checked_mul(self.z)?)
+    }
+}
+
+/// `a × b` in the (Z, X) plane, Q62 for unit vectors.
+const fn cross(a: V, b: V) -> i128 {
+    (a.z * b.x - a.x * b.z) >> 62
+}
+
+/// `a · b`, Q62 for unit vectors.
+const fn dot(a: V, b: V) -> i128 {
+    (a.z * b.z + a.x * b.x) >> 62
+}
+
+/// The unit vector along `v` (not zero), Q62, within 2⁻⁶⁰.
+fn unit(v: V) -> V {
+    let m = v.x.unsigned_abs().max(v.z.unsigned_abs());
+    if m == 0 {
+        return V::ZERO;
+    }
+    // Bring the larger component into [2⁶¹, 2⁶²).
+    let shift = m.leading_zeros() as i32 - 66;
+    let n = if shift >= 0 {
+        V {
+            x: v.x << shift,
+            z: v.z << shift,
+        }
+    } else {
+        V {
+            x: v.x >> -shift,
+            z: v.z >> -shift,
+        }
+    };
+    // |n| < 2^62.5: the squares sum below 2¹²⁵.
+    let len = i128::from(isqrt((n.x * n.x + n.z * n.z) as u128));
+    if len == 0 {
+        return V::ZERO;
+    }
+    V {
+        x: (n.x << 62) / len,
+        z: (n.z << 62) / len,
+    }
+}
+
+/// `n / 2¹⁶` rounded half away from zero.
+const fn round_frac(n: i128) -> i128 {
+    let half = 1 << (FRAC - 1);
+    if n >= 0 {
+        (n + half) >> FRAC
+    } else {
+        -((-n + half) >> FRAC)
+    }
+}
+
+/// Which side of the contour the tool is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum Side {
+    Left,
+    Right,
+}
+
+impl Side {
+    fn of(c: Compensation) -> Option<Side> {
+        match c {
+            Compensation::Off => None,
+            Compensation::Left => Some(Side::Left),
+            Compensation::Right => Some(Side::Right),
+        }
+    }
+
+    /// The unit normal to this side of the unit direction `t`.
+    const fn normal(self, t: V) -> V {
+        match self {
+            Side::Left => t.left(),
+            Side::Right => V { x: -t.z, z: t.x },
+        }
+    }
+
+    /// +1 left, −1 right: the sign of a turn towards this side.
+    const fn sign(self) -> i128 {
+        match self {
+            Side::Left => 1,
+            Side::Right => -1,
+        }
+    }
+}
+
+/// The shape of a programmed element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Shape {
+    /// A straight line; `rapid` for G00.
+    Line {
+        /// G00 rather than G01.
+        rapid: bool,
+    },
+    /// An arc about `centre` (ångström, X radius, Z).
+    Arc {
+        /// Centre.
+        centre: [i64; 2],
+        /// Direction.
+        dir: ArcDir,
+    },
+}
+
+/// One programmed motion (a contour element), in ångström, X on the radius.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Element {
+    /// Start point.
+    pub from: [i64; 2],
+    /// End point.
+    pub to: [i64; 2],
+    /// Line or arc.
+    pub shape: Shape,
+    /// The block's `N` number, to name it in refusals.
+    pub n: Option<u32>,
+}
+
+impl Element {
+    /// A line from `from` to `to`.
+    pub const fn line(from: [i64; 2], to: [i64; 2], rapid: bool, n: Option<u32>) -> Element {
+        Element {
+            from,
+            to,
+            shape: Shape::Line { rapid },
+            n,
+        }
+    }
+
+    const fn rapid(&self) -> bool {
+        matches!(self.shape, Shape::Line { rapid: true })
+    }
+
+    /// The unit direction of travel at `p` (a point of the element).
+    fn tangent(&self, p: [i64; 2]) -> V {
+        match self.shape {
+            Shape::Line { .. } => unit(V::of(self.to).sub(V::of(self.from))),
+            Shape::Arc { centre, dir } => {
+                let r = V::of(p).sub(V::of(centre));
+                match dir {
+                    ArcDir::Ccw => unit(r.left()),
+                    ArcDir::Cw => unit(V { x: -r.z, z: r.x }),
+                }
+            }
+        }
+    }
+
+    /// The offset radius at `p` (ångström · 2¹⁶): `R − r` when the tool is
+    /// inside the circle, `R + r` otherwise; `None` for a line.
+    fn offset_radius(&self, p: [i64; 2], side: Side, r: i128) -> Option<i128> {
+        let Shape::Arc { centre, dir } = self.shape else {
+            return None;
+        };
+        let d = V::of(p).sub(V::of(centre));
+        // |d| < 2⁴¹: d² < 2⁸³, shifted by 32 stays below 2¹¹⁵.
+        let radius = i128::from(isqrt(((d.x * d.x + d.z * d.z) as u128) << (2 * FRAC)));
+        let inside = matches!(
+            (side, dir),
+            (Side::Left, ArcDir::Ccw) | (Side::Right, ArcDir::Cw)
+        );
+        Some(if inside { radius - r } else { radius + r })
+    }
+
+    /// The offset element, relative to `origin` (ångström · 2¹⁶).
+    fn offset(&self, at: [i64; 2], origin: [i64; 2], side: Side, r: i128) -> Offset {
+        let o = V::of(origin);
+        match self.shape {
+            Shape::Line { .. } => {
+                let t = self.tangent(at);
+                let p = shl(V::of(at).sub(o));
+                Offset::Line {
+                    a: p.add(off(side.normal(t), r)),
+                    t,
+                }
+            }
+            Shape::Arc { centre, .. } => Offset::Circle {
+                c: shl(V::of(centre).sub(o)),
+                rho: self.offset_radius(at, side, r).unwrap_or(0),
+            },
+        }
+    }
+}
+
+/// A vector in ångström · 2¹⁶.
+const fn shl(v: V) -> V {
+    V {
+        x: v.x << FRAC,
+        z: v.z << FRAC,
+    }
+}
+
+/// `r·n` for a Q62 unit `n` and `r` in ångström · 2¹⁶ (`|r| < 2⁴⁵`).
+const fn off(n: V, r: i128) -> V {
+    V {
+        x: (n.x * r) >> 62,
+        z: (n.z * r) >> 62,
+    }
+}
+
+/// An offset element near a corner.
+#[derive(Clone, Copy, Debug)]
+enum Offset {
+    Line { a: V, t: V },
+    Circle { c: V, rho: i128 },
+}
+
+/// The intersection of two offset elements nearest the origin.
+fn intersect(a: Offset, b: Offset) -> Option<V> {
+    let points = match (a, b) {
+        (Offset::Line { a: a1, t: t1 }, Offset::Line { a: a2, t: t2 }) => {
+            let w = a2.sub(a1);
+            let den = cross(t1, t2);
+            if den == 0 {
+                return None;
+            }
+            let num = w.z.checked_mul(t2.x)?.checked_sub(w.x.checked_mul(t2.z)?)?;
+            let s = num.checked_div(den)?;
+            [Some(a1.add(t1.scale(s)?)), None]
+        }
+        (Offset::Line { a, t }, Offset::Circle { c, rho })
+        | (Offset::Circle { c, rho }, Offset::Line { a, t }) => {
+            let w = a.sub(c);
+            let b = w.z.checked_mul(t.z)?.checked_add(w.x.checked_mul(t.x)?)? >> 62;
+            let q = w.norm2()?.checked_sub(rho.checked_mul(rho)?)?;
+            let disc = b.checked_mul(b)?.checked_sub(q)?;
+            if disc < 0 {
+                return None;
+            }
+            let root = i128::from(isqrt(disc as u128));
+            [
+                Some(a.add(t.scale(-b + root)?)),
+                Some(a.add(t.scale(-b - root)?)),
+            ]
+        }
+        (Offset::Circle { c: c1, rho: r1 }, Offset::Circle { c: c2, rho: r2 }) => {
+            let d = c2.sub(c1);
+            let dd = d.norm2()?;
+            if dd == 0 {
+                return None;
+            }
+            let dist = i128::from(isqrt(dd as u128));
+            let num = r1
+                .checked_mul(r1)?
+                .checked_sub(r2.checked_mul(r2)?)?
+                .checked_add(dd)?;
+            let along = num.checked_div(dist.checked_mul(2)?)?;
+            let h2 = r1.checked_mul(r1)?.checked_sub(along.checked_mul(along)?)?;
+            if h2 < 0 {
+                return None;
+            }
+            let h = i128::from(isqrt(h2 as u128));
+            let base = V {
+                x: c1.x.checked_add(d.x.checked_mul(along)? / dist)?,
+                z: c1.z.checked_add(d.z.checked_mul(along)? / dist)?,
+            };
+            let p = d.left();
+            let side = V {
+                x: p.x.checked_mul(h)? / dist,
+                z: p.z.checked_mul(h)? / dist,
+            };
+            [Some(base.add(side)), Some(base.sub(side))]
+        }
+    };
+    let mut best: Option<(i128, V)> = None;
+    for p in points.into_iter().flatten() {
+        if p.x.abs() >= FAR || p.z.abs() >= FAR {
+            continue;
+        }
+        let d = p.norm2()?;
+        if best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, p));
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
+/// The tool: nose radius and tip code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Tool {
+    r: i64,
+    tip: [i64; 2],
+}
+
+impl Tool {
+    /// A tool of nose radius `rn` (0 … 25 mm) and tip code `tip`.
+    pub const fn new(rn: Length, tip: TipCode) -> Tool {
+        let r = rn.as_angstrom();
+        let tip = match tip.get() {
+            1 => [r, r],
+            2 => [r, -r],
+            3 => [-r, -r],
+            4 => [-r, r],
+            5 => [0, r],
+            6 => [r, 0],
+            7 => [0, -r],
+            8 => [-r, 0],
+            _ => [0, 0],
+        };
+        Tool { r, tip }
+    }
+
+    /// The nose radius in ångström · 2¹⁶.
+    const fn r(&self) -> i128 {
+        (self.r as i128) << FRAC
+    }
+
+    /// The TTT of a nose-centre point.
+    const fn ttt(&self, p: [i64; 2]) -> [i64; 2] {
+        [p[0] + self.tip[0], p[1] + self.tip[1]]
+    }
+}
+
+/// What the tool does along one output block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MoveKind {
+    /// A straight move; `rapid` for G00.
+    Line {
+        /// G00 rather than G01.
+        rapid: bool,
+    },
+    /// An arc about `centre` (ångström).
+    Arc {
+        /// Centre of the TTT arc.
+        centre: [i64; 2],
+        /// Direction.
+        dir: ArcDir,
+    },
+}
+
+/// One output block: the theoretical tool tip moves from where the previous
+/// block left it to `to` (ångström, X on the radius).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Move {
+    /// End point of the TTT.
+    pub to: [i64; 2],
+    /// Line or arc.
+    pub kind: MoveKind,
+}
+
+/// The most blocks one request can send: an element and three corner moves.
+pub const MAX_MOVES: usize = 4;
+
+/// The blocks a programmed block sends.
+pub type Moves = heapless::Vec<Move, MAX_MOVES>;
+
+/// Why a block was refused (`ERR GEOMETRY`); numbers are the blocks' `N`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CompError {
+    /// An arc with the tool inside whose radius is not larger than the nose
+    /// radius.
+    ConcaveRadius(Option<u32>),
+    /// The compensated motion of block `.0` would reverse against the
+    /// programmed one at its corner with block `.1`.
+    TooShort(Option<u32>, Option<u32>),
+    /// The offset elements of blocks `.0` and `.1` do not meet.
+    NoCorner(Option<u32>, Option<u32>),
+    /// G41/G42 first takes effect in an arc block.
+    OnInArc(Option<u32>),
+    /// G40 in an arc block.
+    OffInArc(Option<u32>),
+    /// G41 while G42 is on, or the reverse.
+    SideChange(Option<u32>),
+    /// A compensated point beyond the coordinate range.
+    Range(Option<u32>),
+}
+
+/// The compensation state between blocks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum State {
+    /// No element waits.
+    Idle,
+    /// The start-up line waits for the element after it.
+    Startup(Element),
+    /// An element waits for its end corner; it starts at the nose-centre
+    /// point `start`.
+    Pending { e: Element, start: [i64; 2] },
+}
+
+/// The contour engine: modal compensation and corner mode, and at most one
+/// waiting element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Contour {
+    mode: Compensation,
+    corner: Corner,
+    state: State,
+}
+
+impl Default for Contour {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Contour {
+    /// Power-on: G40, G451.
+    pub const fn new() -> Contour {
+        Contour {
+            mode: Compensation::Off,
+            corner: Corner::Intersection,
+            state: State::Idle,
+        }
+    }
+
+    /// The modal compensation (G40, G41, G42).
+    pub const fn mode(&self) -> Compensation {
+        self.mode
+    }
+
+    /// The modal corner mode (G450, G451).
+    pub const fn corner(&self) -> Corner {
+        self.corner
+    }
+
+    /// Whether compensation is on or armed: the tool is not at the programmed
+    /// point, or will leave it at the next motion.
+    pub const fn active(&self) -> bool {
+        !matches!(self.mode, Compensation::Off) || !matches!(self.state, State::Idle)
+    }
+
+    /// Runs one block: its compensation and corner words and its motion
+    /// (`None` for a block that does not move). Returns the state after it
+    /// and the TTT blocks it sends, or the refusal; `self` is not changed,
+    /// so the caller commits only what it can also execute.
+    pub fn block(
+        &self,
+        tool: &Tool,
+        comp: Option<Compensation>,
+        corner: Option<Corner>,
+        motion: Option<Element>,
+    ) -> Result<(Contour, Moves), CompError> {
+        let n = motion.and_then(|e| e.n);
+        let mode = comp.unwrap_or(self.mode);
+        if let (Some(a), Some(b)) = (Side::of(self.mode), Side::of(mode)) {
+            if a != b {
+                return Err(CompError::SideChange(n));
+            }
+        }
+        let mut next = Contour {
+            mode,
+            corner: corner.unwrap_or(self.corner),
+            state: self.state,
+        };
+        let mut moves = Moves::new();
+        let r = tool.r();
+        let arc = matches!(
+            motion,
+            Some(Element {
+                shape: Shape::Arc { .. },
+                ..
+            })
+        );
+        match (Side::of(mode), self.state) {
+            (None, state) => {
+                if arc && !matches!(state, State::Idle) {
+                    return Err(CompError::OffInArc(n));
+                }
+                match state {
+                    State::Idle => {}
+                    State::Startup(s) => {
+                        let side = Side::of(self.mode).unwrap_or(Side::Left);
+                        let end = perpendicular(&s, s.to, side, r)?;
+                        push(
+                            &mut moves,
+                            tool.ttt(end),
+                            MoveKind::Line { rapid: s.rapid() },
+                        )?;
+                    }
+                    State::Pending { e, start } => {
+                        let side = Side::of(self.mode).unwrap_or(Side::Left);
+                        let end = perpendicular(&e, e.to, side, r)?;
+                        check_direction(&e, start, end, None)?;
+                        push(&mut moves, tool.ttt(end), element_kind(&e, tool))?;
+                    }
+                }
+                if let Some(e) = motion {
+                    let kind = match e.shape {
+                        Shape::Line { rapid } => MoveKind::Line { rapid },
+                        Shape::Arc { centre, dir } => MoveKind::Arc { centre, dir },
+                    };
+                    push(&mut moves, e.to, kind)?;
+                }
+                next.state = State::Idle;
+            }
+            (Some(_), State::Idle) => {
+                if let Some(e) = motion {
+                    if arc {
+                        return Err(CompError::OnInArc(n));
+                    }
+                    next.state = State::Startup(e);
+                }
+            }
+            (Some(side), State::Startup(s)) => {
+                if let Some(e) = motion {
+                    check_concave(&e, side, r)?;
+                    let start = perpendicular(&e, e.from, side, r)?;
+                    push(
+                        &mut moves,
+                        tool.ttt(start),
+                        MoveKind::Line { rapid: s.rapid() },
+                    )?;
+                    next.state = State::Pending { e, start };
+                }
+            }
+            (Some(side), State::Pending { e: e1, start }) => {
+                if let Some(e2) = motion {
+                    check_concave(&e2, side, r)?;
+                    let c = corner_of(&e1, &e2, side, next.corner, r)?;
+                    check_direction(&e1, start, c.end, e2.n)?;
+                    push(&mut moves, tool.ttt(c.end), element_kind(&e1, tool))?;
+                    for m in c.inserted.iter().flatten() {
+                        let kind = match m.kind {
+                            MoveKind::Line { .. } => MoveKind::Line {
+                                rapid: e1.rapid() && e2.rapid(),
+                            },
+                            MoveKind::Arc { centre, dir } => MoveKind::Arc {
+                                centre: tool.ttt(centre),
+                                dir,
+                            },
+                        };
+                        let from = moves.last().map(|l| l.to).unwrap_or(tool.ttt(c.end));
+                        let to = tool.ttt(m.to);
+                        if to != from {
+                            push(&mut moves, to, kind)?;
+                        }
+                    }
+                    next.state = State::Pending {
+                        e: e2,
+                        start: c.start,
+                    };
+                }
+            }
+        }
+        Ok((next, moves))
+    }
+}
+
+fn push(moves: &mut Moves, to: [i64; 2], kind: MoveKind) -> Result<(), CompError> {
+    moves
+        .push(Move { to, kind })
+        .map_err(|_| CompError::Range(None))
+}
+
+/// The output kind of a compensated element: its TTT arc keeps the centre
+/// shifted by the tip vector.
+const fn element_kind(e: &Element, tool: &Tool) -> MoveKind {
+    match e.shape {
+        Shape::Line { rapid } => MoveKind::Line { rapid },
+        Shape::Arc { centre, dir } => MoveKind::Arc {
+            centre: tool.ttt(centre),
+            dir,
+        },
+    }
+}
+
+/// Refuses an arc the nose cannot follow on the inside.
+fn check_concave(e: &Element, side: Side, r: i128) -> Result<(), CompError> {
+    for p in [e.from, e.to] {
+        if e.offset_radius(p, side, r).is_some_and(|rho| rho <= 0) {
+            return Err(CompError::ConcaveRadius(e.n));
+        }
+    }
+    Ok(())
+}
+
+/// The perpendicular offset point of `e` at its point `p`, rounded.
+fn perpendicular(e: &Element, p: [i64; 2], side: Side, r: i128) -> Result<[i64; 2], CompError> {
+    absolute(p, off(side.normal(e.tangent(p)), r), e.n)
+}
+
+/// `origin + v` for `v` in ångström · 2¹⁶, rounded to the ångström grid and
+/// checked against the coordinate range.
+fn absolute(origin: [i64; 2], v: V, n: Option<u32>) -> Result<[i64; 2], CompError> {
+    let lim = i128::from(LENGTH_LIMIT.as_angstrom());
+    let one = |o: i64, d: i128| -> Result<i64, CompError> {
+        let a = i128::from(o) + round_frac(d);
+        if a.abs() > lim {
+            return Err(CompError::Range(n));
+        }
+        Ok(a as i64)
+    };
+    Ok([one(origin[0], v.x)?, one(origin[1], v.z)?])
+}
+
+/// Refuses an element whose compensated motion from `start` to `end` does not
+/// keep its programmed direction.
+fn check_direction(
+    e: &Element,
+    start: [i64; 2],
+    end: [i64; 2],
+    next: Option<u32>,
+) -> Result<(), CompError> {
+    let short = Err(CompError::TooShort(e.n, next));
+    match e.shape {
+        Shape::Line { .. } => {
+            let d = V::of(e.to).sub(V::of(e.from));
+            let c = V::of(end).sub(V::of(start));
+            if d.x * c.x + d.z * c.z <= 0 {
+                return short;
+            }
+        }
+        Shape::Arc { centre, dir } => {
+            let sweep = |a: [i64; 2], b: [i64; 2]| {
+                let angle = |p: [i64; 2]| {
+                    let v = V::of(p).sub(V::of(centre));
+                    atan2(v.x, v.z).0
+                };
+                match dir {
+                    ArcDir::Ccw => angle(b).wrapping_sub(angle(a)),
+                    ArcDir::Cw => angle(a).wrapping_sub(angle(b)),
+                }
+            };
+            let full = e.from == e.to;
+            let programmed = if full { u64::MAX } else { sweep(e.from, e.to) };
+            let done = sweep(start, end);
+            if start == end {
+                if !full {
+                    return short;
+                }
+            } else if done > programmed.saturating_add(SWEEP_SLACK) || (full && done < 1 << 63) {
+                return short;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// How one corner is closed: where the first element ends, the moves
+/// inserted (nose-centre points), where the second starts.
+struct CornerPlan {
+    end: [i64; 2],
+    inserted: [Option<Move>; 3],
+    start: [i64; 2],
+}
+
+fn corner_of(
+    e1: &Element,
+    e2: &Element,
+    side: Side,
+    mode: Corner,
+    r: i128,
+) -> Result<CornerPlan, CompError> {
+    let p = e1.to;
+    let (n1, n2) = (e1.n, e2.n);
+    let at = |v: V| absolute(p, v, n2);
+    let (t1, t2) = (e1.tangent(p), e2.tangent(p));
+    let (s, c) = (cross(t1, t2), dot(t1, t2));
+    let a1 = off(side.normal(t1), r);
+    let a2 = off(side.normal(t2), r);
+    let line1 = matches!(e1.shape, Shape::Line { .. });
+    let line2 = matches!(e2.shape, Shape::Line { .. });
+    let straight = |v: V| -> Result<Option<Move>, CompError> {
+        Ok(Some(Move {
+            to: at(v)?,
+            kind: MoveKind::Line { rapid: false },
+        }))
+    };
+    if s.abs() < SMOOTH_SIN && c > 0 {
+        let end = at(a1)?;
+        return Ok(CornerPlan {
+            end,
+            inserted: [None; 3],
+            start: end,
+        });
+    }
+    let reversal = s.abs() < SMOOTH_SIN;
+    if !reversal && s * side.sign() > 0 {
+        // Inside: intersect the offset elements.
+        let x = intersect(e1.offset(p, p, side, r), e2.offset(p, p, side, r))
+            .ok_or(CompError::NoCorner(n1, n2))?;
+        let x = at(x)?;
+        return Ok(CornerPlan {
+            end: x,
+            inserted: [None; 3],
+            start: x,
+        });
+    }
+    match mode {
+        Corner::Arc => Ok(CornerPlan {
+            end: at(a1)?,
+            inserted: [
+                Some(Move {
+                    to: at(a2)?,
+                    kind: MoveKind::Arc {
+                        centre: p,
+                        dir: match side {
+                            Side::Left => ArcDir::Cw,
+                            Side::Right => ArcDir::Ccw,
+                        },
+                    },
+                }),
+                None,
+                None,
+            ],
+            start: at(a2)?,
+        }),
+        Corner::Intersection => {
+            let (v1, v2) = if c >= 0 {
+                // tan(θ/2) = sin θ / (1 + cos θ) ≤ 1.
+                let l = r * s.abs() / (ONE + c);
+                let v = a1.add(off(t1, l));
+                (v, v)
+            } else {
+                (a1.add(off(t1, r)), a2.sub(off(t2, r)))
+            };
+            let mut inserted = [None; 3];
+            let end = if line1 {
+                at(v1)?
+            } else {
+                inserted[0] = straight(v1)?;
+                at(a1)?
+            };
+            if v1 != v2 {
+                inserted[1] = straight(v2)?;
+            }
+            let start = if line2 {
+                at(v2)?
+            } else {
+                inserted[2] = straight(a2)?;
+                at(a2)?
+            };
+            Ok(CornerPlan {
+                end,
+                inserted,
+                start,
+            })
+        }
+    }
+}
