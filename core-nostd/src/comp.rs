@@ -22,7 +22,7 @@
 //! use core_nostd::gcode::Compensation;
 //! use core_nostd::length::Length;
 //! # use core_nostd::protocol::TipCode;
-//! let mm = |s| Length::from_mm_str(s).unwrap().as_angstrom();
+//! let mm = |s: &str| Length::from_mm_str(s).unwrap().as_angstrom();
 //! let tool = Tool::new(Length::from_mm_str("0.4").unwrap(), TipCode::EXTERNAL_RIGHT);
 //! let line = |from: [&str; 2], to: [&str; 2]| Element::line([mm(from[0]), mm(from[1])], [mm(to[0]), mm(to[1])], false, None);
 //! let mut c = Contour::new();
@@ -31,7 +31,7 @@
 //! c = c.block(&tool, None, None, Some(line(["10", "0"], ["14", "0"]))).unwrap().0;
 //! let (_, moves) = c.block(&tool, None, None, Some(line(["14", "0"], ["24", "-10"]))).unwrap();
 //! // The face ends on the taper's offset: X = 14 − 0.4·(1 − tan 22.5°).
-//! assert_eq!(moves[0].to, [mm("13.7656854"), 0]);
+//! assert_eq!(moves[0].to, [137_656_854, 0]);
 //! ```
 
 use crate::arc::ArcDir;
@@ -45,28 +45,27 @@ const FRAC: u32 = 16;
 /// 1 in Q62.
 const ONE: i128 = 1 << 62;
 /// A corner is smooth when `|sin θ| < 2⁻²²` (and `cos θ > 0`).
-const SMOOTH_SIN: i128 = 1 << 40;
+const SMOOTH_SIN: i64 = 1 << 40;
 /// Intersections farther than 2⁴⁰ Å from the corner do not count.
-const FAR: i128 = 1 << (40 + FRAC);
+const FAR: i64 = 1 << (40 + FRAC);
 /// Sweep slack for rounding when comparing an arc's compensated sweep with
 /// its programmed one: 2⁻²⁴ turn.
 const SWEEP_SLACK: u64 = 1 << 40;
 
-/// A vector `(X, Z)`; its unit depends on use (ångström · 2¹⁶, or Q62).
+/// A vector `(X, Z)`; its unit depends on use (ångström, ångström · 2¹⁶
+/// relative to a corner, or Q62 for a unit vector). Every use stays below
+/// 2⁶⁰ in magnitude; products are taken in `i128` by [`mul`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct V {
-    x: i128,
-    z: i128,
+    x: i64,
+    z: i64,
 }
 
 impl V {
     const ZERO: V = V { x: 0, z: 0 };
 
     const fn of(p: [i64; 2]) -> V {
-        V {
-            x: p[0] as i128,
-            z: p[1] as i128,
-        }
+        V { x: p[0], z: p[1] }
     }
 
     const fn add(self, o: V) -> V {
@@ -83,14 +82,6 @@ impl V {
         }
     }
 
-    /// `self · k / 2⁶²` for a Q62 factor `k`, `None` on overflow.
-    fn scale(self, k: i128) -> Option<V> {
-        Some(V {
-            x: self.x.checked_mul(k)? >> 62,
-            z: self.z.checked_mul(k)? >> 62,
-        })
-    }
-
     /// Rotated by +90° in the (Z right, X up) plane: the left normal.
     const fn left(self) -> V {
         V {
@@ -98,32 +89,32 @@ impl V {
             z: -self.x,
         }
     }
-
-    fn norm2(self) -> Option<i128> {
-        self.x
-            .checked_mul(self.x)?
-            .checked_add(self.z.checked_mul(self.z)?)
-    }
 }
 
-/// `a × b` in the (Z, X) plane, Q62 for unit vectors.
-const fn cross(a: V, b: V) -> i128 {
-    (a.z * b.x - a.x * b.z) >> 62
+/// `a × b / 2⁶²` in the (Z, X) plane: Q62 for unit vectors.
+const fn cross(a: V, b: V) -> i64 {
+    ((mul(a.z, b.x) - mul(a.x, b.z)) >> 62) as i64
 }
 
-/// `a · b`, Q62 for unit vectors.
-const fn dot(a: V, b: V) -> i128 {
-    (a.z * b.z + a.x * b.x) >> 62
+/// `a · b / 2⁶²`: Q62 for unit vectors.
+const fn dot(a: V, b: V) -> i64 {
+    ((mul(a.z, b.z) + mul(a.x, b.x)) >> 62) as i64
+}
+
+/// `a² + b²`, exact.
+const fn norm2(v: V) -> i128 {
+    mul(v.x, v.x) + mul(v.z, v.z)
 }
 
 /// The unit vector along `v` (not zero), Q62, within 2⁻⁶⁰.
+#[inline(never)]
 fn unit(v: V) -> V {
     let m = v.x.unsigned_abs().max(v.z.unsigned_abs());
     if m == 0 {
         return V::ZERO;
     }
     // Bring the larger component into [2⁶¹, 2⁶²).
-    let shift = m.leading_zeros() as i32 - 66;
+    let shift = m.leading_zeros() as i32 - 2;
     let n = if shift >= 0 {
         V {
             x: v.x << shift,
@@ -136,18 +127,18 @@ fn unit(v: V) -> V {
         }
     };
     // |n| < 2^62.5: the squares sum below 2¹²⁵.
-    let len = i128::from(isqrt((n.x * n.x + n.z * n.z) as u128));
+    let len = i128::from(isqrt(norm2(n) as u128));
     if len == 0 {
         return V::ZERO;
     }
     V {
-        x: (n.x << 62) / len,
-        z: (n.z << 62) / len,
+        x: div((n.x as i128) << 62, len) as i64,
+        z: div((n.z as i128) << 62, len) as i64,
     }
 }
 
 /// `n / 2¹⁶` rounded half away from zero.
-const fn round_frac(n: i128) -> i128 {
+const fn round_frac(n: i64) -> i64 {
     let half = 1 << (FRAC - 1);
     if n >= 0 {
         (n + half) >> FRAC
@@ -182,7 +173,7 @@ impl Side {
     }
 
     /// +1 left, −1 right: the sign of a turn towards this side.
-    const fn sign(self) -> i128 {
+    const fn sign(self) -> i64 {
         match self {
             Side::Left => 1,
             Side::Right => -1,
@@ -253,13 +244,14 @@ impl Element {
 
     /// The offset radius at `p` (ångström · 2¹⁶): `R − r` when the tool is
     /// inside the circle, `R + r` otherwise; `None` for a line.
-    fn offset_radius(&self, p: [i64; 2], side: Side, r: i128) -> Option<i128> {
+    fn offset_radius(&self, p: [i64; 2], side: Side, r: i64) -> Option<i64> {
         let Shape::Arc { centre, dir } = self.shape else {
             return None;
         };
         let d = V::of(p).sub(V::of(centre));
         // |d| < 2⁴¹: d² < 2⁸³, shifted by 32 stays below 2¹¹⁵.
-        let radius = i128::from(isqrt(((d.x * d.x + d.z * d.z) as u128) << (2 * FRAC)));
+        // R < 2^41.5 Å: R² · 2³² < 2¹¹⁵, R · 2¹⁶ < 2⁵⁸.
+        let radius = isqrt((norm2(d) as u128) << (2 * FRAC)) as i64;
         let inside = matches!(
             (side, dir),
             (Side::Left, ArcDir::Ccw) | (Side::Right, ArcDir::Cw)
@@ -268,7 +260,7 @@ impl Element {
     }
 
     /// The offset element, relative to `origin` (ångström · 2¹⁶).
-    fn offset(&self, at: [i64; 2], origin: [i64; 2], side: Side, r: i128) -> Offset {
+    fn offset(&self, at: [i64; 2], origin: [i64; 2], side: Side, r: i64) -> Offset {
         let o = V::of(origin);
         match self.shape {
             Shape::Line { .. } => {
@@ -295,11 +287,11 @@ const fn shl(v: V) -> V {
     }
 }
 
-/// `r·n` for a Q62 unit `n` and `r` in ångström · 2¹⁶ (`|r| < 2⁴⁵`).
-const fn off(n: V, r: i128) -> V {
+/// `r·n` for a Q62 unit `n` and `r` in ångström · 2¹⁶ (`|r| < 2⁶⁰`).
+const fn off(n: V, r: i64) -> V {
     V {
-        x: (n.x * r) >> 62,
-        z: (n.z * r) >> 62,
+        x: (mul(n.x, r) >> 62) as i64,
+        z: (mul(n.z, r) >> 62) as i64,
     }
 }
 
@@ -307,63 +299,79 @@ const fn off(n: V, r: i128) -> V {
 #[derive(Clone, Copy, Debug)]
 enum Offset {
     Line { a: V, t: V },
-    Circle { c: V, rho: i128 },
+    Circle { c: V, rho: i64 },
+}
+
+/// `a · b`, exact. One shared
+/// routine: 128-bit products inlined everywhere cost kilobytes of flash.
+#[inline(never)]
+const fn mul(a: i64, b: i64) -> i128 {
+    (a as i128) * (b as i128)
+}
+
+/// `a / b` truncated; 0 where the quotient does not exist (callers have
+/// excluded `b = 0`).
+const fn div(a: i128, b: i128) -> i128 {
+    match a.checked_div(b) {
+        Some(q) => q,
+        None => 0,
+    }
 }
 
 /// The intersection of two offset elements nearest the origin.
+///
+/// Inputs are relative to the corner: line points within `2r < 2⁴⁶`, unit
+/// directions in Q62, centres within 2⁴¹ Å (2⁵⁷ in these units) and offset
+/// radii below 2⁵⁸. Under those bounds no product below exceeds 2¹²², so the
+/// arithmetic is unchecked; quotients that could grow are bounded first.
+#[inline(never)]
 fn intersect(a: Offset, b: Offset) -> Option<V> {
     let points = match (a, b) {
         (Offset::Line { a: a1, t: t1 }, Offset::Line { a: a2, t: t2 }) => {
             let w = a2.sub(a1);
-            let den = cross(t1, t2);
+            let den = i128::from(cross(t1, t2));
             if den == 0 {
                 return None;
             }
-            let num = w.z.checked_mul(t2.x)?.checked_sub(w.x.checked_mul(t2.z)?)?;
-            let s = num.checked_div(den)?;
-            [Some(a1.add(t1.scale(s)?)), None]
+            let s = div(mul(w.z, t2.x) - mul(w.x, t2.z), den);
+            if s.abs() >= i128::from(FAR) {
+                return None;
+            }
+            [Some(a1.add(off(t1, s as i64))), None]
         }
         (Offset::Line { a, t }, Offset::Circle { c, rho })
         | (Offset::Circle { c, rho }, Offset::Line { a, t }) => {
             let w = a.sub(c);
-            let b = w.z.checked_mul(t.z)?.checked_add(w.x.checked_mul(t.x)?)? >> 62;
-            let q = w.norm2()?.checked_sub(rho.checked_mul(rho)?)?;
-            let disc = b.checked_mul(b)?.checked_sub(q)?;
+            let b = dot(w, t);
+            let disc = mul(b, b) - (norm2(w) - mul(rho, rho));
             if disc < 0 {
                 return None;
             }
-            let root = i128::from(isqrt(disc as u128));
+            let root = isqrt(disc as u128) as i64;
             [
-                Some(a.add(t.scale(-b + root)?)),
-                Some(a.add(t.scale(-b - root)?)),
+                Some(a.add(off(t, root - b))),
+                Some(a.add(off(t, -root - b))),
             ]
         }
         (Offset::Circle { c: c1, rho: r1 }, Offset::Circle { c: c2, rho: r2 }) => {
             let d = c2.sub(c1);
-            let dd = d.norm2()?;
-            if dd == 0 {
-                return None;
-            }
+            let dd = norm2(d);
             let dist = i128::from(isqrt(dd as u128));
-            let num = r1
-                .checked_mul(r1)?
-                .checked_sub(r2.checked_mul(r2)?)?
-                .checked_add(dd)?;
-            let along = num.checked_div(dist.checked_mul(2)?)?;
-            let h2 = r1.checked_mul(r1)?.checked_sub(along.checked_mul(along)?)?;
-            if h2 < 0 {
+            if dist == 0 {
                 return None;
             }
-            let h = i128::from(isqrt(h2 as u128));
-            let base = V {
-                x: c1.x.checked_add(d.x.checked_mul(along)? / dist)?,
-                z: c1.z.checked_add(d.z.checked_mul(along)? / dist)?,
+            let along = div(mul(r1, r1) - mul(r2, r2) + dd, 2 * dist);
+            if along.abs() > i128::from(r1) {
+                return None;
+            }
+            let along = along as i64;
+            let h = isqrt((mul(r1, r1) - mul(along, along)) as u128) as i64;
+            let scaled = |v: V, k: i64| V {
+                x: div(mul(v.x, k), dist) as i64,
+                z: div(mul(v.z, k), dist) as i64,
             };
-            let p = d.left();
-            let side = V {
-                x: p.x.checked_mul(h)? / dist,
-                z: p.z.checked_mul(h)? / dist,
-            };
+            let base = c1.add(scaled(d, along));
+            let side = scaled(d.left(), h);
             [Some(base.add(side)), Some(base.sub(side))]
         }
     };
@@ -372,7 +380,7 @@ fn intersect(a: Offset, b: Offset) -> Option<V> {
         if p.x.abs() >= FAR || p.z.abs() >= FAR {
             continue;
         }
-        let d = p.norm2()?;
+        let d = norm2(p);
         if best.is_none_or(|(bd, _)| d < bd) {
             best = Some((d, p));
         }
@@ -407,8 +415,8 @@ impl Tool {
     }
 
     /// The nose radius in ångström · 2¹⁶.
-    const fn r(&self) -> i128 {
-        (self.r as i128) << FRAC
+    const fn r(&self) -> i64 {
+        self.r << FRAC
     }
 
     /// The TTT of a nose-centre point.
@@ -533,6 +541,7 @@ impl Contour {
     /// (`None` for a block that does not move). Returns the state after it
     /// and the TTT blocks it sends, or the refusal; `self` is not changed,
     /// so the caller commits only what it can also execute.
+    #[inline(never)]
     pub fn block(
         &self,
         tool: &Tool,
@@ -665,7 +674,7 @@ const fn element_kind(e: &Element, tool: &Tool) -> MoveKind {
 }
 
 /// Refuses an arc the nose cannot follow on the inside.
-fn check_concave(e: &Element, side: Side, r: i128) -> Result<(), CompError> {
+fn check_concave(e: &Element, side: Side, r: i64) -> Result<(), CompError> {
     for p in [e.from, e.to] {
         if e.offset_radius(p, side, r).is_some_and(|rho| rho <= 0) {
             return Err(CompError::ConcaveRadius(e.n));
@@ -675,26 +684,28 @@ fn check_concave(e: &Element, side: Side, r: i128) -> Result<(), CompError> {
 }
 
 /// The perpendicular offset point of `e` at its point `p`, rounded.
-fn perpendicular(e: &Element, p: [i64; 2], side: Side, r: i128) -> Result<[i64; 2], CompError> {
+fn perpendicular(e: &Element, p: [i64; 2], side: Side, r: i64) -> Result<[i64; 2], CompError> {
     absolute(p, off(side.normal(e.tangent(p)), r), e.n)
 }
 
 /// `origin + v` for `v` in ångström · 2¹⁶, rounded to the ångström grid and
 /// checked against the coordinate range.
 fn absolute(origin: [i64; 2], v: V, n: Option<u32>) -> Result<[i64; 2], CompError> {
-    let lim = i128::from(LENGTH_LIMIT.as_angstrom());
-    let one = |o: i64, d: i128| -> Result<i64, CompError> {
-        let a = i128::from(o) + round_frac(d);
+    let lim = LENGTH_LIMIT.as_angstrom();
+    // |o| ≤ 10¹² and |d| < 2⁶⁰ · 2⁻¹⁶: the sum fits.
+    let one = |o: i64, d: i64| -> Result<i64, CompError> {
+        let a = o + round_frac(d);
         if a.abs() > lim {
             return Err(CompError::Range(n));
         }
-        Ok(a as i64)
+        Ok(a)
     };
     Ok([one(origin[0], v.x)?, one(origin[1], v.z)?])
 }
 
 /// Refuses an element whose compensated motion from `start` to `end` does not
 /// keep its programmed direction.
+#[inline(never)]
 fn check_direction(
     e: &Element,
     start: [i64; 2],
@@ -706,7 +717,7 @@ fn check_direction(
         Shape::Line { .. } => {
             let d = V::of(e.to).sub(V::of(e.from));
             let c = V::of(end).sub(V::of(start));
-            if d.x * c.x + d.z * c.z <= 0 {
+            if mul(d.x, c.x) + mul(d.z, c.z) <= 0 {
                 return short;
             }
         }
@@ -714,7 +725,7 @@ fn check_direction(
             let sweep = |a: [i64; 2], b: [i64; 2]| {
                 let angle = |p: [i64; 2]| {
                     let v = V::of(p).sub(V::of(centre));
-                    atan2(v.x, v.z).0
+                    atan2(i128::from(v.x), i128::from(v.z)).0
                 };
                 match dir {
                     ArcDir::Ccw => angle(b).wrapping_sub(angle(a)),
@@ -744,12 +755,13 @@ struct CornerPlan {
     start: [i64; 2],
 }
 
+#[inline(never)]
 fn corner_of(
     e1: &Element,
     e2: &Element,
     side: Side,
     mode: Corner,
-    r: i128,
+    r: i64,
 ) -> Result<CornerPlan, CompError> {
     let p = e1.to;
     let (n1, n2) = (e1.n, e2.n);
@@ -808,7 +820,7 @@ fn corner_of(
         Corner::Intersection => {
             let (v1, v2) = if c >= 0 {
                 // tan(θ/2) = sin θ / (1 + cos θ) ≤ 1.
-                let l = r * s.abs() / (ONE + c);
+                let l = div(mul(r, s.abs()), ONE + i128::from(c)) as i64;
                 let v = a1.add(off(t1, l));
                 (v, v)
             } else {

@@ -258,6 +258,7 @@ fn cordic_octant(big: u128, small: u128) -> u64 {
 /// assert_eq!(isqrt(99), 9);
 /// assert_eq!(isqrt(u128::MAX), u64::MAX);
 /// ```
+#[inline(never)]
 pub const fn isqrt(n: u128) -> u64 {
     if n == 0 {
         return 0;
