@@ -443,6 +443,18 @@ pub enum MoveKind {
     },
 }
 
+/// Which programmed block an output block belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Origin {
+    /// The motion block before this one (sent one block late).
+    Previous,
+    /// A corner between the previous block and this one.
+    Corner,
+    /// This block.
+    Current,
+}
+
 /// One output block: the theoretical tool tip moves from where the previous
 /// block left it to `to` (ångström, X on the radius).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -452,6 +464,8 @@ pub struct Move {
     pub to: [i64; 2],
     /// Line or arc.
     pub kind: MoveKind,
+    /// The programmed block it comes from.
+    pub origin: Origin,
 }
 
 /// The most blocks one request can send: an element and three corner moves.
@@ -584,13 +598,19 @@ impl Contour {
                             &mut moves,
                             tool.ttt(end),
                             MoveKind::Line { rapid: s.rapid() },
+                            Origin::Previous,
                         )?;
                     }
                     State::Pending { e, start } => {
                         let side = Side::of(self.mode).unwrap_or(Side::Left);
                         let end = perpendicular(&e, e.to, side, r)?;
                         check_direction(&e, start, end, None)?;
-                        push(&mut moves, tool.ttt(end), element_kind(&e, tool))?;
+                        push(
+                            &mut moves,
+                            tool.ttt(end),
+                            element_kind(&e, tool),
+                            Origin::Previous,
+                        )?;
                     }
                 }
                 if let Some(e) = motion {
@@ -598,7 +618,7 @@ impl Contour {
                         Shape::Line { rapid } => MoveKind::Line { rapid },
                         Shape::Arc { centre, dir } => MoveKind::Arc { centre, dir },
                     };
-                    push(&mut moves, e.to, kind)?;
+                    push(&mut moves, e.to, kind, Origin::Current)?;
                 }
                 next.state = State::Idle;
             }
@@ -618,6 +638,7 @@ impl Contour {
                         &mut moves,
                         tool.ttt(start),
                         MoveKind::Line { rapid: s.rapid() },
+                        Origin::Previous,
                     )?;
                     next.state = State::Pending { e, start };
                 }
@@ -627,7 +648,12 @@ impl Contour {
                     check_concave(&e2, side, r)?;
                     let c = corner_of(&e1, &e2, side, next.corner, r)?;
                     check_direction(&e1, start, c.end, e2.n)?;
-                    push(&mut moves, tool.ttt(c.end), element_kind(&e1, tool))?;
+                    push(
+                        &mut moves,
+                        tool.ttt(c.end),
+                        element_kind(&e1, tool),
+                        Origin::Previous,
+                    )?;
                     for m in c.inserted.iter().flatten() {
                         let kind = match m.kind {
                             MoveKind::Line { .. } => MoveKind::Line {
@@ -641,7 +667,7 @@ impl Contour {
                         let from = moves.last().map(|l| l.to).unwrap_or(tool.ttt(c.end));
                         let to = tool.ttt(m.to);
                         if to != from {
-                            push(&mut moves, to, kind)?;
+                            push(&mut moves, to, kind, Origin::Corner)?;
                         }
                     }
                     next.state = State::Pending {
@@ -655,9 +681,9 @@ impl Contour {
     }
 }
 
-fn push(moves: &mut Moves, to: [i64; 2], kind: MoveKind) -> Result<(), CompError> {
+fn push(moves: &mut Moves, to: [i64; 2], kind: MoveKind, origin: Origin) -> Result<(), CompError> {
     moves
-        .push(Move { to, kind })
+        .push(Move { to, kind, origin })
         .map_err(|_| CompError::Range(None))
 }
 
@@ -776,6 +802,7 @@ fn corner_of(
         Ok(Some(Move {
             to: at(v)?,
             kind: MoveKind::Line { rapid: false },
+            origin: Origin::Corner,
         }))
     };
     if s.abs() < SMOOTH_SIN && c > 0 {
@@ -811,6 +838,7 @@ fn corner_of(
                             Side::Right => ArcDir::Ccw,
                         },
                     },
+                    origin: Origin::Corner,
                 }),
                 None,
                 None,

@@ -1,6 +1,6 @@
 //! Structured sessions: requests built from the real command words and keys
 //! (`MOVE`, `ARC` by chords and `MODE=DIRECT`, `CFG`, `DRIVE`, `ZERO [X Z]`,
-//! `SESSION`, `POS`, `VER`, G-code blocks G00–G03 / G40–G42 / G90 G91 with
+//! `SESSION`, `POS`, `VER`, G-code blocks G00–G03 / G40 / G90 G91 with
 //! X Z I K R, words apart or written together) with arbitrary numbers,
 //! optionally in lower case, with an `@id` (new or a retry), a CRC word and a
 //! `*HH` checksum, run one after another on one device.
@@ -13,7 +13,7 @@
 //!   blocks: the exact outcome (which `ERR` code, or the exact `OK` line);
 //! - `ARC` and arc blocks: the refusals that come before any geometry (which
 //!   code), and on `OK` the commanded point is the request's end point
-//!   (absolute or incremental, X halved when `DIAM=1`); G41/G42 are refused;
+//!   (absolute or incremental, X halved when `DIAM=1`);
 //! - an id without a CRC word, an id out of range, a numbered request before
 //!   `SESSION TOKEN=`, an over-long or empty line: the code; the same id as
 //!   the last one: the same final line, nothing runs.
@@ -547,7 +547,8 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                 w.push(format!("N{n}"));
             }
             let motion = motion.map(|g| g % 4);
-            let compensation = compensation.map(|g| 40 + g % 3);
+            // G41/G42 contours are the `contour` target's: here only G40.
+            let compensation = compensation.map(|_| 40);
             for g in [motion, compensation, incremental.map(|i| 90 + u8::from(i))]
                 .into_iter()
                 .flatten()

@@ -12,14 +12,20 @@
 //!   reference;
 //! - [`reliable`]: requests that survive a faulty link, and the fault
 //!   injector; [`soak`]: long faulted sessions against the reference;
+//! - [`reference_comp`]: the f64 reference of nose radius compensation
+//!   (G41/G42 contours), written from `docs/compensation.md`;
+//! - [`compensate`]: `host-sim compensate`, a G41/G42 program printed as the
+//!   tool-tip program the device runs;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod compare;
+pub mod compensate;
 pub mod device;
 pub mod link;
 pub mod qemu;
 pub mod reference;
 pub mod reference_arc;
+pub mod reference_comp;
 pub mod reference_cone;
 pub mod reliable;
 pub mod scenario;

@@ -37,6 +37,22 @@ enum Command {
     /// Count the firmware's instructions per step event and per request on
     /// the Cortex-M4, under QEMU -icount.
     QemuBench,
+    /// Print a G41/G42 program as the tool-tip program the device runs
+    /// (compensation done), ready for a control without it.
+    Compensate {
+        /// The G-code program.
+        file: std::path::PathBuf,
+        /// Nose radius in mm.
+        #[arg(long, default_value = "0.4")]
+        rn: String,
+        /// Tip orientation code 0–9 (3: external right-hand tool, 2: boring
+        /// bar; 0 and 9 program the nose centre).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u8).range(0..=9))]
+        tip: u8,
+        /// X words are radii, not diameters.
+        #[arg(long)]
+        radius: bool,
+    },
     /// Serve the in-process device for a terminal or another program.
     Serve {
         /// Serve on standard input and output.
@@ -112,6 +128,32 @@ enum LinkKind {
     Local,
 }
 
+/// `host-sim compensate`: the program on stdout, remarks and refusals on
+/// stderr; exit 1 when the program is refused (nothing is printed then).
+fn compensate(
+    file: &std::path::Path,
+    rn: String,
+    tip: u8,
+    diam: bool,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let program = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let settings = host_sim::compensate::Settings { rn, tip, diam };
+    match host_sim::compensate::compensate(&program, &settings) {
+        Ok(out) => {
+            for w in &out.warnings {
+                eprintln!("{}: {w}", file.display());
+            }
+            std::io::stdout().write_all(out.text.as_bytes())?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(e) => {
+            eprintln!("{}: {e}", file.display());
+            Ok(ExitCode::from(1))
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
@@ -119,6 +161,12 @@ fn main() -> ExitCode {
         Command::Qemu(args) => run_qemu(&args),
         Command::QemuBench => qemu_bench(),
         Command::Soak(args) => run_soak(&args),
+        Command::Compensate {
+            file,
+            rn,
+            tip,
+            radius,
+        } => compensate(&file, rn, tip, !radius),
         Command::Serve {
             stdio: _,
             pty: true,

@@ -252,6 +252,6 @@ fn gcode_words_written_together() {
     assert!(ask1(&mut dev, "G1.5").starts_with("ERR VALUE"));
     let before = state(&dev);
     assert!(ask1(&mut dev, "G01 X1 (\u{e9})").starts_with("ERR SYNTAX"));
-    assert!(ask1(&mut dev, "G42 G01 X20").starts_with("ERR VALUE G"));
+    assert!(ask1(&mut dev, "G42 G03 X20 R5").starts_with("ERR GEOMETRY"));
     assert_eq!(state(&dev), before);
 }

@@ -8,7 +8,7 @@ use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
-use crate::comp::{CompError, Contour, Element, Move, MoveKind, Shape, Tool};
+use crate::comp::{CompError, Contour, Element, Move, MoveKind, Moves, Shape, Tool};
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{is_block, parse_block, BlockError, Compensation, Motion};
@@ -136,6 +136,8 @@ pub struct Session {
     prog: [Length; 2],
     /// Nose radius compensation.
     contour: Contour,
+    /// The blocks the last G-code request sent.
+    last_moves: Moves,
     /// The host's session token (`SESSION`); 0 after power-on.
     token: u32,
     /// The id of the last request that carried one, and its final reply.
@@ -216,6 +218,7 @@ impl Session {
             modal: Modal::POWER_ON,
             prog: [Length::ZERO; 2],
             contour: Contour::new(),
+            last_moves: Moves::new(),
             token: 0,
             last_id: None,
             last_final: heapless::Vec::new(),
@@ -235,6 +238,17 @@ impl Session {
     /// Position registers in impulses.
     pub const fn position(&self) -> ImpulsePoint {
         self.pos
+    }
+
+    /// The theoretical-tool-tip blocks the last G-code request sent, each
+    /// with the programmed block it belongs to (what its `DATA` lines show).
+    pub const fn last_moves(&self) -> &Moves {
+        &self.last_moves
+    }
+
+    /// The contour engine's modal state.
+    pub const fn contour(&self) -> &Contour {
+        &self.contour
     }
 
     /// Exact commanded coordinates `(X radius, Z)` since the program zero.
@@ -712,6 +726,7 @@ impl Session {
         }
         self.modal = modal;
         self.contour = contour;
+        self.last_moves = moves;
         send_ok(
             io,
             Some(format_args!(

@@ -1,0 +1,16 @@
+; Krylenko Fig. 11/12: external tapers, programmed as drawn
+; compensate with: host-sim compensate examples/krylenko-fig12.nc --rn 0.4 --tip 3
+T101
+G96 S120 M03
+G00 X30 Z10 ; safe approach
+G00 X20 Z2
+N10 G42 G01 Z0 F0.1
+N20 X28            ; point 2
+N30 X48 Z-10       ; point 3
+N40 Z-46           ; point 4
+N50 X68 Z-56       ; point 5
+N60 X94            ; point 6
+N70 X114 Z-66      ; point 7
+N80 Z-80
+N90 G40 G00 X120
+M30

@@ -1,0 +1,380 @@
+//! `host-sim compensate`: a G41/G42 program turned into the theoretical tool
+//! tip program a control without nose compensation can run.
+//!
+//! Every line goes through the same protocol handler the firmware runs (the
+//! in-process [`LocalDevice`]); the blocks it sends are printed as G-code in
+//! place of the programmed motion. Lines the control does not interpret
+//! (`T0101`, `G96 S120 M03`, `O1234`, `%`, comments) are kept as written, in
+//! their place relative to the motion: a line after an element that waits
+//! for its end corner is printed after that element.
+
+use crate::device::LocalDevice;
+use core_nostd::arc::ArcDir;
+use core_nostd::comp::{MoveKind, Origin};
+use std::fmt::Write as _;
+
+/// Tool and format of a compensation run.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    /// Nose radius in mm, as written (`0.4`).
+    pub rn: String,
+    /// Tip code 0–9.
+    pub tip: u8,
+    /// X words are diameters.
+    pub diam: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            rn: "0.4".into(),
+            tip: 3,
+            diam: true,
+        }
+    }
+}
+
+/// A refused program: the line (1-based) and the device's reason.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CompensateError {
+    /// Line number in the program, 0 for the settings.
+    pub line: usize,
+    /// The `ERR …` reply, without its checksum.
+    pub reason: String,
+}
+
+impl std::fmt::Display for CompensateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.line == 0 {
+            write!(f, "settings: {}", self.reason)
+        } else {
+            write!(f, "line {}: {}", self.line, self.reason)
+        }
+    }
+}
+
+impl std::error::Error for CompensateError {}
+
+/// The compensated program and what the run noticed.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Compensated {
+    /// The program text, one block per line.
+    pub text: String,
+    /// Remarks for the programmer (not errors).
+    pub warnings: Vec<String>,
+}
+
+/// The words of a source line that are kept on its compensated blocks.
+#[derive(Clone, Debug, Default)]
+struct Source {
+    /// `N…`, if any.
+    n: Option<String>,
+    /// Other kept words (`F0.1`, `M08`), in order.
+    words: Vec<String>,
+    /// Comment text (`; point 2` or `(…)`), as written.
+    comment: String,
+    /// The arc was written in R form.
+    r_form: bool,
+}
+
+/// Splits a block into address words and its comment. `None` if it is not
+/// made of words (the device then says why).
+fn words_of(line: &str) -> Option<(Vec<(char, String)>, String)> {
+    let mut words = Vec::new();
+    let mut comment = String::new();
+    let mut chars = line.char_indices().peekable();
+    while let Some((i, c)) = chars.next() {
+        match c {
+            ' ' | '\t' => {}
+            ';' => {
+                comment.push_str(line[i..].trim_end());
+                break;
+            }
+            '(' => {
+                let rest = &line[i..];
+                let end = rest.find(')')? + 1;
+                if !comment.is_empty() {
+                    comment.push(' ');
+                }
+                comment.push_str(&rest[..end]);
+                for _ in 1..rest[..end].chars().count() {
+                    chars.next();
+                }
+            }
+            c if c.is_ascii_alphabetic() => {
+                let mut number = String::new();
+                while let Some(&(_, d)) = chars.peek() {
+                    if d.is_ascii_digit() || matches!(d, '+' | '-' | '.') {
+                        number.push(d);
+                        chars.next();
+                    } else {
+                        break;
+                    }
+                }
+                if number.is_empty() {
+                    return None;
+                }
+                words.push((c.to_ascii_uppercase(), number));
+            }
+            _ => return None,
+        }
+    }
+    Some((words, comment))
+}
+
+/// G codes the control interprets; a line with any other G code (or no
+/// motion, compensation or coordinate word at all) is passed through.
+fn is_control_g(number: &str) -> bool {
+    matches!(
+        number.parse::<u32>(),
+        Ok(0..=3 | 40..=42 | 90 | 91 | 450 | 451)
+    )
+}
+
+/// What kind of line this is for the control.
+enum Line {
+    /// Passed through as written.
+    Foreign,
+    /// Run by the device; the words kept on its output.
+    Block(Source),
+}
+
+fn classify(line: &str) -> Line {
+    let Some((words, comment)) = words_of(line) else {
+        // Not words at all (`%`, a typo): the device decides.
+        return if line.trim().is_empty() || line.trim() == "%" {
+            Line::Foreign
+        } else {
+            Line::Block(Source::default())
+        };
+    };
+    let ours = words
+        .iter()
+        .any(|(l, n)| matches!(l, 'X' | 'Z' | 'I' | 'K' | 'R') || (*l == 'G' && is_control_g(n)));
+    let foreign_g = words.iter().any(|(l, n)| *l == 'G' && !is_control_g(n));
+    if !ours || (foreign_g && !words.iter().any(|(l, _)| matches!(l, 'X' | 'Z'))) {
+        return Line::Foreign;
+    }
+    let mut src = Source {
+        comment,
+        ..Source::default()
+    };
+    for (l, n) in words {
+        match l {
+            'N' => src.n = Some(format!("N{n}")),
+            'G' | 'X' | 'Z' | 'I' | 'K' => {}
+            'R' => src.r_form = true,
+            _ => src.words.push(format!("{l}{n}")),
+        }
+    }
+    Line::Block(src)
+}
+
+/// Millimetres with 4 decimals, half away from zero, from ångström.
+fn mm4(a: i64) -> String {
+    let q = (a.unsigned_abs() + 500) / 1000;
+    let sign = if a < 0 && q != 0 { "-" } else { "" };
+    format!("{sign}{}.{:04}", q / 10_000, q % 10_000)
+}
+
+/// Compensates a program.
+pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, CompensateError> {
+    let mut dev = LocalDevice::new();
+    let cfg = format!(
+        "CFG RN={} TIP={} DIAM={}",
+        settings.rn,
+        settings.tip,
+        u8::from(settings.diam)
+    );
+    let reply = dev.request(&cfg);
+    if let Some(err) = reply.iter().find(|l| l.starts_with("ERR")) {
+        return Err(CompensateError {
+            line: 0,
+            reason: strip_sum(err),
+        });
+    }
+    let mut out = Compensated::default();
+    // The source whose motion waits for the next block, and the lines that
+    // followed it.
+    let mut waiting: Option<(Source, Vec<String>)> = None;
+    let mut at = [0i64; 2];
+    let lines: Vec<&str> = program.lines().collect();
+    for (i, raw) in lines.iter().enumerate().chain([(lines.len(), &"G40")]) {
+        let end_of_program = i == lines.len();
+        let line = raw.trim_end_matches('\r');
+        let src = match classify(line) {
+            Line::Foreign => {
+                match &mut waiting {
+                    Some((_, after)) => after.push(line.to_string()),
+                    None => out.text.push_str(&format!("{line}\n")),
+                }
+                continue;
+            }
+            Line::Block(src) => src,
+        };
+        if end_of_program && !dev.device().session().contour().active() {
+            break;
+        }
+        let reply = dev.request(line);
+        if let Some(err) = reply.iter().find(|l| l.starts_with("ERR")) {
+            return Err(CompensateError {
+                line: i + 1,
+                reason: strip_sum(err),
+            });
+        }
+        if end_of_program {
+            out.warnings.push(
+                "the program ends with G41/G42 on: its last element ends square to its end point; \
+                 end the contour with G40"
+                    .into(),
+            );
+        }
+        let moves = dev.device().session().last_moves().clone();
+        let mut current_printed = false;
+        for m in &moves {
+            let (own, kept): (Option<&Source>, bool) = match m.origin {
+                Origin::Previous => (waiting.as_ref().map(|(s, _)| s), true),
+                Origin::Corner => (None, false),
+                Origin::Current => {
+                    current_printed = true;
+                    (Some(&src), true)
+                }
+            };
+            let mut text = String::new();
+            if let Some(n) = own.and_then(|s| s.n.as_ref()) {
+                let _ = write!(text, "{n} ");
+            }
+            let x = if settings.diam { 2 * m.to[0] } else { m.to[0] };
+            let g = match m.kind {
+                MoveKind::Line { rapid: true } => "G00",
+                MoveKind::Line { rapid: false } => "G01",
+                MoveKind::Arc {
+                    dir: ArcDir::Cw, ..
+                } => "G02",
+                MoveKind::Arc {
+                    dir: ArcDir::Ccw, ..
+                } => "G03",
+            };
+            let _ = write!(text, "{g} X{} Z{}", mm4(x), mm4(m.to[1]));
+            if let MoveKind::Arc { centre, dir } = m.kind {
+                let (i, k) = (centre[0] - at[0], centre[1] - at[1]);
+                if own.is_some_and(|s| s.r_form) {
+                    let r = ((i as f64).hypot(k as f64)).round() as i64;
+                    let long = sweep_over_half(at, m.to, centre, dir);
+                    let _ = write!(text, " R{}", mm4(if long { -r } else { r }));
+                } else {
+                    let _ = write!(text, " I{} K{}", mm4(i), mm4(k));
+                }
+            }
+            if let Some(s) = own.filter(|_| kept) {
+                for w in &s.words {
+                    let _ = write!(text, " {w}");
+                }
+                if !s.comment.is_empty() {
+                    let _ = write!(text, " {}", s.comment);
+                }
+            }
+            out.text.push_str(&text);
+            out.text.push('\n');
+            at = m.to;
+            if m.origin == Origin::Previous {
+                if let Some((_, after)) = waiting.take() {
+                    for l in after {
+                        out.text.push_str(&l);
+                        out.text.push('\n');
+                    }
+                }
+            }
+        }
+        let active = dev.device().session().contour().active();
+        let moved = moves.iter().any(|m| m.origin == Origin::Current) || current_printed;
+        if !moved && !end_of_program {
+            let has_motion = line_has_motion(line);
+            if active && has_motion {
+                // Its motion comes with the next block.
+                if let Some((_, after)) = waiting.take() {
+                    for l in after {
+                        out.text.push_str(&l);
+                        out.text.push('\n');
+                    }
+                }
+                waiting = Some((src, Vec::new()));
+            } else {
+                let kept = kept_line(&src);
+                if !kept.is_empty() {
+                    match &mut waiting {
+                        Some((_, after)) => after.push(kept),
+                        None => {
+                            out.text.push_str(&kept);
+                            out.text.push('\n');
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if let Some((_, after)) = waiting.take() {
+        for l in after {
+            out.text.push_str(&l);
+            out.text.push('\n');
+        }
+    }
+    Ok(out)
+}
+
+/// Whether a block names an end point or an arc (a motion, unless it does
+/// not move).
+fn line_has_motion(line: &str) -> bool {
+    words_of(line).is_some_and(|(w, _)| {
+        w.iter()
+            .any(|(l, _)| matches!(l, 'X' | 'Z' | 'I' | 'K' | 'R'))
+    })
+}
+
+/// A block without motion as it stays in the output: its words other than
+/// compensation, corner and distance codes (`N5 M08`), or nothing.
+fn kept_line(src: &Source) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    if let Some(n) = &src.n {
+        parts.push(n.clone());
+    }
+    parts.extend(src.words.iter().cloned());
+    if !src.comment.is_empty() {
+        parts.push(src.comment.clone());
+    }
+    if parts.iter().all(|p| p.starts_with('N')) {
+        return String::new();
+    }
+    parts.join(" ")
+}
+
+/// Whether the arc from `a` to `b` about `c` in `dir` sweeps more than 180°.
+fn sweep_over_half(a: [i64; 2], b: [i64; 2], c: [i64; 2], dir: ArcDir) -> bool {
+    let ang = |p: [i64; 2]| ((p[0] - c[0]) as f64).atan2((p[1] - c[1]) as f64);
+    let mut s = ang(b) - ang(a);
+    if dir == ArcDir::Cw {
+        s = -s;
+    }
+    let s = s.rem_euclid(std::f64::consts::TAU);
+    s > std::f64::consts::PI || (a == b)
+}
+
+fn strip_sum(line: &str) -> String {
+    line.rsplit_once('*')
+        .map_or(line, |(body, _)| body)
+        .to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mm4_rounds_half_away() {
+        assert_eq!(mm4(275_314_000), "27.5314");
+        assert_eq!(mm4(-102_343_146), "-10.2343");
+        assert_eq!(mm4(-500), "-0.0001");
+        assert_eq!(mm4(-499), "0.0000");
+        assert_eq!(mm4(0), "0.0000");
+    }
+}
