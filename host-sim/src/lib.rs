@@ -14,12 +14,15 @@
 //!   injector; [`soak`]: long faulted sessions against the reference;
 //! - [`reference_comp`]: the f64 reference of nose radius compensation
 //!   (G41/G42 contours), written from `docs/compensation.md`;
+//! - [`contour`]: random compensated contours and their block-by-block
+//!   comparison with the reference;
 //! - [`compensate`]: `host-sim compensate`, a G41/G42 program printed as the
 //!   tool-tip program the device runs;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod compare;
 pub mod compensate;
+pub mod contour;
 pub mod device;
 pub mod link;
 pub mod qemu;

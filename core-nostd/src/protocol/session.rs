@@ -355,6 +355,16 @@ impl Session {
             self.arc_command(words, io)
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
+        } else if command.eq_ignore_ascii_case("RESET") {
+            no_args(words, "RESET")?;
+            // As the RESET key of a control: the program is abandoned where
+            // it stands. Nothing moves; a waiting element is dropped.
+            self.modal = Modal::POWER_ON;
+            self.contour = Contour::new();
+            self.last_moves = Moves::new();
+            self.prog = self.cmd;
+            send_ok(io, None);
+            Ok(())
         } else if command.eq_ignore_ascii_case("POS") {
             no_args(words, "POS")?;
             self.pos_reply(io);

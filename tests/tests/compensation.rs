@@ -1,0 +1,498 @@
+//! Nose radius compensation across the crates: Krylenko's Fig. 12, 17 and 22
+//! from plain G41/G42 contours, the device against the f64 reference on
+//! random contours, and the geometry of the nose itself: it touches every
+//! programmed element and never enters the part.
+
+use core_nostd::arc::ArcDir;
+use core_nostd::comp::{MoveKind, Origin};
+use host_sim::compensate::{compensate, Settings};
+use host_sim::contour::{compare_contour, random_contours, ContourTally};
+use host_sim::device::LocalDevice;
+use host_sim::link::Transport;
+
+/// The compensated blocks of a program through the device, as printed.
+fn device_blocks(program: &str, rn: &str, tip: u8) -> Vec<String> {
+    let mut dev = LocalDevice::new();
+    let cfg = Transport::request(&mut dev, &format!("CFG RN={rn} TIP={tip}")).unwrap();
+    assert!(cfg.is_ok());
+    let mut out = Vec::new();
+    for line in program.lines() {
+        // Lines the control does not interpret (T101, G96 S120 M03).
+        if !core_nostd::gcode::is_block(line) || core_nostd::gcode::parse_block(line).is_err() {
+            continue;
+        }
+        let r = Transport::request(&mut dev, line).unwrap();
+        assert!(r.is_ok(), "{line}: {}", r.last);
+        out.extend(
+            r.data
+                .iter()
+                .map(|d| d.trim_start_matches("DATA ").to_string()),
+        );
+    }
+    out
+}
+
+/// X and Z of a printed block (X as printed).
+fn xz(block: &str) -> (f64, f64) {
+    let word = |l: char| {
+        block
+            .split(' ')
+            .find_map(|w| w.strip_prefix(l))
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap()
+    };
+    (word('X'), word('Z'))
+}
+
+/// Finds `expected` (X, Z as the seed prints them, diameters) as
+/// consecutive blocks of `blocks`, each within 0.001 mm of the seed and
+/// equal to `exact` (the construction) to the printed 0.0001 mm.
+fn assert_seed(blocks: &[String], expected: &[(f64, f64)], exact: &[(f64, f64)]) {
+    let found = (0..blocks.len()).find(|&s| {
+        expected.iter().enumerate().all(|(i, e)| {
+            blocks.get(s + i).is_some_and(|b| {
+                let (x, z) = xz(b);
+                (x - e.0).abs() <= 0.001 + 1e-9 && (z - e.1).abs() <= 0.001 + 1e-9
+            })
+        })
+    });
+    let s = found.unwrap_or_else(|| panic!("{expected:?} not in {blocks:#?}"));
+    for (i, e) in exact.iter().enumerate() {
+        let (x, z) = xz(&blocks[s + i]);
+        assert!(
+            (x - e.0).abs() < 0.00005 + 1e-9 && (z - e.1).abs() < 0.00005 + 1e-9,
+            "{} is not the construction {e:?}",
+            blocks[s + i]
+        );
+    }
+}
+
+fn example(name: &str) -> String {
+    let path = format!("{}/../examples/{name}", env!("CARGO_MANIFEST_DIR"));
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// Krylenko's corrections for r = 0.4 and a 45° taper, from his formulas.
+fn xc_zc() -> (f64, f64) {
+    let r = 0.4;
+    let t = (22.5f64).to_radians().tan();
+    (r * (1.0 - t), r * (1.0 - t))
+}
+
+#[test]
+fn fig_12_external_tapers_from_a_g42_contour() {
+    let blocks = device_blocks(&example("krylenko-fig12.nc"), "0.4", 3);
+    let (xc, zc) = xc_zc();
+    assert_seed(
+        &blocks,
+        &[
+            (27.532, 0.0),
+            (48.0, -10.234),
+            (48.0, -46.234),
+            (67.532, -56.0),
+            (93.532, -56.0),
+            (114.0, -66.234),
+        ],
+        &[
+            (28.0 - 2.0 * xc, 0.0),
+            (48.0, -10.0 - zc),
+            (48.0, -46.0 - zc),
+            (68.0 - 2.0 * xc, -56.0),
+            (94.0 - 2.0 * xc, -56.0),
+            (114.0, -66.0 - zc),
+        ],
+    );
+}
+
+#[test]
+fn fig_17_internal_tapers_from_a_g41_contour() {
+    let blocks = device_blocks(&example("krylenko-fig17.nc"), "0.4", 2);
+    let (xc, zc) = xc_zc();
+    assert_seed(
+        &blocks,
+        &[
+            (78.468, 0.0),
+            (50.0, -14.234),
+            (50.0, -34.234),
+            (28.468, -45.0),
+            (12.0, -45.0),
+        ],
+        &[
+            (78.0 + 2.0 * xc, 0.0),
+            (50.0, -14.0 - zc),
+            (50.0, -34.0 - zc),
+            (28.0 + 2.0 * xc, -45.0),
+            (12.0, -45.0),
+        ],
+    );
+}
+
+#[test]
+fn fig_22_arcs_from_a_g42_contour() {
+    let blocks = device_blocks(&example("krylenko-fig22.nc"), "0.4", 3);
+    // SPEC §9: line 12 of the figure says Z-14, its own comment −14.4.
+    let seed = [
+        (7.2, 0.0),
+        (12.0, -2.4),
+        (12.0, -14.4),
+        (17.2, -17.0),
+        (29.2, -17.0),
+        (38.0, -21.4),
+    ];
+    assert_seed(&blocks, &seed, &seed);
+    let arcs: Vec<&String> = blocks
+        .iter()
+        .filter(|b| b.starts_with("G0") && !b.starts_with("G00") && !b.starts_with("G01"))
+        .collect();
+    assert_eq!(
+        arcs,
+        [
+            "G03 X12.0000 Z-2.4000 I0.0000 K-2.4000",
+            "G02 X17.2000 Z-17.0000 I2.6000 K0.0000",
+            "G03 X38.0000 Z-21.4000 I0.0000 K-4.4000"
+        ]
+    );
+    // `host-sim compensate` prints the same program with R words, the
+    // corrected radii R2.4, R2.6 and R4.4 of the seed.
+    let out = compensate(&example("krylenko-fig22.nc"), &Settings::default()).unwrap();
+    for r in ["R2.4000", "R2.6000", "R4.4000"] {
+        assert!(out.text.contains(r), "{r} in {}", out.text);
+    }
+    assert!(out.warnings.is_empty());
+    assert!(
+        out.text.contains("N20 G01 X7.2000 Z0.0000 ; point 2"),
+        "{}",
+        out.text
+    );
+    assert!(out.text.contains("T101\nG96 S120 M03\n"), "{}", out.text);
+    assert!(!out.text.contains("G42") && !out.text.contains("G40"));
+}
+
+#[test]
+fn compensate_refuses_bad_programs_naming_the_line() {
+    let program = "G00 X20 Z2\nN10 G42 G01 Z0\nN20 X40\nN30 G02 X41 Z-0.5 R0.36\nN40 Z-10\n";
+    let e = compensate(program, &Settings::default()).unwrap_err();
+    assert_eq!(e.line, 4);
+    assert!(
+        e.reason.starts_with("ERR GEOMETRY N30: concave arc radius"),
+        "{e}"
+    );
+    let e = compensate("G01 X1..2\n", &Settings::default()).unwrap_err();
+    assert_eq!(e.line, 1);
+    assert!(e.reason.starts_with("ERR VALUE X"), "{e}");
+    let bad_tool = Settings {
+        rn: "-1".into(),
+        ..Settings::default()
+    };
+    assert!(compensate("G01 X1\n", &bad_tool)
+        .unwrap_err()
+        .reason
+        .starts_with("ERR VALUE RN"));
+    // A program that ends with compensation on is finished, with a warning.
+    let out = compensate("G00 X20 Z2\nG42 G01 Z0\nX40\nZ-10\n", &Settings::default()).unwrap();
+    assert_eq!(out.warnings.len(), 1);
+    assert!(
+        out.text.trim_end().ends_with("G01 X40.0000 Z-10.4000"),
+        "{}",
+        out.text
+    );
+}
+
+/// The device and the f64 reference print the same compensated blocks.
+#[test]
+fn device_matches_the_reference_on_random_contours() {
+    let mut tally = ContourTally::default();
+    for case in random_contours(1977, 2000) {
+        let mut dev = LocalDevice::new();
+        compare_contour(&mut dev, &case, &mut tally).unwrap();
+    }
+    assert!(
+        tally.mismatches.is_empty(),
+        "{:#?}",
+        &tally.mismatches[..tally.mismatches.len().min(10)]
+    );
+    assert!(tally.compared > 20_000, "{tally:?}");
+    // Refusals are rare with these contours, and both sides agree on them.
+    assert!(tally.refused_alike < tally.programs / 10, "{tally:?}");
+    println!(
+        "{} programs, {} blocks, {} compensated blocks equal, {} refused alike, {} near ties, closest tie {:.3e} mm",
+        tally.programs, tally.blocks, tally.compared, tally.refused_alike, tally.near_ties, tally.closest_tie_mm
+    );
+}
+
+/// A programmed element or a nose-centre path piece, in mm (X radius, Z).
+#[derive(Clone, Copy, Debug)]
+enum Piece {
+    Line([f64; 2], [f64; 2]),
+    /// From, to, centre, counter-clockwise.
+    Arc([f64; 2], [f64; 2], [f64; 2], bool),
+}
+
+fn angle(p: [f64; 2], c: [f64; 2]) -> f64 {
+    (p[0] - c[0]).atan2(p[1] - c[1])
+}
+
+fn sweep(p: Piece) -> f64 {
+    match p {
+        Piece::Line(..) => 0.0,
+        Piece::Arc(a, b, c, ccw) => {
+            let s = angle(b, c) - angle(a, c);
+            let s = if ccw { s } else { -s };
+            let s = s.rem_euclid(std::f64::consts::TAU);
+            if a == b {
+                std::f64::consts::TAU
+            } else {
+                s
+            }
+        }
+    }
+}
+
+/// The unit direction of travel at the start or the end of a piece,
+/// `[X, Z]`.
+fn tangent(p: Piece, at_end: bool) -> [f64; 2] {
+    let v = match p {
+        Piece::Line(a, b) => [b[0] - a[0], b[1] - a[1]],
+        Piece::Arc(a, b, c, ccw) => {
+            let q = if at_end { b } else { a };
+            let r = [q[0] - c[0], q[1] - c[1]];
+            // Counter-clockwise in the (Z right, X up) plane.
+            if ccw {
+                [r[1], -r[0]]
+            } else {
+                [-r[1], r[0]]
+            }
+        }
+    };
+    let l = v[0].hypot(v[1]);
+    [v[0] / l, v[1] / l]
+}
+
+/// The length of a piece, mm.
+fn length(p: Piece) -> f64 {
+    match p {
+        Piece::Line(a, b) => (b[0] - a[0]).hypot(b[1] - a[1]),
+        Piece::Arc(a, _, c, _) => (a[0] - c[0]).hypot(a[1] - c[1]) * sweep(p),
+    }
+}
+
+/// Points along a piece.
+fn samples(p: Piece, n: usize) -> Vec<[f64; 2]> {
+    (0..=n)
+        .map(|i| {
+            let t = i as f64 / n as f64;
+            match p {
+                Piece::Line(a, b) => [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])],
+                Piece::Arc(a, _, c, ccw) => {
+                    let r = ((a[0] - c[0]).powi(2) + (a[1] - c[1]).powi(2)).sqrt();
+                    let s = sweep(p) * t * if ccw { 1.0 } else { -1.0 };
+                    let phi = angle(a, c) + s;
+                    [c[0] + r * phi.sin(), c[1] + r * phi.cos()]
+                }
+            }
+        })
+        .collect()
+}
+
+/// Distance from `q` to a finite element, and whether the nearest point is
+/// inside the element (not one of its ends).
+fn distance(q: [f64; 2], p: Piece) -> (f64, bool) {
+    match p {
+        Piece::Line(a, b) => {
+            let (dx, dz) = (b[0] - a[0], b[1] - a[1]);
+            let l2 = dx * dx + dz * dz;
+            let t = (((q[0] - a[0]) * dx + (q[1] - a[1]) * dz) / l2).clamp(0.0, 1.0);
+            let (px, pz) = (a[0] + t * dx, a[1] + t * dz);
+            (
+                ((q[0] - px).powi(2) + (q[1] - pz).powi(2)).sqrt(),
+                t > 1e-9 && t < 1.0 - 1e-9,
+            )
+        }
+        Piece::Arc(a, b, c, ccw) => {
+            let r = ((a[0] - c[0]).powi(2) + (a[1] - c[1]).powi(2)).sqrt();
+            let s = sweep(p);
+            let off = angle(q, c) - angle(a, c);
+            let off = if ccw { off } else { -off };
+            let off = off.rem_euclid(std::f64::consts::TAU);
+            if off <= s {
+                let d = ((q[0] - c[0]).powi(2) + (q[1] - c[1]).powi(2)).sqrt();
+                ((d - r).abs(), off > 1e-9 && off < s - 1e-9)
+            } else {
+                let da = ((q[0] - a[0]).powi(2) + (q[1] - a[1]).powi(2)).sqrt();
+                let db = ((q[0] - b[0]).powi(2) + (q[1] - b[1]).powi(2)).sqrt();
+                (da.min(db), false)
+            }
+        }
+    }
+}
+
+/// The nose on random contours: the nose-centre path never comes nearer
+/// than `r − 1 µm` to the programmed contour (the nose never enters the
+/// part), and touches every programmed element at `r ± 1 µm` inside it.
+#[test]
+fn the_nose_touches_every_element_and_never_enters_the_part() {
+    let mut checked = (0usize, 0usize, 0usize, 0usize);
+    for case in random_contours(2026, 1000) {
+        let r = case.rn_mm();
+        let tip = match case.tip {
+            1 => [r, r],
+            2 => [r, -r],
+            3 => [-r, -r],
+            4 => [-r, r],
+            5 => [0.0, r],
+            6 => [r, 0.0],
+            7 => [0.0, -r],
+            8 => [-r, 0.0],
+            _ => [0.0, 0.0],
+        };
+        let mut dev = LocalDevice::new();
+        let cfg =
+            Transport::request(&mut dev, &format!("CFG RN={} TIP={}", case.rn, case.tip)).unwrap();
+        assert!(cfg.is_ok());
+        let mm = |p: [i64; 2]| [p[0] as f64 * 1e-7, p[1] as f64 * 1e-7];
+        let mut contour: Vec<Piece> = Vec::new();
+        let mut path: Vec<Piece> = Vec::new();
+        let mut at = [0.0, 0.0];
+        let mut nose_at = [0.0, 0.0];
+        let mut refused = false;
+        for (i, line) in case.lines.iter().enumerate() {
+            let before = dev.device().session().commanded();
+            let prog_before = at;
+            let r = Transport::request(&mut dev, line).unwrap();
+            if !r.is_ok() {
+                refused = true;
+                break;
+            }
+            let _ = before;
+            // The programmed element of this block (the test re-reads the
+            // program: lines from the contour's first point to the G40).
+            if let Some(piece) = programmed_piece(line, prog_before) {
+                let end = match piece {
+                    Piece::Line(_, b) | Piece::Arc(_, b, _, _) => b,
+                };
+                // Blocks 0 and 1 (approach and start-up) and the G40 retract
+                // are not part of the contour.
+                if i >= 2 && !line.contains("G40") {
+                    contour.push(piece);
+                }
+                at = end;
+            }
+            for m in dev.device().session().last_moves() {
+                let to = mm(m.to);
+                let nose_to = [to[0] - tip[0], to[1] - tip[1]];
+                // Compensated blocks: the element after the start-up, its
+                // corners, up to the element before the G40 move.
+                let compensated = i >= 2 && !(line.contains("G40") && m.origin == Origin::Current);
+                let startup = i == 2 && m.origin == Origin::Previous;
+                if compensated && !startup {
+                    path.push(match m.kind {
+                        MoveKind::Line { .. } => Piece::Line(nose_at, nose_to),
+                        MoveKind::Arc { centre, dir } => {
+                            let c = mm(centre);
+                            Piece::Arc(
+                                nose_at,
+                                nose_to,
+                                [c[0] - tip[0], c[1] - tip[1]],
+                                dir == ArcDir::Ccw,
+                            )
+                        }
+                    });
+                }
+                nose_at = nose_to;
+            }
+        }
+        if refused {
+            checked.2 += 1;
+            continue;
+        }
+        // Never inside the part.
+        for p in &path {
+            for q in samples(*p, 64) {
+                for e in &contour {
+                    let (d, _) = distance(q, *e);
+                    assert!(
+                        d > r - 1e-3,
+                        "nose centre {q:?} on {p:?} is {d} from {e:?} (r {r}) in {:#?}",
+                        case.lines
+                    );
+                }
+            }
+        }
+        // Touches every element the nose can reach, inside it: an inside
+        // corner of turn θ keeps the nose r·tan(θ/2) away from the corner
+        // along each element, so an element shorter than what its corners
+        // take (with a margin for arcs) can only be touched at its extension.
+        for (i, e) in contour.iter().enumerate() {
+            let eaten = |a: Option<&Piece>, b: Option<&Piece>| match (a, b) {
+                (Some(a), Some(b)) => {
+                    let (t1, t2) = (tangent(*a, true), tangent(*b, false));
+                    let cross = t1[1] * t2[0] - t1[0] * t2[1];
+                    let dot = t1[0] * t2[0] + t1[1] * t2[1];
+                    let theta = cross.atan2(dot);
+                    // G42: a right turn (negative) is an inside corner.
+                    if theta < 0.0 {
+                        r * (-theta / 2.0).tan()
+                    } else {
+                        0.0
+                    }
+                }
+                _ => 0.0,
+            };
+            let taken = eaten(i.checked_sub(1).and_then(|j| contour.get(j)), Some(e))
+                + eaten(Some(e), contour.get(i + 1));
+            if length(*e) < 1.5 * taken + 0.01 {
+                checked.3 += 1;
+                continue;
+            }
+            let touched = path.iter().any(|p| {
+                samples(*p, 64).into_iter().any(|q| {
+                    let (d, inside) = distance(q, *e);
+                    inside && (d - r).abs() < 1e-3
+                })
+            });
+            assert!(touched, "{e:?} not touched in {:#?}", case.lines);
+            checked.1 += 1;
+        }
+        checked.0 += 1;
+    }
+    assert!(checked.0 > 900, "{checked:?}");
+    assert!(checked.3 * 20 < checked.1, "{checked:?}");
+    println!(
+        "{} contours, {} elements touched, {} too short for their inside corners, {} programs refused",
+        checked.0, checked.1, checked.3, checked.2
+    );
+}
+
+/// The programmed element of a generated block from `from` (mm, radius):
+/// the generator writes absolute X (diameter) and Z, and `R` or `I`/`K`.
+fn programmed_piece(line: &str, from: [f64; 2]) -> Option<Piece> {
+    let b = core_nostd::gcode::parse_block(line).ok()?;
+    let mm = |l: core_nostd::length::Length| l.as_angstrom() as f64 * 1e-7;
+    let to = [
+        b.x.map_or(from[0], |x| mm(x) / 2.0),
+        b.z.map_or(from[1], mm),
+    ];
+    if b.x.is_none() && b.z.is_none() {
+        return None;
+    }
+    let arc = line.contains("G02") || line.contains("G03");
+    if !arc {
+        return Some(Piece::Line(from, to));
+    }
+    let ccw = line.contains("G03");
+    let centre = if let Some(r) = b.r {
+        // The short arc: centre left of the chord for G03.
+        let r = mm(r);
+        let (dx, dz) = (to[0] - from[0], to[1] - from[1]);
+        let d = (dx * dx + dz * dz).sqrt();
+        let h = (r * r - d * d / 4.0).max(0.0).sqrt();
+        let s = if ccw { 1.0 } else { -1.0 };
+        [
+            (from[0] + to[0]) / 2.0 + s * dz / d * h,
+            (from[1] + to[1]) / 2.0 - s * dx / d * h,
+        ]
+    } else {
+        [from[0] + b.i.map_or(0.0, mm), from[1] + b.k.map_or(0.0, mm)]
+    };
+    Some(Piece::Arc(from, to, centre, ccw))
+}
