@@ -150,5 +150,96 @@ fn arcs(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, interleaver, quantizer, protocol, arcs);
+/// The nose radius calculator and the contour engine.
+fn compensation(c: &mut Criterion) {
+    use core_nostd::arc::ArcDir;
+    use core_nostd::comp::{Contour, Element, Shape, Tool};
+    use core_nostd::cone::{cone, Angle};
+    use core_nostd::gcode::Compensation;
+    use core_nostd::protocol::TipCode;
+    let mut g = c.benchmark_group("compensation");
+    let rn = Length::from_um(400).unwrap();
+    g.bench_function("CONE corrections (exact angle, Q62 tangents)", |b| {
+        let a = Angle::from_degrees_str("2:51:51").unwrap();
+        b.iter(|| cone(black_box(a), black_box(rn)))
+    });
+    g.bench_function("CONE request", |b| {
+        let mut dev = Device::new();
+        let mut sink = Sink(0);
+        b.iter(|| dev.receive_bytes(black_box(b"CONE A=2:51:51 RN=0.8\r\n"), &mut sink))
+    });
+    // Krylenko Fig. 22 on the radius, in ångström: a face, a convex arc, a
+    // cylinder, a concave arc, a face, a convex arc, a cylinder.
+    let mm = |v: f64| (v * 1e7).round() as i64;
+    let p = |x: f64, z: f64| [mm(x), mm(z)];
+    let line = |a, b| Element::line(a, b, false, None);
+    let arc = |a, b, c, dir| Element {
+        from: a,
+        to: b,
+        shape: Shape::Arc { centre: c, dir },
+        n: None,
+    };
+    let contour = [
+        line(p(0.0, 0.0), p(4.0, 0.0)),
+        arc(p(4.0, 0.0), p(6.0, -2.0), p(4.0, -2.0), ArcDir::Ccw),
+        line(p(6.0, -2.0), p(6.0, -14.0)),
+        arc(p(6.0, -14.0), p(9.0, -17.0), p(9.0, -14.0), ArcDir::Cw),
+        line(p(9.0, -17.0), p(15.0, -17.0)),
+        arc(p(15.0, -17.0), p(19.0, -21.0), p(15.0, -21.0), ArcDir::Ccw),
+        line(p(19.0, -21.0), p(19.0, -30.0)),
+        // A 45° taper: an outside and an inside corner by intersection.
+        line(p(19.0, -30.0), p(24.0, -35.0)),
+        line(p(24.0, -35.0), p(24.0, -40.0)),
+    ];
+    let tool = Tool::new(rn, TipCode::EXTERNAL_RIGHT);
+    let mut start = Contour::new();
+    start = start
+        .block(
+            &tool,
+            Some(Compensation::Right),
+            None,
+            Some(line(p(0.0, 2.0), p(0.0, 0.0))),
+        )
+        .unwrap()
+        .0;
+    g.throughput(Throughput::Elements(contour.len() as u64));
+    g.bench_function(
+        "contour engine, compensated block (lines, arcs, corners)",
+        |b| {
+            b.iter(|| {
+                let mut c = start;
+                let mut n = 0;
+                for e in &contour {
+                    let (next, moves) = c.block(&tool, None, None, Some(*black_box(e))).unwrap();
+                    n += moves.len();
+                    c = next;
+                }
+                n
+            })
+        },
+    );
+    // The whole request: parse, compensate, plan the chords, step events,
+    // SEQ and DATA lines, for the same contour in G-code.
+    let program: &[u8] = b"G42 G01 X0 Z0\r\nX8\r\nG03 X12 Z-2 R2\r\nG01 Z-14\r\nG02 X18 Z-17 R3\r\nG01 X30\r\nG03 X38 Z-21 R4\r\nG01 Z-30\r\nX48 Z-35\r\nZ-40\r\nG40 X60\r\nRESET\r\nG00 X0 Z2\r\n";
+    g.throughput(Throughput::Elements(11));
+    g.bench_function(
+        "G-code request with G42 (whole request, motion included)",
+        |b| {
+            let mut dev = Device::new();
+            let mut sink = Sink(0);
+            dev.receive_bytes(b"G00 X0 Z2\r\n", &mut sink);
+            b.iter(|| dev.receive_bytes(black_box(program), &mut sink))
+        },
+    );
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    interleaver,
+    quantizer,
+    protocol,
+    arcs,
+    compensation
+);
 criterion_main!(benches);

@@ -49,7 +49,7 @@ impl Crc32 {
     }
 
     /// Adds one byte.
-    #[inline]
+    #[inline(always)]
     pub fn push(&mut self, byte: u8) {
         // The index is a u8: always within the 256-entry table.
         let idx = (self.state ^ u32::from(byte)) as u8;

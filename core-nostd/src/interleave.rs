@@ -167,7 +167,7 @@ pub struct StepEvents {
 impl Iterator for StepEvents {
     type Item = StepEvent;
 
-    #[inline]
+    #[inline(always)]
     fn next(&mut self) -> Option<StepEvent> {
         if self.remaining == 0 {
             return None;

@@ -228,7 +228,7 @@ where
         Ok(())
     }
 
-    #[inline]
+    #[inline(always)]
     fn pulse<D: DelayNs>(
         &mut self,
         event: StepEvent,

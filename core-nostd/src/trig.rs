@@ -260,23 +260,26 @@ fn cordic_octant(big: u128, small: u128) -> u64 {
 /// ```
 #[inline(never)]
 pub const fn isqrt(n: u128) -> u64 {
-    if n == 0 {
-        return 0;
-    }
-    // Newton from above: x₀ ≥ √n, decreasing to ⌊√n⌋.
-    let bits = 128 - n.leading_zeros();
-    let mut x: u128 = 1 << bits.div_ceil(2);
-    loop {
-        // x ≥ 1 throughout.
-        let Some(q) = n.checked_div(x) else {
-            return 0;
-        };
-        let y = (x + q) / 2;
-        if y >= x {
-            return x as u64;
+    // Digit by digit, two bits of `n` per result bit: shifts, compares and
+    // subtractions only (a 128-bit division costs hundreds of instructions
+    // on a Cortex-M4).
+    let mut rest = n;
+    let mut root: u128 = 0;
+    let mut bit: u128 = if n == 0 {
+        0
+    } else {
+        1 << ((127 - n.leading_zeros()) & !1)
+    };
+    while bit != 0 {
+        if rest >= root + bit {
+            rest -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
         }
-        x = y;
+        bit >>= 2;
     }
+    root as u64
 }
 
 #[cfg(test)]
@@ -284,6 +287,15 @@ mod tests {
     extern crate std;
     use super::*;
     use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn isqrt_is_the_floor_square_root(n in any::<u128>()) {
+            let r = u128::from(isqrt(n));
+            prop_assert!(r * r <= n);
+            prop_assert!((r + 1).checked_mul(r + 1).is_none_or(|s| s > n));
+        }
+    }
 
     const BOUND_SIN: i64 = 1 << 4; // 2⁻⁵⁸ in Q62 ulps
     const BOUND_TURN: u64 = 1 << 10; // 2⁻⁵⁴ turn

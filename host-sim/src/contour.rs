@@ -202,6 +202,12 @@ pub struct ContourTally {
     pub near_ties: usize,
     /// The smallest distance to a printing tie among the compared blocks, mm.
     pub closest_tie_mm: f64,
+    /// Position registers after a request checked against `Q(P/h)` of the
+    /// reference's tool-tip point.
+    pub positions: usize,
+    /// Of those that differ, the point within 10⁻³ of a 10⁻⁷ mm rounding
+    /// tie (excused).
+    pub position_near_ties: usize,
     /// Disagreements, described.
     pub mismatches: Vec<String>,
 }
@@ -218,7 +224,10 @@ pub fn compare_contour<T: Transport>(
         tally.closest_tie_mm = f64::INFINITY;
     }
     tally.programs += 1;
-    let cfg = link.request(&format!("CFG DIAM=1 RN={} TIP={}", case.rn, case.tip))?;
+    let cfg = link.request(&format!(
+        "CFG HX=0.005 HZ=0.01 DIAM=1 RN={} TIP={}",
+        case.rn, case.tip
+    ))?;
     if !cfg.is_ok() {
         tally.mismatches.push(format!("CFG refused: {}", cfg.last));
         return Ok(());
@@ -265,6 +274,26 @@ pub fn compare_contour<T: Transport>(
                         }
                     }
                     from = b.end();
+                }
+                // The registers hold Q(P/h) of the tool tip's point, P on
+                // the 10⁻⁷ mm grid (docs/compensation.md), in integers.
+                let (px, pz) = (dev.value("PX"), dev.value("PZ"));
+                for (reg, p, h) in [(px, from.0, 50_000i64), (pz, from.1, 100_000)] {
+                    let units = p * 1e7;
+                    let a = units.round() as i64;
+                    let q = a.abs() / h + i64::from(2 * (a.abs() % h) >= h);
+                    let want = if a < 0 { -q } else { q };
+                    tally.positions += 1;
+                    if reg.and_then(|v| v.parse::<i64>().ok()) != Some(want) {
+                        if ((units - units.floor()) - 0.5).abs() < 1e-3 {
+                            tally.position_near_ties += 1;
+                        } else {
+                            tally.mismatches.push(format!(
+                                "{line}: device {}, reference register {want}",
+                                dev.last
+                            ));
+                        }
+                    }
                 }
             }
             (false, Err(e)) => {

@@ -57,6 +57,84 @@ fn measure(tim: &StepTimer, f: impl FnOnce()) -> u32 {
     tim.count().wrapping_sub(t0)
 }
 
+/// The contour engine per compensated block (Krylenko Fig. 22 and a taper),
+/// and whole G-code requests with G42 on.
+fn compensation(tim: &StepTimer) {
+    use core_nostd::arc::ArcDir;
+    use core_nostd::comp::{Contour, Element, Shape, Tool};
+    use core_nostd::gcode::Compensation;
+    use core_nostd::length::Length;
+    use core_nostd::protocol::TipCode;
+    let um = |v: i64| v * 10_000;
+    let p = |x: i64, z: i64| [um(x), um(z)];
+    let line = |a, b| Element::line(a, b, false, None);
+    let arc = |a, b, c, dir| Element {
+        from: a,
+        to: b,
+        shape: Shape::Arc { centre: c, dir },
+        n: None,
+    };
+    let contour = [
+        line(p(0, 0), p(4_000, 0)),
+        arc(p(4_000, 0), p(6_000, -2_000), p(4_000, -2_000), ArcDir::Ccw),
+        line(p(6_000, -2_000), p(6_000, -14_000)),
+        arc(
+            p(6_000, -14_000),
+            p(9_000, -17_000),
+            p(9_000, -14_000),
+            ArcDir::Cw,
+        ),
+        line(p(9_000, -17_000), p(15_000, -17_000)),
+        arc(
+            p(15_000, -17_000),
+            p(19_000, -21_000),
+            p(15_000, -21_000),
+            ArcDir::Ccw,
+        ),
+        line(p(19_000, -21_000), p(19_000, -30_000)),
+        line(p(19_000, -30_000), p(24_000, -35_000)),
+        line(p(24_000, -35_000), p(24_000, -40_000)),
+    ];
+    let Some(rn) = Length::from_um(400) else {
+        return;
+    };
+    let tool = Tool::new(rn, TipCode::EXTERNAL_RIGHT);
+    let Ok((mut c, _)) = Contour::new().block(
+        &tool,
+        Some(Compensation::Right),
+        None,
+        Some(line(p(0, 2_000), p(0, 0))),
+    ) else {
+        return;
+    };
+    let mut worst = 0;
+    let mut total = 0;
+    for e in &contour {
+        let mut next = None;
+        let t = measure(tim, || next = c.block(&tool, None, None, Some(*e)).ok());
+        let Some((n, _)) = next else { return };
+        c = n;
+        worst = worst.max(t);
+        total += t;
+    }
+    Line::print(format_args!(
+        "contour engine: {} instructions per compensated block on average, {worst} at most ({} blocks: lines, arcs, inside and outside corners)",
+        total / contour.len() as u32,
+        contour.len()
+    ));
+    let mut dev = Device::new();
+    let mut quiet = Quiet(0);
+    dev.receive_bytes(b"G00 X20 Z2\r\nG42 G01 Z0\r\nX28\r\n", &mut quiet);
+    let t = measure(tim, || dev.receive_bytes(b"X48 Z-10\r\n", &mut quiet));
+    Line::print(format_args!(
+        "G-code request with G42 (taper, its motion sent with the next block): {t} instructions"
+    ));
+    let t = measure(tim, || dev.receive_bytes(b"Z-10.5\r\n", &mut quiet));
+    Line::print(format_args!(
+        "G-code request with G42 (short cylinder, sends the 10 mm taper's 2 047 events): {t} instructions"
+    ));
+}
+
 fn arcs(tim: &StepTimer) {
     use core_nostd::arc::{ArcDir, ArcPoints, ChordPlan, DirectArc};
     use core_nostd::impulse::ImpulsePrice;
@@ -196,6 +274,7 @@ fn main() -> ! {
     Line::print(format_args!("CFG request: {t} instructions"));
 
     arcs(tim);
+    compensation(tim);
 
     #[cfg(feature = "qemu")]
     cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
