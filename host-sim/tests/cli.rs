@@ -83,3 +83,62 @@ fn bad_command_line_is_refused_clearly() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn compensate_prints_the_tool_tip_program_or_refuses_it() {
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/krylenko-fig12.nc");
+    let out = Command::new(BIN)
+        .args(["compensate", example, "--rn", "0.4", "--tip", "3"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("N20 G01 X27.5314 Z0.0000 ; point 2\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains("N70 G01 X114.0000 Z-66.2343 ; point 7\n"),
+        "{text}"
+    );
+    assert!(!text.contains("G42"), "{text}");
+
+    // A bad program: nothing on stdout, the line and reason on stderr.
+    let dir = std::env::temp_dir().join(format!("host-sim-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.nc");
+    std::fs::write(
+        &bad,
+        "G00 X20 Z2\nG42 G01 Z0\nX40\nG02 X41 Z-0.5 R0.36\nZ-10\n",
+    )
+    .unwrap();
+    let out = Command::new(BIN)
+        .args(["compensate", bad.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.contains("line 4: ERR GEOMETRY this block: concave arc radius"),
+        "{err}"
+    );
+
+    // Bad options are refused by the command line.
+    let out = Command::new(BIN)
+        .args(["compensate", example, "--tip", "12"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let out = Command::new(BIN)
+        .args(["compensate", dir.join("missing.nc").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
+    std::fs::remove_dir_all(&dir).ok();
+}

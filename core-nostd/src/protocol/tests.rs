@@ -725,3 +725,38 @@ fn corner_modes_and_tip_codes() {
         );
     }
 }
+
+#[test]
+fn reset_abandons_a_contour_whose_corner_cannot_be_cut() {
+    let mut dev = Device::new();
+    let program = [
+        "CFG RN=0.8",
+        "G00 X20 Z5",
+        "G42 G01 Z0",
+        "N10 X40",
+        "N20 Z-10",
+        "N30 X40.4 Z-10.2",
+    ];
+    for b in program {
+        assert!(
+            ask(&mut dev, std::format!("{b}\n").as_bytes())
+                .last()
+                .unwrap()
+                .starts_with("OK"),
+            "{b}"
+        );
+    }
+    // The chamfer is too short for the nose whatever comes next, G40 included.
+    assert!(ask1(&mut dev, "N40 X60").starts_with("ERR GEOMETRY N30 too short"));
+    assert!(ask1(&mut dev, "G40").starts_with("ERR GEOMETRY N30 too short"));
+    assert!(ask1(&mut dev, "MOVE X=50").starts_with("ERR GEOMETRY MOVE not allowed"));
+    let pos = ask1(&mut dev, "POS");
+    assert_eq!(ask1(&mut dev, "RESET"), "OK");
+    assert_eq!(ask1(&mut dev, "POS"), pos, "RESET moves nothing");
+    assert!(ask1(&mut dev, "RESET 1").starts_with("ERR SYNTAX"));
+    // Compensation is off: blocks run as written from where the tool is.
+    let z = pos.rsplit_once(" Z=").unwrap().1;
+    let r = ask(&mut dev, b"G01 X50\n");
+    assert_eq!(r[0], std::format!("DATA G01 X50.0000 Z{z}"), "{r:?}");
+    assert!(ask1(&mut dev, "MOVE X=50").starts_with("OK"));
+}
