@@ -26,7 +26,7 @@ FUZZ_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 ROOT="$(dirname "$FUZZ_DIR")"
 cd "$ROOT" || exit 2
 
-ALL_TARGETS="protocol length gcode words"
+ALL_TARGETS="protocol length gcode words contour"
 TARGETS="${TARGETS:-$ALL_TARGETS}"
 
 # Longest input per target: sessions of many lines for the protocol and the
@@ -35,6 +35,7 @@ max_len() {
     case "$1" in
     protocol) echo 4096 ;;
     words) echo 8192 ;;
+    contour) echo 8192 ;;
     gcode) echo 256 ;;
     length) echo 64 ;;
     *) echo 4096 ;;
