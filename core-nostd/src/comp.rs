@@ -425,23 +425,9 @@ impl Tool {
     }
 }
 
-/// What the tool does along one output block.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum MoveKind {
-    /// A straight move; `rapid` for G00.
-    Line {
-        /// G00 rather than G01.
-        rapid: bool,
-    },
-    /// An arc about `centre` (ångström).
-    Arc {
-        /// Centre of the TTT arc.
-        centre: [i64; 2],
-        /// Direction.
-        dir: ArcDir,
-    },
-}
+/// What the tool does along one output block: a line, or an arc about the
+/// tool-tip centre.
+pub type MoveKind = Shape;
 
 /// Which programmed block an output block belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -614,11 +600,8 @@ impl Contour {
                     }
                 }
                 if let Some(e) = motion {
-                    let kind = match e.shape {
-                        Shape::Line { rapid } => MoveKind::Line { rapid },
-                        Shape::Arc { centre, dir } => MoveKind::Arc { centre, dir },
-                    };
-                    push(&mut moves, e.to, kind, Origin::Current)?;
+                    // Compensation off: the block as programmed.
+                    push(&mut moves, e.to, e.shape, Origin::Current)?;
                 }
                 next.state = State::Idle;
             }

@@ -5,8 +5,10 @@
 //! and a nose radius r: `Xc = r·(1 − tan(β/2))`, `Zc = r·(1 − tan(α/2))`;
 //! the Nomura table's `A = r·tan α·(1 − tan(α/2))` equals Xc, `B = Zc`,
 //! `C = r·(1 + tan(α/2))`. Angles are read exactly (whole micro-arc-seconds)
-//! and the tangents come from [`crate::trig`] in Q62: each value is within
-//! about 10⁻¹⁰ mm of exact for r ≤ 25 mm, so a printed 4-decimal figure is
+//! and the tangents come from [`crate::trig`] in Q62, within 2⁻⁶⁰ (4 ulps;
+//! the tests in this module show it): each value is within about 10⁻¹⁰ mm
+//! of exact for r ≤ 25 mm (the half-angle is rounded to 2⁻⁶⁴ turn, the
+//! radius is exact), so a printed 4-decimal figure is
 //! wrong only if the exact value lies that close to a printing tie, which
 //! [`ConeValue::near_tie`] reports.
 
@@ -218,6 +220,49 @@ mod tests {
         }
         for out in ["0", "90", "0:0:0", "90:0:0", "120"] {
             assert_eq!(uas(out), Err(AngleError::OutOfRange), "{out}");
+        }
+    }
+
+    /// The tangent's error bound: 2⁻⁶⁰ (4 Q62 ulps) for angles up to 45°
+    /// (these tests see at most 1 ulp), which is below 3·10⁻¹⁷ mm on any
+    /// Xc, Zc or C for r ≤ 25 mm.
+    const TAN_BOUND: i128 = 4;
+
+    fn tan_deg(uas: i64) -> i128 {
+        tan_q62(Turn::from_uas(uas))
+    }
+
+    #[test]
+    fn tangent_within_its_bound_at_exact_values() {
+        let one = 1i128 << 62;
+        let root = |n: u128| i128::from(crate::trig::isqrt(n << 124));
+        let deg = |d: i64| d * UAS_PER_DEG;
+        // tan 45° = 1, tan 22.5° = √2 − 1, tan 30° = √3/3, tan 15° = 2 − √3;
+        // the roots are floors, within one ulp.
+        let cases = [
+            (deg(45), one),
+            (deg(45) / 2, root(2) - one),
+            (deg(30), root(3) / 3),
+            (deg(15), 2 * one - root(3)),
+            (deg(0), 0),
+        ];
+        for (uas, exact) in cases {
+            let e = (tan_deg(uas) - exact).abs();
+            assert!(e <= TAN_BOUND, "{uas} µas: {e} ulps");
+        }
+    }
+
+    proptest::proptest! {
+        /// tan 2θ · (1 − tan²θ) = 2·tan θ for θ below 22.5°: with both
+        /// tangents within the bound, the sides differ by at most 5 bounds.
+        #[test]
+        fn tangent_double_angle_identity(uas in 1i64..(45 * UAS_PER_DEG / 2)) {
+            let one = 1i128 << 62;
+            let t = tan_deg(uas);
+            let t2 = tan_deg(2 * uas);
+            let lhs = (t2 * (one - ((t * t) >> 62))) >> 62;
+            let e = (lhs - 2 * t).abs();
+            proptest::prop_assert!(e <= 5 * TAN_BOUND, "{uas}: {e} ulps");
         }
     }
 }

@@ -526,6 +526,26 @@ pub fn mixed_session() -> Vec<u8> {
     line("G42 G01 X28 Z0");
     line("X48 Z-10");
     line("G40 X60");
+    // Krylenko Fig. 22 as a G42 contour (arcs, corners, one block late),
+    // a concave arc too small for the nose, RESET out of a stuck corner.
+    for l in [
+        "G00 X0 Z2",
+        "N10 G42 G01 Z0",
+        "N20 X8",
+        "N30 G03 X12 Z-2 R2",
+        "N40 G01 Z-14",
+        "N50 G02 X18 Z-17 R3",
+        "N55 G02 X18.5 Z-17.25 R0.3",
+        "N60 G01 X30",
+        "N70 G450 G03 X38 Z-21 I0 K-4",
+        "N80 G01 X40 Z-22",
+        "N90 X40.2 Z-22.05",
+        "N100 Z-30",
+        "RESET",
+        "G40 G00 X60",
+    ] {
+        line(l);
+    }
     line("CFG DIAM=0");
     line("MOVE X=0.0025 Z=0.005");
     line("POS");
