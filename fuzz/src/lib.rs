@@ -994,6 +994,8 @@ pub struct RefBlock {
     pub compensation: Option<u8>,
     /// G90 / G91.
     pub distance: Option<u8>,
+    /// G450 / G451.
+    pub corner: Option<u16>,
     /// X, Z, I, K, R words.
     pub xzikr: [Option<i64>; 5],
 }
@@ -1011,7 +1013,7 @@ pub enum RefBlockError {
     Comment,
     /// Bad number at an address.
     Value(u8, LengthRefusal),
-    /// A G code outside 00–03, 40–42, 90, 91.
+    /// A G code outside 00–03, 40–42, 90, 91, 450, 451.
     UnsupportedG,
 }
 
@@ -1053,13 +1055,21 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     if number.len() > 3 || !number.bytes().all(|d| d.is_ascii_digit()) {
                         return Err(RefBlockError::UnsupportedG);
                     }
-                    let code: u8 = number.parse().map_err(|_| RefBlockError::UnsupportedG)?;
+                    let code: u16 = number.parse().map_err(|_| RefBlockError::UnsupportedG)?;
+                    if matches!(code, 450 | 451) {
+                        if b.corner.is_some() {
+                            return Err(RefBlockError::Repeated(b'G'));
+                        }
+                        b.corner = Some(code);
+                        continue;
+                    }
                     let slot = match code {
                         0..=3 => &mut b.motion,
                         40..=42 => &mut b.compensation,
                         90 | 91 => &mut b.distance,
                         _ => return Err(RefBlockError::UnsupportedG),
                     };
+                    let code = code as u8;
                     if slot.is_some() {
                         return Err(RefBlockError::Repeated(b'G'));
                     }
