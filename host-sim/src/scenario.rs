@@ -105,17 +105,23 @@ pub const TABLE21_PRINTED_SUMS: [(i64, i64, i64, i64); 4] = [
     (15900, 15900, 25606, 25606),
 ];
 
-/// Table 21 as a scenario: radius programming at 0.005/0.01 mm, each path
-/// driven from its reference point through its points back to it.
-pub fn table21() -> Scenario {
-    let mut steps = vec![
+/// The first steps of a scenario: the default prices (0.005 mm on X,
+/// 0.01 mm on Z), X words as diameters or radii, and the program zero.
+fn from_zero(diam: bool) -> Vec<Step> {
+    vec![
         Step::Cfg {
             hx: Some("0.005".into()),
             hz: Some("0.01".into()),
-            diam: Some(false),
+            diam: Some(diam),
         },
         Step::Zero,
-    ];
+    ]
+}
+
+/// Table 21 as a scenario: radius programming at 0.005/0.01 mm, each path
+/// driven from its reference point through its points back to it.
+pub fn table21() -> Scenario {
+    let mut steps = from_zero(false);
     for path in TABLE21_PATHS {
         for r in path {
             steps.push(Step::to(r.x, r.z));
@@ -177,14 +183,7 @@ pub fn krylenko() -> Scenario {
             ("30", "10"),
         ],
     ];
-    let mut steps = vec![
-        Step::Cfg {
-            hx: Some("0.005".into()),
-            hz: Some("0.01".into()),
-            diam: Some(true),
-        },
-        Step::Zero,
-    ];
+    let mut steps = from_zero(true);
     for program in programs {
         for &(x, z) in program {
             steps.push(Step::to(x, z));
@@ -217,14 +216,7 @@ fn arc(x: &str, z: &str, i: &str, k: &str, ccw: bool) -> Step {
 /// X14.6 Z-21.4; Fig. 24's G03 X0 Z-10.4 R10.4 about X0 Z0), finishing at
 /// 0.01 and 0.002 mm and roughing at 0.05 mm.
 pub fn krylenko_arcs() -> Scenario {
-    let mut steps = vec![
-        Step::Cfg {
-            hx: Some("0.005".into()),
-            hz: Some("0.01".into()),
-            diam: Some(true),
-        },
-        Step::Zero,
-    ];
+    let mut steps = from_zero(true);
     for (tol, rough) in [("0.01", false), ("0.002", false), ("0.05", true)] {
         let with = |s: Step| match s {
             Step::Arc {
@@ -399,14 +391,7 @@ const Z_PRICES_NM: [i64; 5] = [10_000, 5_000, 1_000, 2_500, 2_000];
 /// zeros between them. The same seed gives the same scenario.
 pub fn random(seed: u64, n: usize) -> Scenario {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut steps = vec![
-        Step::Cfg {
-            hx: Some("0.005".into()),
-            hz: Some("0.01".into()),
-            diam: Some(true),
-        },
-        Step::Zero,
-    ];
+    let mut steps = from_zero(true);
     let (mut hx, mut hz, mut diam) = (5_000i64, 10_000i64, true);
     // Commanded coordinates in nm: X as a diameter (twice the radius, so an
     // odd count is a radius with half a nanometre), Z.
