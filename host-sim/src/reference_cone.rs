@@ -213,13 +213,11 @@ impl RefCone {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The 12 rows of `data/nomura-nose-correction-table.txt`: kind, r, then
-    /// the values for a = 5°, 10°, … 85°.
-    const NOMURA: &str = "\
+/// The Nomura (MELDAS 65SLC) nose correction table of the domain brief
+/// (`data/nomura-nose-correction-table.txt`, 204 values): one row per kind
+/// and nose radius, `A2` (2A, the diameter correction), `B` or `C`, then r,
+/// then the values for a = 5°, 10°, … 85°, as printed.
+pub const NOMURA_TABLE: &str = "\
 A2 0.2 0.03 0.06 0.09 0.12 0.15 0.17 0.19 0.21 0.23 0.25 0.27 0.29 0.31 0.33 0.35 0.37 0.38
 A2 0.4 0.07 0.13 0.19 0.24 0.29 0.34 0.38 0.43 0.47 0.51 0.55 0.59 0.62 0.66 0.69 0.73 0.77
 A2 0.5 0.08 0.16 0.23 0.30 0.36 0.42 0.48 0.53 0.59 0.64 0.68 0.73 0.78 0.82 0.87 0.91 0.96
@@ -233,6 +231,10 @@ C 0.4 0.42 0.43 0.45 0.47 0.49 0.51 0.53 0.55 0.57 0.59 0.61 0.63 0.65 0.68 0.71
 C 0.5 0.52 0.54 0.57 0.59 0.61 0.63 0.66 0.68 0.71 0.73 0.76 0.79 0.82 0.85 0.88 0.92 0.96
 C 0.8 0.83 0.87 0.91 0.94 0.98 1.01 1.05 1.09 1.13 1.17 1.22 1.26 1.31 1.36 1.41 1.47 1.53
 ";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
 
     #[test]
     fn krylenko_example_r04_alpha45() {
@@ -360,7 +362,7 @@ C 0.8 0.83 0.87 0.91 0.94 0.98 1.01 1.05 1.09 1.13 1.17 1.22 1.26 1.31 1.36 1.41
     fn nomura_table_reproduced() {
         let mut count = 0;
         let mut worst = 0.0f64;
-        for line in NOMURA.lines() {
+        for line in NOMURA_TABLE.lines() {
             let mut words = line.split_whitespace();
             let kind = words.next().unwrap();
             let r: f64 = words.next().unwrap().parse().unwrap();

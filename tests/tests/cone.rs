@@ -3,22 +3,7 @@
 
 use host_sim::device::LocalDevice;
 use host_sim::link::{words_value, Transport};
-
-/// `data/nomura-nose-correction-table.txt` of the domain brief: 2A (the
-/// diameter correction), B and C for r = 0.2, 0.4, 0.5, 0.8 at a = 5…85°.
-const NOMURA: &str = "\
-A2 0.2 0.03 0.06 0.09 0.12 0.15 0.17 0.19 0.21 0.23 0.25 0.27 0.29 0.31 0.33 0.35 0.37 0.38
-A2 0.4 0.07 0.13 0.19 0.24 0.29 0.34 0.38 0.43 0.47 0.51 0.55 0.59 0.62 0.66 0.69 0.73 0.77
-A2 0.5 0.08 0.16 0.23 0.30 0.36 0.42 0.48 0.53 0.59 0.64 0.68 0.73 0.78 0.82 0.87 0.91 0.96
-A2 0.8 0.13 0.26 0.37 0.48 0.58 0.68 0.77 0.85 0.94 1.02 1.10 1.17 1.25 1.32 1.39 1.46 1.53
-B 0.2 0.19 0.18 0.17 0.16 0.16 0.15 0.14 0.13 0.12 0.11 0.10 0.08 0.07 0.06 0.05 0.03 0.02
-B 0.4 0.38 0.37 0.35 0.33 0.31 0.29 0.27 0.25 0.23 0.21 0.19 0.17 0.15 0.12 0.09 0.06 0.03
-B 0.5 0.48 0.46 0.43 0.41 0.39 0.37 0.34 0.32 0.29 0.27 0.24 0.21 0.18 0.15 0.12 0.08 0.04
-B 0.8 0.77 0.73 0.69 0.66 0.62 0.59 0.55 0.51 0.47 0.43 0.38 0.34 0.29 0.24 0.19 0.13 0.07
-C 0.2 0.21 0.22 0.23 0.24 0.24 0.25 0.26 0.27 0.28 0.29 0.30 0.32 0.33 0.34 0.35 0.37 0.38
-C 0.4 0.42 0.43 0.45 0.47 0.49 0.51 0.53 0.55 0.57 0.59 0.61 0.63 0.65 0.68 0.71 0.74 0.77
-C 0.5 0.52 0.54 0.57 0.59 0.61 0.63 0.66 0.68 0.71 0.73 0.76 0.79 0.82 0.85 0.88 0.92 0.96
-C 0.8 0.83 0.87 0.91 0.94 0.98 1.01 1.05 1.09 1.13 1.17 1.22 1.26 1.31 1.36 1.41 1.47 1.53";
+use host_sim::reference_cone::NOMURA_TABLE;
 
 fn cone(dev: &mut LocalDevice, a: &str, rn: &str) -> host_sim::link::Reply {
     let r = Transport::request(dev, &format!("CONE A={a} RN={rn}")).unwrap();
@@ -35,7 +20,7 @@ fn nomura_table_in_all_204_places() {
     let mut dev = LocalDevice::new();
     let mut places = 0;
     let mut worst: f64 = 0.0;
-    for row in NOMURA.lines() {
+    for row in NOMURA_TABLE.lines() {
         let mut w = row.split_whitespace();
         let (kind, rn) = (w.next().unwrap(), w.next().unwrap());
         for (i, printed) in w.enumerate() {
