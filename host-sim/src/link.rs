@@ -40,6 +40,15 @@ impl Reply {
     }
 }
 
+/// The final reply lines (`OK …`, `ERR …`) in a CRLF-separated byte stream:
+/// one per request answered.
+pub fn final_lines(bytes: &[u8]) -> usize {
+    String::from_utf8_lossy(bytes)
+        .split("\r\n")
+        .filter(|l| l.starts_with("OK") || l.starts_with("ERR "))
+        .count()
+}
+
 /// The value of `KEY=` among space-separated words.
 pub fn words_value<'a>(line: &'a str, key: &str) -> Option<&'a str> {
     line.split(' ').find_map(|w| {
@@ -190,6 +199,18 @@ impl Client {
                 Err(e) => return Err(e.into()),
             }
         }
+    }
+
+    /// Reads reply lines until `n` final lines have come; returns them all
+    /// as received, each with its CRLF (to compare with a recorded stream).
+    pub fn read_finals(&mut self, n: usize) -> Result<Vec<u8>, LinkError> {
+        let mut got = Vec::new();
+        while final_lines(&got) < n {
+            let line = self.read_line()?;
+            got.extend_from_slice(line.as_bytes());
+            got.extend_from_slice(b"\r\n");
+        }
+        Ok(got)
     }
 
     /// Reads reply lines up to and including a final `OK`/`ERR` line.

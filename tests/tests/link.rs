@@ -3,17 +3,9 @@
 
 use host_sim::compare::Comparator;
 use host_sim::device::LocalDevice;
-use host_sim::link::{Client, PtyDevice, Transport};
+use host_sim::link::{final_lines, Client, PtyDevice, Transport};
 use host_sim::scenario;
 use std::time::Duration;
-
-/// Final reply lines (`OK`/`ERR`) in a byte stream.
-fn finals(bytes: &[u8]) -> usize {
-    String::from_utf8_lossy(bytes)
-        .split("\r\n")
-        .filter(|l| l.starts_with("OK") || l.starts_with("ERR "))
-        .count()
-}
 
 #[test]
 fn scenarios_over_the_pty_match_the_reference() {
@@ -39,18 +31,13 @@ fn scenarios_over_the_pty_match_the_reference() {
 fn mixed_session_bytes_are_identical_over_the_pty() {
     let session = scenario::mixed_session();
     let expected = LocalDevice::new().feed(&session);
-    let requests = finals(&expected);
+    let requests = final_lines(&expected);
     assert!(requests >= 30, "{requests}");
 
     let device = PtyDevice::start().unwrap();
     let mut client = Client::open(device.path(), Duration::from_secs(10)).unwrap();
     client.write_raw(&session).unwrap();
-    let mut got = Vec::new();
-    while finals(&got) < requests {
-        let line = client.read_line().unwrap();
-        got.extend_from_slice(line.as_bytes());
-        got.extend_from_slice(b"\r\n");
-    }
+    let got = client.read_finals(requests).unwrap();
     assert_eq!(
         String::from_utf8_lossy(&got),
         String::from_utf8_lossy(&expected)

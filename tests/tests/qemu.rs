@@ -7,6 +7,7 @@
 
 use host_sim::compare::Comparator;
 use host_sim::device::LocalDevice;
+use host_sim::link::final_lines;
 use host_sim::qemu::{build_firmware, firmware_dir, qemu_available, Qemu};
 use host_sim::scenario;
 use std::process::Command;
@@ -19,13 +20,6 @@ fn qemu_or_skip() -> bool {
     assert!(std::env::var_os("CI").is_none(), "CI needs qemu-system-arm");
     eprintln!("qemu-system-arm not found: QEMU test skipped");
     false
-}
-
-fn finals(bytes: &[u8]) -> usize {
-    String::from_utf8_lossy(bytes)
-        .split("\r\n")
-        .filter(|l| l.starts_with("OK") || l.starts_with("ERR "))
-        .count()
 }
 
 #[test]
@@ -41,12 +35,7 @@ fn firmware_answers_the_mixed_session_like_the_in_process_device() {
     // The whole session at once: the firmware must keep up through its
     // receive queue, with long blocks among the requests.
     client.write_raw(&session).unwrap();
-    let mut got = Vec::new();
-    while finals(&got) < finals(&expected) {
-        let line = client.read_line().unwrap();
-        got.extend_from_slice(line.as_bytes());
-        got.extend_from_slice(b"\r\n");
-    }
+    let got = client.read_finals(final_lines(&expected)).unwrap();
     assert_eq!(
         String::from_utf8_lossy(&got),
         String::from_utf8_lossy(&expected)
@@ -84,32 +73,15 @@ fn a_debug_panic_stops_and_exits_with_failure() {
     }
     let dir = firmware_dir();
     let target = dir.join("target/panic-check");
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let status = Command::new(&cargo)
-        .current_dir(&dir)
-        .args([
-            "build",
-            "--features",
-            "qemu,panic-check",
-            "--bin",
-            "panic_check",
-            "--target-dir",
-        ])
-        .arg(&target)
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let elf = target.join("thumbv7em-none-eabihf/debug/panic_check");
-    let mut qemu = Qemu::boot_with(&elf, true, "null").unwrap();
-    let status = qemu.wait_exit(Duration::from_secs(30)).expect("QEMU exits");
-    assert_eq!(status.code(), Some(1), "{status}");
-
-    // The same panic in a release build is refused at link time.
-    let out = Command::new(&cargo)
-        .current_dir(&dir)
-        .args([
-            "build",
-            "--release",
+    // The panic-check binary, debug or release, in its own target directory.
+    let build = |release: bool| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let mut cmd = Command::new(cargo);
+        cmd.current_dir(&dir).arg("build");
+        if release {
+            cmd.arg("--release");
+        }
+        cmd.args([
             "--features",
             "qemu,panic-check",
             "--bin",
@@ -118,7 +90,21 @@ fn a_debug_panic_stops_and_exits_with_failure() {
         ])
         .arg(&target)
         .output()
-        .unwrap();
+        .unwrap()
+    };
+    let out = build(false);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let elf = target.join("thumbv7em-none-eabihf/debug/panic_check");
+    let mut qemu = Qemu::boot_with(&elf, true, "null").unwrap();
+    let status = qemu.wait_exit(Duration::from_secs(30)).expect("QEMU exits");
+    assert_eq!(status.code(), Some(1), "{status}");
+
+    // The same panic in a release build is refused at link time.
+    let out = build(true);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("release_build_has_a_reachable_panic"));
 }
