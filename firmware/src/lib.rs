@@ -62,6 +62,17 @@ impl Io for Controller {
     }
 }
 
+/// Reset to running: takes the peripherals (once, at reset), starts the
+/// logger and brings up clocks, pins, USART1 and the step timer.
+pub fn boot() -> board::Board {
+    // `take` succeeds once, at reset; there is no other caller.
+    let Some(dp) = stm32f4::stm32f405::Peripherals::take() else {
+        halt()
+    };
+    log::init();
+    board::init(dp)
+}
+
 /// Stops here for good, outputs safe.
 pub fn halt() -> ! {
     board::step_outputs_low();

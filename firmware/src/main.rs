@@ -4,17 +4,11 @@
 
 use core_nostd::protocol::Device;
 use cortex_m_rt::entry;
-use firmware::{board, halt, log, Controller};
-use stm32f4::stm32f405 as pac;
+use firmware::{board, Controller};
 
 #[entry]
 fn main() -> ! {
-    // `take` succeeds once, at reset; there is no other caller.
-    let Some(dp) = pac::Peripherals::take() else {
-        halt()
-    };
-    log::init();
-    let mut io = Controller::new(board::init(dp));
+    let mut io = Controller::new(firmware::boot());
     let mut device = Device::new();
     defmt::info!(
         "{=str} {=str} ready, {=u32} Hz",

@@ -15,9 +15,8 @@ use core_nostd::protocol::{Device, Io};
 use core_nostd::stepdir::{DriveTiming, StepClock, StepDir};
 use cortex_m_rt::entry;
 use embedded_hal::delay::DelayNs;
-use firmware::board::{self, PortCPin, StepTimer};
-use firmware::{halt, log};
-use stm32f4::stm32f405 as pac;
+use firmware::board::{PortCPin, StepTimer};
+use firmware::halt;
 
 /// A line of text for the host.
 struct Line(heapless::String<160>);
@@ -28,7 +27,7 @@ impl Line {
         let _ = l.0.write_fmt(args);
         let _ = l.0.push('\n');
         #[cfg(feature = "qemu")]
-        log::host_print(&l.0);
+        firmware::log::host_print(&l.0);
     }
 }
 
@@ -198,11 +197,7 @@ fn arcs(tim: &StepTimer) {
 
 #[entry]
 fn main() -> ! {
-    let Some(dp) = pac::Peripherals::take() else {
-        halt()
-    };
-    log::init();
-    let mut b = board::init(dp);
+    let mut b = firmware::boot();
     b.tim2.free_run();
     let tim = &b.tim2;
 

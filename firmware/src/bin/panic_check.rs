@@ -5,17 +5,12 @@
 
 use cortex_m_rt::entry;
 use embedded_hal::digital::OutputPin;
-use firmware::board::{self, PortCPin};
-use firmware::{halt, log};
-use stm32f4::stm32f405 as pac;
+use firmware::board::PortCPin;
+use firmware::halt;
 
 #[entry]
 fn main() -> ! {
-    let Some(dp) = pac::Peripherals::take() else {
-        halt()
-    };
-    log::init();
-    let _board = board::init(dp);
+    let _board = firmware::boot();
     let _ = PortCPin(0).set_high();
     // An index the optimiser cannot see through, so the bounds check stays.
     let table = [1u8, 2, 3];
