@@ -249,7 +249,6 @@ impl Element {
             return None;
         };
         let d = V::of(p).sub(V::of(centre));
-        // |d| < 2⁴¹: d² < 2⁸³, shifted by 32 stays below 2¹¹⁵.
         // R < 2^41.5 Å: R² · 2³² < 2¹¹⁵, R · 2¹⁶ < 2⁵⁸.
         let radius = isqrt((norm2(d) as u128) << (2 * FRAC)) as i64;
         let inside = matches!(
@@ -257,25 +256,6 @@ impl Element {
             (Side::Left, ArcDir::Ccw) | (Side::Right, ArcDir::Cw)
         );
         Some(if inside { radius - r } else { radius + r })
-    }
-
-    /// The offset element, relative to `origin` (ångström · 2¹⁶).
-    fn offset(&self, at: [i64; 2], origin: [i64; 2], side: Side, r: i64) -> Offset {
-        let o = V::of(origin);
-        match self.shape {
-            Shape::Line { .. } => {
-                let t = self.tangent(at);
-                let p = shl(V::of(at).sub(o));
-                Offset::Line {
-                    a: p.add(off(side.normal(t), r)),
-                    t,
-                }
-            }
-            Shape::Arc { centre, .. } => Offset::Circle {
-                c: shl(V::of(centre).sub(o)),
-                rho: self.offset_radius(at, side, r).unwrap_or(0),
-            },
-        }
     }
 }
 
@@ -538,7 +518,8 @@ impl Contour {
     }
 
     /// Runs one block: its compensation and corner words and its motion
-    /// (`None` for a block that does not move). Returns the state after it
+    /// (`None` for a block without one; with compensation on, a line that
+    /// does not move counts as none). Returns the state after it
     /// and the TTT blocks it sends, or the refusal; `self` is not changed,
     /// so the caller commits only what it can also execute.
     #[inline(never)]
@@ -551,6 +532,11 @@ impl Contour {
     ) -> Result<(Contour, Moves), CompError> {
         let n = motion.and_then(|e| e.n);
         let mode = comp.unwrap_or(self.mode);
+        // With compensation on (or ending), a line that does not move is not
+        // an element: it is passed over.
+        let compensating = self.active() || Side::of(mode).is_some();
+        let motion = motion
+            .filter(|e| !(compensating && e.from == e.to && matches!(e.shape, Shape::Line { .. })));
         if let (Some(a), Some(b)) = (Side::of(self.mode), Side::of(mode)) {
             if a != b {
                 return Err(CompError::SideChange(n));
@@ -799,8 +785,17 @@ fn corner_of(
     let reversal = s.abs() < SMOOTH_SIN;
     if !reversal && s * side.sign() > 0 {
         // Inside: intersect the offset elements.
-        let x = intersect(e1.offset(p, p, side, r), e2.offset(p, p, side, r))
-            .ok_or(CompError::NoCorner(n1, n2))?;
+        // The offset elements relative to the corner: a line through its
+        // perpendicular offset point, a circle about the arc's centre.
+        let offset = |e: &Element, t: V, a: V| match e.shape {
+            Shape::Line { .. } => Offset::Line { a, t },
+            Shape::Arc { centre, .. } => Offset::Circle {
+                c: shl(V::of(centre).sub(V::of(p))),
+                rho: e.offset_radius(p, side, r).unwrap_or(0),
+            },
+        };
+        let x =
+            intersect(offset(e1, t1, a1), offset(e2, t2, a2)).ok_or(CompError::NoCorner(n1, n2))?;
         let x = at(x)?;
         return Ok(CornerPlan {
             end: x,

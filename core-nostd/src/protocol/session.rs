@@ -8,10 +8,10 @@ use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
-use crate::comp::{CompError, Contour, Element, Move, MoveKind, Moves, Shape, Tool};
+use crate::comp::{CompError, Contour, Element, Move, MoveKind, Moves, Shape, Tool, MAX_MOVES};
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
-use crate::gcode::{is_block, parse_block, BlockError, Compensation, Motion};
+use crate::gcode::{is_block, parse_block, BlockError, Motion};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::{div_round_half_away, write_mm4, Length};
@@ -709,27 +709,25 @@ impl Session {
             shape,
             n: b.n,
         });
-        // With compensation on, a line that does not move is not an element.
-        let compensating =
-            self.contour.active() || b.compensation.is_some_and(|c| c != Compensation::Off);
-        let element = element
-            .filter(|e| !(compensating && e.from == e.to && matches!(e.shape, Shape::Line { .. })));
         let tool = Tool::new(self.cfg.rn, self.cfg.tip);
         let (contour, moves) = self
             .contour
             .block(&tool, b.compensation, b.corner, element)
             .map_err(Refusal::Contour)?;
-        // Check every block before the first one moves.
+        // Plan and check every block before the first one moves.
+        let mut planned = heapless::Vec::<Planned, MAX_MOVES>::new();
         let mut cmd = self.cmd;
         let mut pos = self.pos;
         for m in &moves {
-            pos = self.check_move(cmd, pos, m)?;
-            cmd = point(m.to)?;
+            let p = self.plan_move(cmd, pos, m)?;
+            (cmd, pos) = (p.end(), p.registers());
+            // As many plans as moves: never full.
+            let _ = planned.push(p);
         }
         let start = self.pos;
         let mut crc = Crc32::new();
-        for m in &moves {
-            crc = self.run_move(m, crc, io);
+        for p in &planned {
+            crc = self.run_planned(p, crc, io);
         }
         if element.is_some() || has_end {
             self.prog = target;
@@ -747,74 +745,58 @@ impl Session {
         Ok(())
     }
 
-    /// The arc of a move from the commanded point `from`.
-    fn move_arc(
-        from: [Length; 2],
-        m: &Move,
-    ) -> Result<Option<(ArcPoints, ArcDir)>, Refusal<'static>> {
-        Ok(match m.kind {
-            MoveKind::Line { .. } => None,
-            MoveKind::Arc { centre, dir } => Some((
-                ArcPoints {
-                    start: from,
-                    end: point(m.to)?,
-                    centre: point(centre)?,
-                },
-                dir,
-            )),
-        })
-    }
-
-    /// Checks one move from the commanded point `cmd` and registers `pos`;
-    /// returns the registers after it.
-    fn check_move(
+    /// Plans one move from the commanded point `cmd` and registers `pos`,
+    /// checking every block of it against the machine's limits.
+    fn plan_move(
         &self,
         cmd: [Length; 2],
         pos: ImpulsePoint,
         m: &Move,
-    ) -> Result<ImpulsePoint, Refusal<'static>> {
-        match Self::move_arc(cmd, m)? {
-            None => {
-                let to = point(m.to)?;
+    ) -> Result<Planned, Refusal<'static>> {
+        let end = point(m.to)?;
+        match m.kind {
+            MoveKind::Line { rapid } => {
                 let to = ImpulsePoint {
-                    x: quantize(to[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
-                    z: quantize(to[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
+                    x: quantize(end[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
+                    z: quantize(end[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
                 };
-                LinearBlock::new(pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
-                Ok(to)
+                let block = LinearBlock::new(pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+                Ok(Planned::Line { block, end, rapid })
             }
-            Some((points, dir)) => {
+            MoveKind::Arc { centre, dir } => {
+                let points = ArcPoints {
+                    start: cmd,
+                    end,
+                    centre: point(centre)?,
+                };
                 let plan =
                     ChordPlan::new(&points, dir, self.cfg.tol, self.cfg.pass == Pass::Finish)?;
-                self.check_chords(&plan, pos)
+                let to = self.check_chords(&plan, pos)?;
+                Ok(Planned::Arc {
+                    plan,
+                    points,
+                    dir,
+                    to,
+                })
             }
         }
     }
 
-    /// Runs one checked move, sends its `DATA` line, and adds its step
+    /// Runs one planned move, sends its `DATA` line, and adds its step
     /// events to `crc`.
-    fn run_move<I: Io>(&mut self, m: &Move, mut crc: Crc32, io: &mut I) -> Crc32 {
-        let Ok(to) = point(m.to) else {
-            return crc;
-        };
-        match Self::move_arc(self.cmd, m) {
-            Ok(None) => {
-                if let Ok(block) = self.linear_block(to) {
-                    crc = block_crc(&block, crc);
-                    self.cmd = to;
-                    self.pos = block.to();
-                    io.run_block(&block, &self.drive);
-                }
-                let rapid = matches!(m.kind, MoveKind::Line { rapid: true });
+    fn run_planned<I: Io>(&mut self, p: &Planned, mut crc: Crc32, io: &mut I) -> Crc32 {
+        match *p {
+            Planned::Line { block, end, rapid } => {
+                crc = block_crc(&block, crc);
+                self.cmd = end;
+                self.pos = block.to();
+                io.run_block(&block, &self.drive);
                 let word = if rapid { Motion::Rapid } else { Motion::Linear };
                 self.send_block_data(io, word, None);
             }
-            Ok(Some((points, dir))) => {
-                let Ok(plan) =
-                    ChordPlan::new(&points, dir, self.cfg.tol, self.cfg.pass == Pass::Finish)
-                else {
-                    return crc;
-                };
+            Planned::Arc {
+                plan, points, dir, ..
+            } => {
                 crc = self.run_chords(&plan, &points, io, false, crc);
                 let word = match dir {
                     ArcDir::Cw => Motion::ArcCw,
@@ -822,7 +804,6 @@ impl Session {
                 };
                 self.send_block_data(io, word, Some(centre_minus(points.centre, points.start)));
             }
-            Err(_) => {}
         }
         crc
     }
@@ -1023,6 +1004,41 @@ const RANGE_POS_Z: &str = "Z position beyond 999999999 impulses";
 const RANGE_BLOCK: &str = "block beyond 1000000 impulses per axis";
 const RANGE_POS: &str = "position beyond 999999999 impulses";
 const _: () = assert!(MAX_POSITION == 999_999_999 && MAX_BLOCK_IMPULSES == 1_000_000);
+
+/// One output block, planned and checked: ready to run without a check that
+/// could fail.
+enum Planned {
+    Line {
+        block: LinearBlock,
+        end: [Length; 2],
+        rapid: bool,
+    },
+    Arc {
+        plan: ChordPlan,
+        points: ArcPoints,
+        dir: ArcDir,
+        /// Registers after the last chord.
+        to: ImpulsePoint,
+    },
+}
+
+impl Planned {
+    /// The commanded point after it.
+    const fn end(&self) -> [Length; 2] {
+        match self {
+            Planned::Line { end, .. } => *end,
+            Planned::Arc { points, .. } => points.end,
+        }
+    }
+
+    /// The registers after it.
+    fn registers(&self) -> ImpulsePoint {
+        match self {
+            Planned::Line { block, .. } => block.to(),
+            Planned::Arc { to, .. } => *to,
+        }
+    }
+}
 
 /// `NX= NZ= PX= PZ= SEQ=`: the impulses a request issued, the registers
 /// after it, and the CRC of its step events.
