@@ -230,15 +230,12 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
             );
         }
         let moves = dev.device().session().last_moves().clone();
-        let mut current_printed = false;
         for m in &moves {
-            let (own, kept): (Option<&Source>, bool) = match m.origin {
-                Origin::Previous => (waiting.as_ref().map(|(s, _)| s), true),
-                Origin::Corner => (None, false),
-                Origin::Current => {
-                    current_printed = true;
-                    (Some(&src), true)
-                }
+            // The source line whose words go on this block; none for corners.
+            let own: Option<&Source> = match m.origin {
+                Origin::Previous => waiting.as_ref().map(|(s, _)| s),
+                Origin::Corner => None,
+                Origin::Current => Some(&src),
             };
             let mut text = String::new();
             if let Some(n) = own.and_then(|s| s.n.as_ref()) {
@@ -266,7 +263,7 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
                     let _ = write!(text, " I{} K{}", mm4(i), mm4(k));
                 }
             }
-            if let Some(s) = own.filter(|_| kept) {
+            if let Some(s) = own {
                 for w in &s.words {
                     let _ = write!(text, " {w}");
                 }
@@ -287,7 +284,7 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
             }
         }
         let active = dev.device().session().contour().active();
-        let moved = moves.iter().any(|m| m.origin == Origin::Current) || current_printed;
+        let moved = moves.iter().any(|m| m.origin == Origin::Current);
         if !moved && !end_of_program {
             let has_motion = line_has_motion(line);
             if active && has_motion {

@@ -124,47 +124,49 @@ pub fn random_contour(rng: &mut impl Rng) -> ContourCase {
                     }
                 };
                 let first = rng.random_bool(0.5);
-                let Some(ccw) = [first, !first].into_iter().find(|&c| monotone(c)) else {
-                    x = x1;
-                    z = z1;
-                    last_face = false;
-                    lines.push(format!("N{n} G01 X{} Z{}", mm3(2.0 * x1), mm3(z1)));
-                    x = (2.0 * x * 1000.0).round() / 2000.0;
-                    z = (z * 1000.0).round() / 1000.0;
-                    continue;
-                };
-                let g = if ccw { "G03" } else { "G02" };
+                let hand = [first, !first].into_iter().find(|&c| monotone(c));
+                let g = |ccw: bool| if ccw { "G03" } else { "G02" };
                 last_face = false;
-                if rng.random_bool(0.5) {
-                    x = x1;
-                    z = z1;
-                    format!("{g} X{} Z{} R{}", mm3(2.0 * x1), mm3(z1), mm3(r))
-                } else {
-                    // The centre to three decimals, and the end point moved
-                    // onto the circle about it.
-                    let (cx, cz) = centre(ccw);
-                    let (ci, ck) = (
-                        (cx * 1000.0).round() / 1000.0 - x,
-                        (cz * 1000.0).round() / 1000.0 - z,
-                    );
-                    let (ccx, ccz) = (x + ci, z + ck);
-                    let rr = (ci * ci + ck * ck).sqrt();
-                    let (ex, ez) = (x1 - ccx, z1 - ccz);
-                    let el = (ex * ex + ez * ez).sqrt();
-                    let (ex1, ez1) = (ccx + ex * rr / el, ccz + ez * rr / el);
-                    let (ex1, ez1) = (
-                        (ex1 * 2000.0).round() / 2000.0,
-                        (ez1 * 1000.0).round() / 1000.0,
-                    );
-                    x = ex1;
-                    z = ez1;
-                    format!(
-                        "{g} X{} Z{} I{} K{}",
-                        mm3(2.0 * ex1),
-                        mm3(ez1),
-                        mm3(ci),
-                        mm3(ck)
-                    )
+                match hand {
+                    // Neither hand keeps Z from increasing: a taper instead.
+                    None => {
+                        x = x1;
+                        z = z1;
+                        format!("G01 X{} Z{}", mm3(2.0 * x1), mm3(z1))
+                    }
+                    Some(ccw) if rng.random_bool(0.5) => {
+                        x = x1;
+                        z = z1;
+                        format!("{} X{} Z{} R{}", g(ccw), mm3(2.0 * x1), mm3(z1), mm3(r))
+                    }
+                    Some(ccw) => {
+                        // The centre to three decimals, and the end point moved
+                        // onto the circle about it.
+                        let (cx, cz) = centre(ccw);
+                        let (ci, ck) = (
+                            (cx * 1000.0).round() / 1000.0 - x,
+                            (cz * 1000.0).round() / 1000.0 - z,
+                        );
+                        let (ccx, ccz) = (x + ci, z + ck);
+                        let rr = (ci * ci + ck * ck).sqrt();
+                        let (ex, ez) = (x1 - ccx, z1 - ccz);
+                        let el = (ex * ex + ez * ez).sqrt();
+                        let (ex1, ez1) = (ccx + ex * rr / el, ccz + ez * rr / el);
+                        let (ex1, ez1) = (
+                            (ex1 * 2000.0).round() / 2000.0,
+                            (ez1 * 1000.0).round() / 1000.0,
+                        );
+                        x = ex1;
+                        z = ez1;
+                        format!(
+                            "{} X{} Z{} I{} K{}",
+                            g(ccw),
+                            mm3(2.0 * ex1),
+                            mm3(ez1),
+                            mm3(ci),
+                            mm3(ck)
+                        )
+                    }
                 }
             }
         };
