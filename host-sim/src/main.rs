@@ -270,10 +270,7 @@ fn run_soak(args: &SoakArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
     } else {
         Faults::HARSH
     };
-    let bar = ProgressBar::new(u64::from(args.blocks)).with_style(
-        ProgressStyle::with_template("  {bar:40} {pos}/{len} blocks {per_sec} eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = blocks_bar(u64::from(args.blocks));
     let (report, stats, corrupted) = if args.qemu {
         println!(
             "soak: firmware in QEMU over a faulty link, seed {}",
@@ -336,6 +333,14 @@ fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// A progress bar over `len` blocks.
+fn blocks_bar(len: u64) -> ProgressBar {
+    ProgressBar::new(len).with_style(
+        ProgressStyle::with_template("  {bar:40} {pos}/{len} blocks {per_sec} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    )
+}
+
 /// Random G41/G42 programs in the main job.
 const CONTOURS: usize = 300;
 
@@ -353,10 +358,7 @@ fn compare_all<T: Transport>(link: T, args: &ScenarioArgs) -> Result<ExitCode, L
         report_scenario(&s, &before, &cmp.tally);
     }
     let random = scenario::random(args.seed, args.blocks as usize);
-    let bar = ProgressBar::new(random.blocks() as u64).with_style(
-        ProgressStyle::with_template("  {bar:40} {pos}/{len} blocks {per_sec} eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = blocks_bar(random.blocks() as u64);
     let before = cmp.tally.clone();
     let t0 = Instant::now();
     cmp.run(&random, |_| bar.inc(1))?;
