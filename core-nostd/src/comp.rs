@@ -21,7 +21,7 @@
 //! use core_nostd::comp::{Contour, Element, Tool};
 //! use core_nostd::gcode::Compensation;
 //! use core_nostd::length::Length;
-//! # use core_nostd::protocol::TipCode;
+//! # use core_nostd::comp::TipCode;
 //! let mm = |s: &str| Length::from_mm_str(s).unwrap().as_angstrom();
 //! let tool = Tool::new(Length::from_mm_str("0.4").unwrap(), TipCode::EXTERNAL_RIGHT);
 //! let line = |from: [&str; 2], to: [&str; 2]| Element::line([mm(from[0]), mm(from[1])], [mm(to[0]), mm(to[1])], false, None);
@@ -37,7 +37,6 @@
 use crate::arc::ArcDir;
 use crate::gcode::{Compensation, Corner};
 use crate::length::{Length, LENGTH_LIMIT};
-use crate::protocol::TipCode;
 use crate::trig::{atan2, isqrt};
 
 /// Fractional bits of an ångström in corner arithmetic.
@@ -366,6 +365,30 @@ fn intersect(a: Offset, b: Offset) -> Option<V> {
         }
     }
     best.map(|(_, p)| p)
+}
+
+/// Tool tip orientation code 0…9 (Fanuc/Haas convention, see PROTOCOL.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TipCode(u8);
+
+impl TipCode {
+    /// An external right-hand turning tool.
+    pub const EXTERNAL_RIGHT: TipCode = TipCode(3);
+
+    /// A code from its digit, if 0…9.
+    pub const fn new(code: u8) -> Option<TipCode> {
+        if code <= 9 {
+            Some(TipCode(code))
+        } else {
+            None
+        }
+    }
+
+    /// The digit.
+    pub const fn get(self) -> u8 {
+        self.0
+    }
 }
 
 /// The tool: nose radius and tip code.

@@ -10,7 +10,7 @@ pub mod reply;
 mod session;
 mod words;
 
-pub use session::{Config, Pass, Session, TipCode, NAME, VERSION};
+pub use session::{Config, Pass, Session, NAME, VERSION};
 
 use crate::arc::DirectArc;
 use crate::interleave::LinearBlock;

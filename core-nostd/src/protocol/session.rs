@@ -8,7 +8,9 @@ use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
-use crate::comp::{CompError, Contour, Element, Move, MoveKind, Moves, Shape, Tool, MAX_MOVES};
+use crate::comp::{
+    CompError, Contour, Element, Move, MoveKind, Moves, Shape, TipCode, Tool, MAX_MOVES,
+};
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{is_block, parse_block, BlockError, Motion};
@@ -46,30 +48,6 @@ impl Pass {
             Pass::Finish => "FIN",
             Pass::Rough => "ROUGH",
         }
-    }
-}
-
-/// Tool tip orientation code 0…9 (Fanuc/Haas convention, see PROTOCOL.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct TipCode(u8);
-
-impl TipCode {
-    /// An external right-hand turning tool.
-    pub const EXTERNAL_RIGHT: TipCode = TipCode(3);
-
-    /// A code from its digit, if 0…9.
-    pub const fn new(code: u8) -> Option<TipCode> {
-        if code <= 9 {
-            Some(TipCode(code))
-        } else {
-            None
-        }
-    }
-
-    /// The digit.
-    pub const fn get(self) -> u8 {
-        self.0
     }
 }
 
@@ -421,9 +399,10 @@ impl Session {
         }
         if let Some(v) = tip {
             cfg.tip = match v.as_bytes() {
-                [d @ b'0'..=b'9'] => TipCode(d - b'0'),
-                _ => return Err(Refusal::Value("TIP", "must be a digit 0 to 9")),
-            };
+                [d @ b'0'..=b'9'] => TipCode::new(d - b'0'),
+                _ => None,
+            }
+            .ok_or(Refusal::Value("TIP", "must be a digit 0 to 9"))?;
         }
         if let Some(v) = tol {
             cfg.tol = parse_tol(v)?;
@@ -447,7 +426,7 @@ impl Session {
                 c.hz.as_length(),
                 u8::from(c.diam),
                 c.rn,
-                c.tip.0,
+                c.tip.get(),
                 c.tol,
                 c.pass.as_str()
             )),

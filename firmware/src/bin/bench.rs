@@ -63,7 +63,7 @@ fn compensation(tim: &StepTimer) {
     use core_nostd::comp::{Contour, Element, Shape, Tool};
     use core_nostd::gcode::Compensation;
     use core_nostd::length::Length;
-    use core_nostd::protocol::TipCode;
+    use core_nostd::comp::TipCode;
     let um = |v: i64| v * 10_000;
     let p = |x: i64, z: i64| [um(x), um(z)];
     let line = |a, b| Element::line(a, b, false, None);
