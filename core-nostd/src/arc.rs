@@ -264,11 +264,28 @@ impl ChordPlan {
         hx: ImpulsePrice,
         hz: ImpulsePrice,
     ) -> Result<ImpulsePoint, RangeError> {
+        self.chord_point(i, hx, hz).map(|(p, _)| p)
+    }
+
+    /// The end of chord `i` (1 … n): its impulse position with the carry
+    /// rule, and the point itself in ångström · 2³² (rounded half away from
+    /// zero from the 2⁻⁶² Å it is computed to; chord `n` ends exactly on the
+    /// commanded end).
+    pub fn chord_point(
+        &self,
+        i: u32,
+        hx: ImpulsePrice,
+        hz: ImpulsePrice,
+    ) -> Result<(ImpulsePoint, [i128; 2]), RangeError> {
         if i >= self.n {
-            return Ok(ImpulsePoint {
-                x: crate::impulse::quantize(self.end[0], hx)?,
-                z: crate::impulse::quantize(self.end[1], hz)?,
-            });
+            let q = |l: Length| i128::from(l.as_angstrom()) << 32;
+            return Ok((
+                ImpulsePoint {
+                    x: crate::impulse::quantize(self.end[0], hx)?,
+                    z: crate::impulse::quantize(self.end[1], hz)?,
+                },
+                [q(self.end[0]), q(self.end[1])],
+            ));
         }
         // i·Δφ < n·Δφ ≤ 10⁴ · 1 296 000″: fits.
         let angle = Turn::from_arcsec(i64::from(i) * i64::from(self.dphi_arcsec));
@@ -282,10 +299,23 @@ impl ChordPlan {
         // Rotate (z, x) by the angle: z' = z·c − x·s, x' = z·s + x·c (Å·2⁶²).
         let z = (i128::from(self.centre[1]) << 62) + uz * c - ux * s;
         let x = (i128::from(self.centre[0]) << 62) + uz * s + ux * c;
-        Ok(ImpulsePoint {
-            x: quantize_q62(x, hx)?,
-            z: quantize_q62(z, hz)?,
-        })
+        // Å·2⁶² to Å·2³², half away from zero.
+        let q32 = |v: i128| {
+            let m = (v.unsigned_abs() + (1 << 29)) >> 30;
+            let m = m as i128;
+            if v < 0 {
+                -m
+            } else {
+                m
+            }
+        };
+        Ok((
+            ImpulsePoint {
+                x: quantize_q62(x, hx)?,
+                z: quantize_q62(z, hz)?,
+            },
+            [q32(x), q32(z)],
+        ))
     }
 }
 

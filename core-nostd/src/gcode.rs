@@ -13,7 +13,8 @@
 //! | `Z` | Z end point | length |
 //! | `I`, `K` | arc centre minus start point, radius values | length |
 //! | `R` | arc radius: positive for an arc of at most 180°, negative for more | length |
-//! | `F`, `S`, `T`, `M` | feed, speed, tool, miscellaneous | accepted, not acted on |
+//! | `F` | feed along the path, mm/min (modal) | length |
+//! | `S`, `T`, `M` | speed, tool, miscellaneous | accepted, not acted on |
 
 use crate::length::{Length, LengthError};
 
@@ -88,6 +89,8 @@ pub struct Block {
     pub k: Option<Length>,
     /// R word.
     pub r: Option<Length>,
+    /// F word: the feed, mm/min.
+    pub f: Option<Length>,
 }
 
 /// Why a block was refused.
@@ -197,8 +200,9 @@ fn word(
             length()?;
             block.n = number.parse().ok();
         }
+        b'F' => block.f = Some(length()?),
         // Accepted and checked as numbers, not acted on.
-        b'F' | b'S' | b'T' | b'M' => {
+        b'S' | b'T' | b'M' => {
             length()?;
         }
         _ => return Err(BlockError::UnknownAddress(letter)),

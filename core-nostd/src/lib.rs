@@ -47,9 +47,11 @@ pub mod gcode;
 pub mod impulse;
 pub mod interleave;
 pub mod length;
+pub mod machine;
 pub mod plan;
 pub mod protocol;
 pub mod step;
 pub mod stepdir;
 pub mod trig;
 mod wide;
+

@@ -30,7 +30,7 @@
 use crate::impulse::ImpulsePrice;
 use crate::interleave::LinearBlock;
 use crate::length::{Length, ANGSTROM_PER_MM};
-use crate::step::{Cruise, Ramp, TickRate, TimedBlock, HALF};
+use crate::step::{Cruise, Ramp, TickRate, TimedBlock, HALF, TIE};
 use crate::trig::isqrt;
 use crate::wide::{mul_div, mul_shl_div, mul_shr, shl_div, sqrt_shl, U256};
 use core::fmt;
@@ -212,16 +212,24 @@ pub struct Rates {
 }
 
 impl Rates {
+    /// The default limits on the device's timer.
+    pub const DEFAULT: Rates = Rates::new(Limits::DEFAULT, TickRate::TIMER);
+
     /// The limits on a clock of `tick`.
-    pub fn new(limits: Limits, tick: TickRate) -> Rates {
-        let t2 = u128::from(tick.hz()) * u128::from(tick.hz());
-        let v2 = |v: u64| shl_div(u128::from(v) * u128::from(v), 64, 3600 * t2);
-        let a = |a: u64| shl_div(u128::from(a), 96, t2);
+    pub const fn new(limits: Limits, tick: TickRate) -> Rates {
+        let t2 = tick.hz() as u128 * tick.hz() as u128;
+        let (vx, vz) = (limits.vmax[0] as u128, limits.vmax[1] as u128);
         Rates {
             limits,
             tick,
-            vmax2: [v2(limits.vmax[0]), v2(limits.vmax[1])],
-            accel: [a(limits.amax[0]), a(limits.amax[1])],
+            vmax2: [
+                shl_div(vx * vx, 64, 3600 * t2),
+                shl_div(vz * vz, 64, 3600 * t2),
+            ],
+            accel: [
+                shl_div(limits.amax[0] as u128, 96, t2),
+                shl_div(limits.amax[1] as u128, 96, t2),
+            ],
         }
     }
 
@@ -250,7 +258,7 @@ impl Rates {
 
 impl Default for Rates {
     fn default() -> Self {
-        Rates::new(Limits::DEFAULT, TickRate::TIMER)
+        Rates::DEFAULT
     }
 }
 
@@ -313,9 +321,20 @@ impl Block {
         h: [ImpulsePrice; 2],
         rates: &Rates,
     ) -> Option<Block> {
-        let d = [to[0].checked_sub(from[0])?, to[1].checked_sub(from[1])?];
+        let mut d = [to[0].checked_sub(from[0])?, to[1].checked_sub(from[1])?];
+        let (nx, nz) = events.delta();
+        let lead = usize::from(nz.unsigned_abs() > nx.unsigned_abs());
+        if d == [0, 0] {
+            // No length: nothing to plan, unless the ends lie on either side
+            // of a rounding boundary closer than 2⁻³² Å (then 2⁻³² Å long).
+            let n = if lead == 0 { nx } else { nz };
+            if n == 0 {
+                return None;
+            }
+            d[lead] = i128::from(n.signum());
+        }
         let m = d[0].unsigned_abs().max(d[1].unsigned_abs());
-        if m == 0 || m >= 1 << 100 {
+        if m >= 1 << 100 {
             return None;
         }
         let bits = 128 - m.leading_zeros() as i32;
@@ -358,8 +377,6 @@ impl Block {
         // 2aL = 2·a·ln·2^scale, Q96·Q32 → Q64.
         let two_al = mul_shr(accel, u128::from(ln), (63 - scale) as u32);
         // The lead axis by impulses, X when equal (SPEC §2).
-        let (nx, nz) = events.delta();
-        let lead = usize::from(nz.unsigned_abs() > nx.unsigned_abs());
         let (a0, n) = if lead == 0 {
             (events.from().x.get(), nx)
         } else {
@@ -522,6 +539,11 @@ impl<const N: usize> Planner<N> {
         self.blocks.len()
     }
 
+    /// Whether a run is open: a block has started since the last one ended.
+    pub const fn in_run(&self) -> bool {
+        self.running
+    }
+
     /// Whether nothing is queued and no run is open.
     pub fn is_idle(&self) -> bool {
         self.blocks.is_empty() && !self.running
@@ -668,20 +690,20 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
         accel: Ramp {
             first: mul_shr(ue, ue, 64).saturating_add(two_s_over_a(o)),
             per_event,
-            origin: signed(HALF + ue).saturating_sub(signed(start)),
+            origin: signed(HALF - TIE + ue).saturating_sub(signed(start)),
         },
         cruise: Cruise {
             first: start
                 .saturating_add(t_accel)
                 .saturating_add(cruise_time(at(accel_events).saturating_sub(l_accel)))
-                .saturating_add(HALF),
+                .saturating_add(HALF + TIE),
             per_event: cruise_time(h),
         },
         decel: Ramp {
             first: mul_shr(ux, ux, 64)
                 .saturating_add(two_s_over_a(len.saturating_sub(at(cruise_end)))),
             per_event,
-            origin: signed(decel_start.saturating_add(uc)).saturating_sub(HALF as i128),
+            origin: signed(decel_start.saturating_add(uc)).saturating_sub((HALF - TIE) as i128),
         },
         start,
         end: decel_start.saturating_add(t_decel),

@@ -37,6 +37,11 @@ use crate::wide::{mul_shr, sqrt_shl};
 pub(crate) const ONE: u128 = 1 << 64;
 /// Half a tick in Q64.64.
 pub(crate) const HALF: u128 = 1 << 63;
+/// A time this close below a half tick is taken as the tie and rounds up:
+/// 2⁻³⁶ tick. Exact ties occur (a cruise at a round feed along an axis), the
+/// formats carry far less error than this (about 2⁻⁵⁰ tick), and the
+/// reference decides ties by the same rule (`docs/motion.md`).
+pub(crate) const TIE: u128 = 1 << 28;
 
 /// Single-tick corrections after a prediction before the generator takes a
 /// square root instead.
@@ -76,10 +81,10 @@ impl TickRate {
     }
 }
 
-/// `floor(t + ½)`: a Q64.64 time rounded half up to whole ticks (half away
-/// from zero, times being positive).
+/// `Q(t)`: a Q64.64 time rounded half up to whole ticks (half away from
+/// zero, times being positive), a tie within [`TIE`].
 pub(crate) const fn round_ticks(t: u128) -> u64 {
-    (t.saturating_add(HALF) >> 64) as u64
+    (t.saturating_add(HALF + TIE) >> 64) as u64
 }
 
 /// A ramp of a started block: accelerating or decelerating at constant `a`.
@@ -91,14 +96,15 @@ pub(crate) struct Ramp {
     /// Its change per event, Q64 ticks².
     pub per_event: u128,
     /// Accelerating: `½ − T_ramp + u_entry`, so `z_k = k + origin`.
-    /// Decelerating: `T_stop − ½`, so `w_k = origin − k`. Q64 ticks.
+    /// Decelerating: `T_stop − ½`, so `w_k = origin − k`. Q64 ticks, the
+    /// half tick moved by [`TIE`] so that ties round up.
     pub origin: i128,
 }
 
 /// The cruise of a started block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Cruise {
-    /// The time of its first event plus half a tick, Q64.
+    /// The time of its first event plus half a tick (and [`TIE`]), Q64.
     pub first: u128,
     /// Time between events, Q64 ticks.
     pub per_event: u128,

@@ -38,10 +38,10 @@ pub enum TimingError {
 impl DriveTiming {
     /// The highest step rate: 200 000 steps per second (a 5 µs period).
     pub const MAX_RATE_HZ: u32 = 200_000;
-    /// Defaults that suit common step/dir drives: 10 000 steps/s, 5 µs pulse,
-    /// 5 µs direction set-up.
+    /// Defaults that suit common step/dir drives: up to 50 000 step events
+    /// per second, 5 µs pulse, 5 µs direction set-up.
     pub const DEFAULT: DriveTiming = DriveTiming {
-        rate_hz: 10_000,
+        rate_hz: 50_000,
         pulse_us: 5,
         setup_us: 5,
     };

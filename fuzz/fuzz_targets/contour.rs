@@ -11,7 +11,6 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use core_nostd::protocol::Device;
 use fuzz_oracle::Checker;
 use libfuzzer_sys::fuzz_target;
 
@@ -44,7 +43,7 @@ fn mm(v: i32) -> String {
 }
 
 fuzz_target!(|p: Program| {
-    let mut checker = Checker::new(Device::new());
+    let mut checker = Checker::new(fuzz_oracle::fuzz_device());
     let cfg = format!("CFG RN={} TIP={}", mm(i32::from(p.rn % 3000)), p.tip % 10);
     assert!(checker.line(&cfg, true).err().is_none());
     for b in p.blocks.iter().take(64) {

@@ -32,7 +32,7 @@ fn preludes() -> &'static [(Device, bool)] {
     static P: OnceLock<Vec<(Device, bool)>> = OnceLock::new();
     P.get_or_init(|| {
         vec![
-            (Device::new(), false),
+            (fuzz_oracle::fuzz_device(), false),
             (
                 device_after(&[
                     "CFG HX=0.0025 TOL=0.02 PASS=ROUGH",

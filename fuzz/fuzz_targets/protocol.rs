@@ -12,12 +12,11 @@
 //! agree; bytes after the last terminator produce no reply.
 #![no_main]
 
-use core_nostd::protocol::Device;
 use fuzz_oracle::{requests, Checker};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let mut checker = Checker::new(Device::new());
+    let mut checker = Checker::new(fuzz_oracle::fuzz_device());
     let answers = checker.feed(data);
     assert_eq!(answers.len(), requests(data).len());
 });

@@ -23,7 +23,7 @@
 #![no_main]
 
 use arbitrary::Arbitrary;
-use core_nostd::protocol::{Device, NAME, VERSION};
+use core_nostd::protocol::{NAME, VERSION};
 use fuzz_oracle::{
     mm4_of, parse_mm, q, reference_block, reference_is_block, with_checksum, Checker,
     LIMIT_ANGSTROM, MAX_BLOCK, MAX_LINE, MAX_POSITION,
@@ -736,7 +736,7 @@ fn with_crc(body: &str) -> String {
 }
 
 fuzz_target!(|requests: Vec<Request>| {
-    let mut checker = Checker::new(Device::new());
+    let mut checker = Checker::new(fuzz_oracle::fuzz_device());
     let mut model = Model::POWER_ON;
     let mut prev_id = None;
     for r in requests.iter().take(64) {

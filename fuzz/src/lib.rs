@@ -6,8 +6,8 @@
 //! re-derived from `PROTOCOL.md` and the module docs, with exact integer
 //! arithmetic.
 
-use core_nostd::arc::DirectArc;
-use core_nostd::interleave::LinearBlock;
+
+use core_nostd::interleave::{LinearBlock, StepEvent};
 use core_nostd::protocol::{Device, Io, Session};
 use core_nostd::stepdir::DriveTiming;
 
@@ -426,8 +426,8 @@ pub fn check_reply_line(line: &[u8]) -> String {
 /// Checks the step events of a linear block against SPEC §2: the leading axis
 /// (larger |Δ|, X on a tie) steps in every event; after event `i` the other
 /// axis stands at `Q(i·Δb/|Δlead|)`; a direction bit is set only with its
-/// step, and only for a negative step. Adds the event bytes to `crc`.
-pub fn check_linear_events(block: &LinearBlock, crc: &mut Crc32) {
+/// step, and only for a negative step. `bytes` are the events issued for it.
+pub fn check_linear_events(block: &LinearBlock, bytes: &[u8]) {
     let (dx, dz) = block.delta();
     assert!(i64::from(dx).abs() <= MAX_BLOCK && i64::from(dz).abs() <= MAX_BLOCK);
     let (from, to) = (block.from(), block.to());
@@ -456,50 +456,42 @@ pub fn check_linear_events(block: &LinearBlock, crc: &mut Crc32) {
     // loop runs for every step and is not what the fuzzer should steer by.
     let l = u64::from(lead.unsigned_abs());
     let d = u64::from(other.unsigned_abs());
+    assert_eq!(bytes.len() as u64, l, "number of events of the block {dx},{dz}");
     let mut prev = 0u64;
     let mut i = 0u64;
     let mut bad = 0u64;
     let two_l = 2 * l.max(1);
-    for e in block.events() {
-        let b = e.bits();
+    for &b in bytes {
         i = i.wrapping_add(1);
         let now = (i.wrapping_mul(2 * d).wrapping_add(l)) / two_l;
         let expected = lead_bits | other_bits.wrapping_mul(now.wrapping_sub(prev) as u8);
         bad |= u64::from(b ^ expected);
         prev = now;
-        crc.push(b);
     }
-    if bad != 0 || i != l {
+    if bad != 0 {
         // Slow path: find and name the first wrong event.
         let mut prev = 0u64;
-        for (k, e) in block.events().enumerate() {
+        for (k, &b) in bytes.iter().enumerate() {
             let k = k as u64 + 1;
             let now = (2 * k * d + l) / (2 * l);
             let expected = lead_bits | (other_bits * (now - prev) as u8);
             assert_eq!(
-                e.bits(),
-                expected,
-                "event {k} of the block {dx},{dz}: {:#06b}, the rule gives {expected:#06b}",
-                e.bits()
+                b, expected,
+                "event {k} of the block {dx},{dz}: {b:#06b}, the rule gives {expected:#06b}"
             );
             prev = now;
         }
-        assert_eq!(i, l, "number of events of the block {dx},{dz}");
     }
 }
 
 /// Checks the step events of a direct arc: each event steps at least one
-/// axis, each axis at most once, a direction bit only with its step, and the
-/// steps add up to the arc's increments. Adds the event bytes to `crc`.
-pub fn check_direct_events(arc: &DirectArc, crc: &mut Crc32) {
-    let (dx, dz) = arc.delta();
-    assert!(i64::from(dx).abs() <= MAX_BLOCK && i64::from(dz).abs() <= MAX_BLOCK);
+/// axis, each axis at most once, a direction bit only with its step; returns
+/// the increments they add up to.
+pub fn check_direct_events(bytes: &[u8]) -> (i32, i32) {
     // Count the events by byte value (no per-event branches), then check.
     let mut seen = [0i64; 256];
-    for e in arc.events() {
-        let b = e.bits();
+    for &b in bytes {
         seen[usize::from(b)] = seen[usize::from(b)].wrapping_add(1);
-        crc.push(b);
     }
     let (mut sx, mut sz) = (0i64, 0i64);
     for (b, &n) in seen.iter().enumerate().filter(|(_, &n)| n > 0) {
@@ -514,14 +506,21 @@ pub fn check_direct_events(arc: &DirectArc, crc: &mut Crc32) {
             sz += if b & 8 != 0 { -n } else { n };
         }
     }
-    assert_eq!((sx, sz), (i64::from(dx), i64::from(dz)), "direct arc steps");
+    assert!(sx.abs() <= MAX_BLOCK && sz.abs() <= MAX_BLOCK);
+    (sx as i32, sz as i32)
 }
 
-/// Step events per request that are checked one by one (and covered by the
-/// `SEQ` check). An arc may issue billions of steps (a circle of 50 m radius
-/// at 0.0001 mm per impulse); beyond this budget only the increments are
+/// Step events per request that are kept and checked one by one. An arc may
+/// issue billions of steps (a circle of 50 m radius at 0.0001 mm per
+/// impulse); beyond this budget only the `SEQ` and the increments are
 /// checked, so one input cannot stall the fuzzer for minutes.
 pub const EVENT_BUDGET: u64 = 5_000_000;
+
+/// The fuzzed device: the look-ahead window is one block, so every block
+/// starts, and issues its events, within the request that queues it.
+pub fn fuzz_device() -> Device {
+    Device::with_window(1)
+}
 
 /// An [`Io`] that checks and collects reply lines, and checks the motion it
 /// is handed.
@@ -532,10 +531,17 @@ pub struct Collect {
     pub moves: Vec<(i32, i32)>,
     /// CRC-32 of every step event handed to the drive.
     pub crc: Crc32,
-    /// Events left to check one by one.
+    /// Events left to keep.
     pub budget: u64,
-    /// Some motion was beyond the budget: `crc` is incomplete.
+    /// Some motion was beyond the budget: not every event was checked.
     pub over_budget: bool,
+    /// The events kept, and where each block's begin.
+    bytes: Vec<u8>,
+    blocks: Vec<(usize, LinearBlock)>,
+    /// Signed steps of every event.
+    sum: (i64, i64),
+    /// The tick of the last event of the run.
+    tick: Option<u64>,
 }
 
 impl Default for Collect {
@@ -546,19 +552,48 @@ impl Default for Collect {
             crc: Crc32::default(),
             budget: EVENT_BUDGET,
             over_budget: false,
+            bytes: Vec::new(),
+            blocks: Vec::new(),
+            sum: (0, 0),
+            tick: None,
         }
     }
 }
 
 impl Collect {
-    fn spend(&mut self, (dx, dz): (i32, i32)) -> bool {
-        let events = u64::from(dx.unsigned_abs() + dz.unsigned_abs());
-        if self.over_budget || events > self.budget {
-            self.over_budget = true;
-            return false;
+    /// Checks the events against the blocks they came from and sets
+    /// `moves`: one entry per block, and one for events of no block (a
+    /// direct arc).
+    pub fn finish(&mut self) {
+        let mut direct = Vec::new();
+        let mut at = 0;
+        for (k, &(start, block)) in self.blocks.iter().enumerate() {
+            let n = block.events().len();
+            if start > at {
+                direct.extend_from_slice(&self.bytes[at..start.min(self.bytes.len())]);
+            }
+            let end = start + n;
+            let next = self.blocks.get(k + 1).map_or(usize::MAX, |b| b.0);
+            assert!(end <= next, "a block's events cut short by the next block");
+            if !self.over_budget {
+                check_linear_events(&block, &self.bytes[start..end]);
+            }
+            self.moves.push(block.delta());
+            at = end;
         }
-        self.budget -= events;
-        true
+        if at < self.bytes.len() {
+            direct.extend_from_slice(&self.bytes[at..]);
+        }
+        if !direct.is_empty() {
+            self.moves.push(check_direct_events(&direct));
+        }
+        if !self.over_budget {
+            let total = self
+                .moves
+                .iter()
+                .fold((0i64, 0i64), |a, m| (a.0 + i64::from(m.0), a.1 + i64::from(m.1)));
+            assert_eq!(total, self.sum, "steps issued vs the blocks' increments");
+        }
     }
 }
 
@@ -566,17 +601,28 @@ impl Io for Collect {
     fn send(&mut self, line: &[u8]) {
         self.lines.push(check_reply_line(line));
     }
-    fn run_block(&mut self, block: &LinearBlock, _: &DriveTiming) {
-        if self.spend(block.delta()) {
-            check_linear_events(block, &mut self.crc);
-        }
-        self.moves.push(block.delta());
+    fn block_start(&mut self, block: &LinearBlock) {
+        self.blocks.push((self.bytes.len(), *block));
     }
-    fn run_direct(&mut self, arc: &DirectArc, _: &DriveTiming) {
-        if self.spend(arc.delta()) {
-            check_direct_events(arc, &mut self.crc);
+    fn step(&mut self, event: StepEvent, tick: u64, _: &DriveTiming) {
+        let b = event.bits();
+        self.crc.push(b);
+        let signed = |step: bool, neg: bool| i64::from(step) * if neg { -1 } else { 1 };
+        self.sum.0 += signed(event.x_steps(), event.x_negative());
+        self.sum.1 += signed(event.z_steps(), event.z_negative());
+        if let Some(t) = self.tick {
+            assert!(tick >= t, "ticks went back in a run: {t} then {tick}");
         }
-        self.moves.push(arc.delta());
+        self.tick = Some(tick);
+        if self.budget == 0 {
+            self.over_budget = true;
+        } else {
+            self.budget -= 1;
+            self.bytes.push(b);
+        }
+    }
+    fn run_end(&mut self, _: u64) {
+        self.tick = None;
     }
 }
 
@@ -775,6 +821,7 @@ impl Checker {
         }
         let mut io = Collect::default();
         self.dev.receive_bytes(&bytes[start..], &mut io);
+        io.finish();
         assert!(
             io.lines.is_empty(),
             "reply without a request: {:?}",
@@ -814,6 +861,7 @@ impl Checker {
         let start = before.session().position();
         let mut io = Collect::default();
         self.dev.receive_bytes(bytes, &mut io);
+        io.finish();
         let shown = String::from_utf8_lossy(bytes);
         let finals = io.lines.iter().filter(|l| is_final(l)).count();
         assert_eq!(finals, 1, "{shown:?} -> {:?}", io.lines);
@@ -973,7 +1021,7 @@ impl Checker {
 /// Runs request lines (terminator added) on a device, asserting they are
 /// accepted: a prelude that puts a device in a known state.
 pub fn device_after(lines: &[&str]) -> Device {
-    let mut c = Checker::new(Device::new());
+    let mut c = Checker::new(fuzz_device());
     for l in lines {
         let a = c.line(l, true);
         assert!(a.err().is_none(), "{l} -> {:?}", a.lines);

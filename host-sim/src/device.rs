@@ -1,22 +1,43 @@
-//! The in-process device: the core's protocol handler behind a byte API.
+//! The in-process device: the core's protocol handler behind a byte API,
+//! with a virtual clock: every step event it issues is recorded with its
+//! tick.
 
-use core_nostd::interleave::LinearBlock;
+use core_nostd::interleave::StepEvent;
 use core_nostd::protocol::{Device, Io};
 use core_nostd::stepdir::DriveTiming;
 
-/// Collects reply bytes and the blocks the device ran.
-#[derive(Default)]
-struct Collect {
-    out: Vec<u8>,
-    blocks: Vec<LinearBlock>,
+/// One step event as issued: its byte (the `SEQ` layout) and its tick in
+/// its run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Issued {
+    /// bit0 X steps, bit1 Z steps, bit2 X negative, bit3 Z negative.
+    pub bits: u8,
+    /// Ticks since its run began.
+    pub tick: u64,
+    /// The run it belongs to, counted from 0 since power-on.
+    pub run: u64,
 }
 
-impl Io for Collect {
+/// Collects reply bytes and the events the device issued.
+struct Collect<'a> {
+    out: Vec<u8>,
+    events: &'a mut Vec<Issued>,
+    runs: &'a mut u64,
+}
+
+impl Io for Collect<'_> {
     fn send(&mut self, line: &[u8]) {
         self.out.extend_from_slice(line);
     }
-    fn run_block(&mut self, block: &LinearBlock, _: &DriveTiming) {
-        self.blocks.push(*block);
+    fn step(&mut self, event: StepEvent, tick: u64, _: &DriveTiming) {
+        self.events.push(Issued {
+            bits: event.bits(),
+            tick,
+            run: *self.runs,
+        });
+    }
+    fn run_end(&mut self, _: u64) {
+        *self.runs += 1;
     }
 }
 
@@ -24,21 +45,43 @@ impl Io for Collect {
 #[derive(Default)]
 pub struct LocalDevice {
     dev: Device,
-    blocks: Vec<LinearBlock>,
+    events: Vec<Issued>,
+    runs: u64,
+    /// Keep the events issued (off: only count them).
+    record: bool,
+    issued: u64,
 }
 
 impl LocalDevice {
-    /// A device at power-on.
+    /// A device at power-on; it counts the events it issues.
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// A device at power-on that keeps every event it issues, for
+    /// [`LocalDevice::take_events`].
+    pub fn recording() -> Self {
+        LocalDevice {
+            record: true,
+            ..Self::default()
+        }
+    }
+
     /// Feeds raw bytes; returns the raw reply bytes they produced.
     pub fn feed(&mut self, bytes: &[u8]) -> Vec<u8> {
-        let mut io = Collect::default();
+        let before = self.events.len();
+        let mut io = Collect {
+            out: Vec::new(),
+            events: &mut self.events,
+            runs: &mut self.runs,
+        };
         self.dev.receive_bytes(bytes, &mut io);
-        self.blocks.extend(io.blocks);
-        io.out
+        let out = io.out;
+        self.issued += (self.events.len() - before) as u64;
+        if !self.record {
+            self.events.clear();
+        }
+        out
     }
 
     /// Sends one request line (LF appended) and returns its reply lines,
@@ -53,9 +96,19 @@ impl LocalDevice {
             .collect()
     }
 
-    /// The blocks run since the last call (the motion the device issued).
-    pub fn take_blocks(&mut self) -> Vec<LinearBlock> {
-        std::mem::take(&mut self.blocks)
+    /// The events issued since the last call (kept by a recording device).
+    pub fn take_events(&mut self) -> Vec<Issued> {
+        std::mem::take(&mut self.events)
+    }
+
+    /// Step events issued since power-on.
+    pub fn issued(&self) -> u64 {
+        self.issued
+    }
+
+    /// Runs ended since power-on.
+    pub fn runs(&self) -> u64 {
+        self.runs
     }
 
     /// The underlying device (state inspection).

@@ -6,7 +6,7 @@
 //! A test under "Findings" fails until the behaviour it describes is fixed.
 
 use core_nostd::gcode::parse_block;
-use core_nostd::interleave::LinearBlock;
+use core_nostd::interleave::StepEvent;
 use core_nostd::length::{Length, LengthError};
 use core_nostd::protocol::{Device, Io};
 use core_nostd::stepdir::DriveTiming;
@@ -29,7 +29,7 @@ impl Io for Replies {
         assert_eq!(sum, format!("{xor:02X}"), "checksum of {text:?}");
         self.lines.push(body.to_string());
     }
-    fn run_block(&mut self, _: &LinearBlock, _: &DriveTiming) {
+    fn step(&mut self, _: StepEvent, _: u64, _: &DriveTiming) {
         self.blocks += 1;
     }
 }
@@ -55,9 +55,9 @@ fn finals(r: &Replies) -> usize {
 }
 
 /// Everything a request could change, as the device reports it.
-fn state(dev: &Device) -> [String; 4] {
+fn state(dev: &Device) -> [String; 5] {
     let mut copy = dev.clone();
-    ["POS", "CFG", "DRIVE", "SESSION"].map(|q| ask1(&mut copy, q))
+    ["POS", "CFG", "DRIVE", "SESSION", "LIMITS"].map(|q| ask1(&mut copy, q))
 }
 
 fn with_crc(body: &str) -> String {

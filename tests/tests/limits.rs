@@ -103,20 +103,23 @@ fn state(dev: &mut LocalDevice) -> State {
 /// `VALUE X`), change no state and issue no motion.
 fn refused(dev: &mut LocalDevice, line: &str, code: &str) {
     let before = state(dev);
-    dev.take_blocks();
+    let issued = dev.issued();
     let r = one(dev, line);
     let want = format!("ERR {code}");
     assert!(
         r == want || r.starts_with(&format!("{want} ")),
         "{line}: got {r:?}, documented {want}"
     );
-    assert!(dev.take_blocks().is_empty(), "{line} issued motion");
+    assert_eq!(dev.issued(), issued, "{line} issued motion");
     assert_eq!(state(dev), before, "{line} changed state");
 }
 
-/// A fresh device with `DIAM=0` (X words are radii) and the given prices.
+/// A fresh device with `DIAM=0` (X words are radii) and the given prices,
+/// its rapid rates slow enough for the finest price (`VMAX/h ≤ RATE`).
 fn device(hx: &str, hz: &str) -> LocalDevice {
     let mut dev = LocalDevice::new();
+    let r = one(&mut dev, "LIMITS VX=1 VZ=1");
+    assert!(r.starts_with("OK "), "{r}");
     let r = one(&mut dev, &format!("CFG DIAM=0 HX={hx} HZ={hz}"));
     assert!(r.starts_with("OK "), "{r}");
     dev
@@ -351,13 +354,13 @@ fn request_line_of_120_bytes_runs_and_121_is_too_long_once() {
         for tail in ["", " MOVE X=40", long_tail.as_str()] {
             let over = format!("{}5{tail}", padded("MOVE X=30", "Z=-15", 120));
             assert!(over.len() >= 121);
-            dev.take_blocks();
+            let issued = dev.issued();
             let r = feed(&mut dev, format!("{over}{terminator}POS\r\n").as_bytes());
             assert_eq!(r.len(), 2, "{terminator:?} {tail:?}: {r:?}");
             assert!(r[0].starts_with("ERR LINE_TOO_LONG"), "{r:?}");
             assert!(r[0] == "ERR LINE_TOO_LONG" || r[0].starts_with("ERR LINE_TOO_LONG "));
             assert_eq!(r[1], pos);
-            assert!(dev.take_blocks().is_empty());
+            assert_eq!(dev.issued(), issued);
         }
     }
     assert_eq!(state(&mut dev), before);
@@ -560,13 +563,15 @@ fn position_register_of_999_999_999_impulses() {
 #[test]
 fn one_linear_block_of_1_000_000_impulses_per_axis() {
     let mut dev = device("0.000001", "0.000001");
-    dev.take_blocks();
+    let issued = dev.issued();
     expect(
         &mut dev,
         "MOVE X=1 Z=-1",
         &move_ok(1_000_000, -1_000_000, 1_000_000, -1_000_000),
     );
-    assert_eq!(dev.take_blocks().len(), 1);
+    // Queued; it runs at the flush: a million diagonal events.
+    assert!(one(&mut dev, "SYNC").starts_with("OK EV=1000000 "));
+    assert_eq!(dev.issued() - issued, 1_000_000);
     // One impulse more on either axis.
     refused(&mut dev, "MOVE X=-0.000001", "RANGE");
     refused(&mut dev, "MOVE Z=0.000001", "RANGE");

@@ -525,7 +525,6 @@ impl Session {
         self.stats.requests += 1;
         self.log.push(line.to_owned());
         let replies = self.dev.request(line);
-        self.dev.take_blocks();
         if replies.len() != 1 {
             return Err(self.context(&format!("expected one reply line, got {replies:?}")));
         }

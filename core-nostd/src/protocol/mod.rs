@@ -12,8 +12,7 @@ mod words;
 
 pub use session::{Config, Pass, Session, NAME, VERSION};
 
-use crate::arc::DirectArc;
-use crate::interleave::LinearBlock;
+use crate::interleave::{LinearBlock, StepEvent};
 use crate::stepdir::DriveTiming;
 use core::fmt;
 use framing::{Framed, LineAssembler};
@@ -71,17 +70,26 @@ pub trait Io {
     /// Sends one complete reply line (it ends with `*HH` and CRLF).
     fn send(&mut self, line: &[u8]);
 
-    /// Runs one accepted linear block with the session's drive timing.
-    /// Called after the session has taken the block (its position registers
-    /// already hold the end point) and before the reply that reports it. The
-    /// default does nothing (a calculator without motion).
-    fn run_block(&mut self, block: &LinearBlock, timing: &DriveTiming) {
-        let _ = (block, timing);
+    /// A run of motion begins: its tick 0 is now.
+    fn run_start(&mut self) {}
+
+    /// A linear block starts: its events follow. (Events of a direct arc
+    /// come without one.)
+    fn block_start(&mut self, block: &LinearBlock) {
+        let _ = block;
     }
 
-    /// Runs one accepted direct (step-by-step) arc, as `run_block` does.
-    fn run_direct(&mut self, arc: &DirectArc, timing: &DriveTiming) {
-        let _ = (arc, timing);
+    /// Issues one step event at `tick` of the current run (ticks of the
+    /// device's step clock since the run began), with the drive's pulse
+    /// width and DIR set-up. Events come in order; ticks never decrease
+    /// within a run. The default does nothing (a calculator without motion).
+    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
+        let _ = (event, tick, drive);
+    }
+
+    /// The run ended `ticks` after it began; the axes are at rest.
+    fn run_end(&mut self, ticks: u64) {
+        let _ = ticks;
     }
 }
 
@@ -98,6 +106,16 @@ impl Device {
         Device {
             rx: LineAssembler::new(),
             session: Session::new(),
+        }
+    }
+
+    /// A device whose planner looks `window` blocks ahead (1 … 64; the
+    /// device's own is 64). With a window of one every block starts, and
+    /// issues its events, within the request that queues it.
+    pub const fn with_window(window: usize) -> Self {
+        Device {
+            rx: LineAssembler::new(),
+            session: Session::with_window(window),
         }
     }
 

@@ -9,7 +9,7 @@ use super::words::{parse_args, ArgError, Words};
 use super::{ErrorCode, Io};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
 use crate::comp::{
-    CompError, Contour, Element, Move, MoveKind, Moves, Shape, TipCode, Tool, MAX_MOVES,
+    CompError, Contour, Element, Move, MoveKind, Moves, Origin, Shape, TipCode, Tool, MAX_MOVES,
 };
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
@@ -17,6 +17,8 @@ use crate::gcode::{is_block, parse_block, BlockError, Motion};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::{div_round_half_away, write_mm4, Length};
+use crate::machine::{Machine, StepSink};
+use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
 use crate::stepdir::{DriveTiming, TimingError};
 use core::fmt::{self, Write};
 
@@ -121,6 +123,11 @@ pub struct Session {
     /// The id of the last request that carried one, and its final reply.
     last_id: Option<u32>,
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
+    /// The planner, the run in progress, what has been issued.
+    machine: Machine,
+    /// The feed of the last element given to the contour engine (the one
+    /// it holds while compensation is on); `None` for a rapid.
+    element_feed: Option<Feed>,
 }
 
 /// The modal state of the G-code path (compensation lives in the contour
@@ -129,13 +136,16 @@ pub struct Session {
 struct Modal {
     motion: Motion,
     incremental: bool,
+    /// The programmed feed (mm/min), none after power-on.
+    feed: Option<Feed>,
 }
 
 impl Modal {
-    /// Power-on: G00, G90.
+    /// Power-on: G00, G90, no feed.
     const POWER_ON: Modal = Modal {
         motion: Motion::Rapid,
         incremental: false,
+        feed: None,
     };
 }
 
@@ -185,6 +195,11 @@ type Outcome<'a> = Result<(), Refusal<'a>>;
 impl Session {
     /// Power-on state: defaults, at program zero.
     pub const fn new() -> Self {
+        Self::with_window(WINDOW)
+    }
+
+    /// As [`Session::new`], its planner looking `window` blocks ahead.
+    pub const fn with_window(window: usize) -> Self {
         Session {
             cfg: Config::DEFAULT,
             cmd: [Length::ZERO; 2],
@@ -200,7 +215,14 @@ impl Session {
             token: 0,
             last_id: None,
             last_final: heapless::Vec::new(),
+            machine: Machine::with_window(window),
+            element_feed: None,
         }
+    }
+
+    /// The motion pipeline: limits, queue, what has been issued.
+    pub const fn machine(&self) -> &Machine {
+        &self.machine
     }
 
     /// The configuration.
@@ -333,11 +355,36 @@ impl Session {
             self.arc_command(words, io)
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
+        } else if command.eq_ignore_ascii_case("LIMITS") {
+            self.limits_command(words, io)
+        } else if command.eq_ignore_ascii_case("SYNC") {
+            no_args(words, "SYNC")?;
+            let r = self.machine.sync(&mut Sink::new(io, self.drive));
+            send_ok(
+                io,
+                Some(format_args!(
+                    "EV={} T={} TSEQ={:08X}",
+                    r.events(),
+                    r.run_ticks(),
+                    r.tseq()
+                )),
+            );
+            Ok(())
+        } else if command.eq_ignore_ascii_case("STATUS") {
+            no_args(words, "STATUS")?;
+            self.status_reply(io);
+            Ok(())
         } else if command.eq_ignore_ascii_case("RESET") {
             no_args(words, "RESET")?;
             // As the RESET key of a control: the program is abandoned where
-            // it stands. Nothing moves; a waiting element is dropped.
-            self.modal = Modal::POWER_ON;
+            // it stands. What is queued runs to its end; a waiting element
+            // is dropped.
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            // The programmed feed stays, as on the controls machinists know.
+            self.modal = Modal {
+                feed: self.modal.feed,
+                ..Modal::POWER_ON
+            };
             self.contour = Contour::new();
             self.last_moves = Moves::new();
             self.prog = self.cmd;
@@ -371,6 +418,9 @@ impl Session {
             x: quantize(cmd[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
             z: quantize(cmd[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
         };
+        self.machine.flush(&mut Sink::new(io, self.drive));
+        self.machine.clear_record();
+        self.machine.set_position(point_q32(cmd), pos);
         self.cmd = cmd;
         self.prog = cmd;
         self.pos = pos;
@@ -415,6 +465,16 @@ impl Session {
             x: quantize(self.cmd[0], cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
             z: quantize(self.cmd[1], cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
         };
+        if let Some(axis) = self
+            .machine
+            .limits()
+            .too_fast([cfg.hx, cfg.hz], self.drive.rate_hz())
+        {
+            let key = ["HX", "HZ"][axis & 1];
+            return Err(Refusal::Value(key, "needs more step events than DRIVE RATE at the rapid rate"));
+        }
+        self.machine.flush(&mut Sink::new(io, self.drive));
+        self.machine.set_position(point_q32(self.cmd), pos);
         self.cfg = cfg;
         self.pos = pos;
         let c = &self.cfg;
@@ -511,14 +571,7 @@ impl Session {
         };
         let feed = match feed {
             None => None,
-            Some(_) if !direct => return Err(Refusal::Missing("F needs MODE=DIRECT")),
-            Some(v) => {
-                let f = parse_length("F", v)?;
-                if f <= Length::ZERO {
-                    return Err(Refusal::Value("F", "must be over 0 mm/min"));
-                }
-                Some(f)
-            }
+            Some(v) => Some(parse_feed(v)?),
         };
         let end_x = self.x_word(parse_length("X", x)?)?;
         let end_z = parse_length("Z", z)?;
@@ -538,23 +591,25 @@ impl Session {
         if direct {
             self.arc_direct(&points, dir, feed, io)
         } else {
-            self.arc_chords(&points, dir, tol, finish, io)
+            self.arc_chords(&points, dir, tol, finish, feed, io)
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn arc_chords<'a, I: Io>(
         &mut self,
         points: &ArcPoints,
         dir: ArcDir,
         tol: Length,
         finish: bool,
+        feed: Option<Feed>,
         io: &mut I,
     ) -> Outcome<'a> {
         let plan = ChordPlan::new(points, dir, tol, finish)?;
         let n = plan.chords();
         self.check_chords(&plan, self.pos)?;
         let start = self.pos;
-        let crc = self.run_chords(&plan, points, io, true, Crc32::new());
+        let crc = self.run_chords(&plan, points, feed, io, true, Crc32::new());
         let at = self.pos;
         let dphi = plan.dphi_arcsec();
         // Degrees with 6 decimals, half away from zero: dphi·10⁶/3600 = dphi·2500/9.
@@ -575,7 +630,7 @@ impl Session {
         &mut self,
         points: &ArcPoints,
         dir: ArcDir,
-        feed: Option<Length>,
+        feed: Option<Feed>,
         io: &mut I,
     ) -> Outcome<'a> {
         let arc = DirectArc::new(points, dir, self.pos, self.cfg.hx, self.cfg.hz)?;
@@ -589,7 +644,14 @@ impl Session {
         self.cmd = points.end;
         self.prog = points.end;
         self.pos = arc.to();
-        io.run_direct(&arc, &self.drive);
+        let rate = self.drive.rate_hz();
+        self.machine.fixed_rate(
+            arc.events(),
+            rate,
+            arc.to(),
+            point_q32(points.end),
+            &mut Sink::new(io, self.drive),
+        );
         let (dx, dz) = arc.delta();
         let (j, k) = arc.jk();
         let g = match dir {
@@ -606,7 +668,7 @@ impl Session {
         }
         let _ = write!(line, " J{j} K{k}");
         if let Some(f) = feed {
-            let _ = write!(line, " F{}", arc.feed_word(f));
+            let _ = write!(line, " F{}", arc.feed_word(f.mm_per_min()));
         }
         io.send(line.finish());
         send_ok(
@@ -626,6 +688,12 @@ impl Session {
         let modal = Modal {
             motion: b.motion.unwrap_or(self.modal.motion),
             incremental: b.incremental.unwrap_or(self.modal.incremental),
+            feed: match b.f {
+                Some(f) => Some(
+                    Feed::new(f).ok_or(Refusal::Value("F", "must be 0.001 to 100000 mm/min"))?,
+                ),
+                None => self.modal.feed,
+            },
         };
         let mut target = self.prog;
         if let Some(x) = b.x {
@@ -688,17 +756,28 @@ impl Session {
             shape,
             n: b.n,
         });
+        let feeds = element.is_some_and(|e| !matches!(e.shape, Shape::Line { rapid: true }));
+        // Output blocks of the element held back by compensation run at its
+        // feed; this block's own and the corners between, at this one's.
+        let now = if feeds { modal.feed } else { None };
         let tool = Tool::new(self.cfg.rn, self.cfg.tip);
         let (contour, moves) = self
             .contour
             .block(&tool, b.compensation, b.corner, element)
             .map_err(Refusal::Contour)?;
+        if feeds && modal.feed.is_none() {
+            return Err(Refusal::Value("F", "not programmed: a feed move needs F (mm/min)"));
+        }
         // Plan and check every block before the first one moves.
         let mut planned = heapless::Vec::<Planned, MAX_MOVES>::new();
         let mut cmd = self.cmd;
         let mut pos = self.pos;
         for m in &moves {
-            let p = self.plan_move(cmd, pos, m)?;
+            let feed = match m.origin {
+                Origin::Previous => self.element_feed,
+                Origin::Corner | Origin::Current => now,
+            };
+            let p = self.plan_move(cmd, pos, m, feed)?;
             (cmd, pos) = (p.end(), p.registers());
             // As many plans as moves: never full.
             let _ = planned.push(p);
@@ -714,6 +793,9 @@ impl Session {
         self.modal = modal;
         self.contour = contour;
         self.last_moves = moves;
+        if element.is_some() {
+            self.element_feed = now;
+        }
         send_ok(
             io,
             Some(format_args!(
@@ -731,6 +813,7 @@ impl Session {
         cmd: [Length; 2],
         pos: ImpulsePoint,
         m: &Move,
+        feed: Option<Feed>,
     ) -> Result<Planned, Refusal<'static>> {
         let end = point(m.to)?;
         match m.kind {
@@ -740,7 +823,12 @@ impl Session {
                     z: quantize(end[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
                 };
                 let block = LinearBlock::new(pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
-                Ok(Planned::Line { block, end, rapid })
+                Ok(Planned::Line {
+                    block,
+                    end,
+                    rapid,
+                    feed,
+                })
             }
             MoveKind::Arc { centre, dir } => {
                 let points = ArcPoints {
@@ -756,6 +844,7 @@ impl Session {
                     points,
                     dir,
                     to,
+                    feed,
                 })
             }
         }
@@ -765,18 +854,35 @@ impl Session {
     /// events to `crc`.
     fn run_planned<I: Io>(&mut self, p: &Planned, mut crc: Crc32, io: &mut I) -> Crc32 {
         match *p {
-            Planned::Line { block, end, rapid } => {
+            Planned::Line {
+                block,
+                end,
+                rapid,
+                feed,
+            } => {
                 crc = block_crc(&block, crc);
                 self.cmd = end;
                 self.pos = block.to();
-                io.run_block(&block, &self.drive);
+                let h = [self.cfg.hx, self.cfg.hz];
+                let feed = if rapid { None } else { feed };
+                self.machine.queue(
+                    point_q32(end),
+                    block,
+                    feed,
+                    h,
+                    &mut Sink::new(io, self.drive),
+                );
                 let word = if rapid { Motion::Rapid } else { Motion::Linear };
                 self.send_block_data(io, word, None);
             }
             Planned::Arc {
-                plan, points, dir, ..
+                plan,
+                points,
+                dir,
+                feed,
+                ..
             } => {
-                crc = self.run_chords(&plan, &points, io, false, crc);
+                crc = self.run_chords(&plan, &points, feed, io, false, crc);
                 let word = match dir {
                     ArcDir::Cw => Motion::ArcCw,
                     ArcDir::Ccw => Motion::ArcCcw,
@@ -838,20 +944,23 @@ impl Session {
         &mut self,
         plan: &ChordPlan,
         points: &ArcPoints,
+        feed: Option<Feed>,
         io: &mut I,
         data: bool,
         mut crc: Crc32,
     ) -> Crc32 {
         let mut at = self.pos;
+        let h = [self.cfg.hx, self.cfg.hz];
         for i in 1..=plan.chords() {
-            let Ok(to) = plan.chord_end(i, self.cfg.hx, self.cfg.hz) else {
+            let Ok((to, point)) = plan.chord_point(i, h[0], h[1]) else {
                 break;
             };
             let Ok(block) = LinearBlock::new(at, to) else {
                 break;
             };
             crc = block_crc(&block, crc);
-            io.run_block(&block, &self.drive);
+            self.machine
+                .queue(point, block, feed, h, &mut Sink::new(io, self.drive));
             if data {
                 let (nx, nz) = block.delta();
                 send_data(io, format_args!("I={i} NX={nx} NZ={nz}"));
@@ -888,12 +997,25 @@ impl Session {
         let rate = parse_count("RATE", rate, d.rate_hz())?;
         let pulse = parse_count("PULSE", pulse, d.pulse_us())?;
         let setup = parse_count("SETUP", setup, d.setup_us())?;
-        self.drive = DriveTiming::new(rate, pulse, setup).map_err(|e| match e {
+        let drive = DriveTiming::new(rate, pulse, setup).map_err(|e| match e {
             TimingError::Rate => Refusal::Value("RATE", "must be 1 to 200000 steps/s"),
             TimingError::Pulse => Refusal::Value("PULSE", "must be 1 to 1000 us"),
             TimingError::Setup => Refusal::Value("SETUP", "must be 0 to 1000 us"),
             TimingError::PulseTooLong => Refusal::Value("PULSE", "longer than a step period"),
         })?;
+        if self
+            .machine
+            .limits()
+            .too_fast([self.cfg.hx, self.cfg.hz], drive.rate_hz())
+            .is_some()
+        {
+            return Err(Refusal::Value(
+                "RATE",
+                "below what the rapid rates need (VX/HX, VZ/HZ)",
+            ));
+        }
+        self.machine.flush(&mut Sink::new(io, self.drive));
+        self.drive = drive;
         send_ok(
             io,
             Some(format_args!(
@@ -907,8 +1029,12 @@ impl Session {
     }
 
     fn move_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [x, z, inc] = parse_args(words, ["X", "Z", "INC"])?;
+        let [x, z, inc, feed] = parse_args(words, ["X", "Z", "INC", "F"])?;
         self.not_compensating("MOVE")?;
+        let feed = match feed {
+            Some(v) => Some(parse_feed(v)?),
+            None => None,
+        };
         let inc = match inc {
             None => false,
             Some(v) => parse_flag("INC", v)?,
@@ -933,7 +1059,14 @@ impl Session {
         self.cmd = target;
         self.prog = target;
         self.pos = block.to();
-        io.run_block(&block, &self.drive);
+        let h = [self.cfg.hx, self.cfg.hz];
+        self.machine.queue(
+            point_q32(target),
+            block,
+            feed,
+            h,
+            &mut Sink::new(io, self.drive),
+        );
         send_ok(
             io,
             Some(format_args!(
@@ -942,6 +1075,84 @@ impl Session {
             )),
         );
         Ok(())
+    }
+
+    /// `LIMITS [VX=] [VZ=] [AX=] [AZ=] [JD=]`: the motion limits, applied
+    /// whole at rest, or reported.
+    fn limits_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let keys = ["VX", "VZ", "AX", "AZ", "JD"];
+        let values = parse_args(words, keys)?;
+        let now = *self.machine.limits();
+        let old = [
+            now.rate(0),
+            now.rate(1),
+            now.accel(0),
+            now.accel(1),
+            now.junction(),
+        ];
+        let mut v = old;
+        for ((slot, value), key) in v.iter_mut().zip(values).zip(keys) {
+            if let Some(text) = value {
+                *slot = parse_length(key, text)?;
+            }
+        }
+        let limits = Limits::new([v[0], v[1]], [v[2], v[3]], v[4]).map_err(|e| match e {
+            LimitsError::Rate(0) => Refusal::Value("VX", "must be over 0, at most 100000 mm/min"),
+            LimitsError::Rate(_) => Refusal::Value("VZ", "must be over 0, at most 100000 mm/min"),
+            LimitsError::Accel(0) => Refusal::Value("AX", "must be 10 to 100000 mm/s2"),
+            LimitsError::Accel(_) => Refusal::Value("AZ", "must be 10 to 100000 mm/s2"),
+            LimitsError::Junction => Refusal::Value("JD", "must be 0 to 10 mm"),
+        })?;
+        if let Some(axis) = limits.too_fast([self.cfg.hx, self.cfg.hz], self.drive.rate_hz()) {
+            let key = ["VX", "VZ"][axis & 1];
+            return Err(Refusal::Value(key, "needs more step events than DRIVE RATE"));
+        }
+        if limits != now {
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            self.machine.set_limits(limits);
+        }
+        let l = self.machine.limits();
+        send_ok(
+            io,
+            Some(format_args!(
+                "VX={} VZ={} AX={} AZ={} JD={} TICK={} LOOKAHEAD={}",
+                l.rate(0),
+                l.rate(1),
+                l.accel(0),
+                l.accel(1),
+                l.junction(),
+                self.machine.tick().hz(),
+                WINDOW
+            )),
+        );
+        Ok(())
+    }
+
+    /// `STATUS`: where the axes are now (the steps issued), their speed and
+    /// the blocks waiting.
+    fn status_reply<I: Io>(&self, io: &mut I) {
+        let st = self.machine.status();
+        let state = if st.queued > 0 { "RUN" } else { "IDLE" };
+        let factor = if self.cfg.diam { 2 } else { 1 };
+        // |registers| ≤ 999 999 999 and prices ≤ 10⁷ Å: within i64.
+        let x = i64::from(st.issued.x.get()) * self.cfg.hx.as_angstrom() * factor;
+        let z = i64::from(st.issued.z.get()) * self.cfg.hz.as_angstrom();
+        // Speed: √v² Å/tick · TICK · 60 / 1000 in 10⁻⁴ mm/min.
+        let v = st.speed(self.machine.tick());
+        let mut line = ReplyLine::new();
+        let _ = write!(
+            line,
+            "OK STATE={state} PX={} PZ={} X=",
+            st.issued.x.get(),
+            st.issued.z.get()
+        );
+        let _ = write_mm4(&mut line, div_round_half_away(x, 1_000));
+        let _ = line.write_str(" Z=");
+        let _ = write_mm4(&mut line, div_round_half_away(z, 1_000));
+        let _ = line.write_str(" V=");
+        let _ = write_mm4(&mut line, v);
+        let _ = write!(line, " Q={}", st.queued);
+        io.send(line.finish());
     }
 
     /// The commanded coordinate of `axis` after a word: absolute, or added
@@ -991,6 +1202,7 @@ enum Planned {
         block: LinearBlock,
         end: [Length; 2],
         rapid: bool,
+        feed: Option<Feed>,
     },
     Arc {
         plan: ChordPlan,
@@ -998,6 +1210,7 @@ enum Planned {
         dir: ArcDir,
         /// Registers after the last chord.
         to: ImpulsePoint,
+        feed: Option<Feed>,
     },
 }
 
@@ -1162,12 +1375,21 @@ impl<I: Io> Io for Suffixed<'_, I> {
         }
     }
 
-    fn run_block(&mut self, block: &LinearBlock, timing: &DriveTiming) {
-        self.inner.run_block(block, timing);
+    fn run_start(&mut self) {
+        self.inner.run_start();
     }
 
-    fn run_direct(&mut self, arc: &DirectArc, timing: &DriveTiming) {
-        self.inner.run_direct(arc, timing);
+    fn block_start(&mut self, block: &LinearBlock) {
+        self.inner.block_start(block);
+    }
+
+    #[inline(always)]
+    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
+        self.inner.step(event, tick, drive);
+    }
+
+    fn run_end(&mut self, ticks: u64) {
+        self.inner.run_end(ticks);
     }
 }
 
@@ -1245,6 +1467,47 @@ fn parse_count(key: &'static str, v: Option<&str>, default: u32) -> Result<u32, 
         return Err(Refusal::Value(key, "not a whole number"));
     }
     Ok(v.bytes().fold(0, |n, b| n * 10 + u32::from(b - b'0')))
+}
+
+/// A feed in mm/min: 0.001 … 100 000, at most 6 decimals.
+fn parse_feed(v: &str) -> Result<Feed, Refusal<'static>> {
+    Feed::new(parse_length("F", v)?).ok_or(Refusal::Value("F", "must be 0.001 to 100000 mm/min"))
+}
+
+/// A commanded point as the planner takes it.
+fn point_q32(p: [Length; 2]) -> Point {
+    [q32(p[0]), q32(p[1])]
+}
+
+/// The protocol's outputs as the motion pipeline's step sink.
+struct Sink<'a, I: Io> {
+    io: &'a mut I,
+    drive: DriveTiming,
+}
+
+impl<'a, I: Io> Sink<'a, I> {
+    fn new(io: &'a mut I, drive: DriveTiming) -> Self {
+        Sink { io, drive }
+    }
+}
+
+impl<I: Io> StepSink for Sink<'_, I> {
+    fn run_start(&mut self) {
+        self.io.run_start();
+    }
+
+    fn block_start(&mut self, block: &LinearBlock) {
+        self.io.block_start(block);
+    }
+
+    #[inline(always)]
+    fn step(&mut self, event: StepEvent, tick: u64) {
+        self.io.step(event, tick, &self.drive);
+    }
+
+    fn run_end(&mut self, ticks: u64) {
+        self.io.run_end(ticks);
+    }
 }
 
 fn parse_tol(v: &str) -> Result<Length, Refusal<'static>> {

@@ -24,7 +24,7 @@ impl Io for Lines {
         assert_eq!(sum, std::format!("{xor:02X}"), "reply checksum of {text:?}");
         self.out.push(body.to_string());
     }
-    fn run_block(&mut self, _: &LinearBlock, _: &crate::stepdir::DriveTiming) {
+    fn step(&mut self, _: crate::interleave::StepEvent, _: u64, _: &crate::stepdir::DriveTiming) {
         self.blocks += 1;
     }
 }
@@ -42,8 +42,13 @@ fn ask1(dev: &mut Device, request: &str) -> String {
 }
 
 /// Everything a request could change, as the device reports it.
-fn state(dev: &mut Device) -> (String, String, String) {
-    (ask1(dev, "POS"), ask1(dev, "CFG"), ask1(dev, "DRIVE"))
+fn state(dev: &mut Device) -> (String, String, String, String) {
+    (
+        ask1(dev, "POS"),
+        ask1(dev, "CFG"),
+        ask1(dev, "DRIVE"),
+        ask1(dev, "LIMITS"),
+    )
 }
 
 fn with_checksum(body: &str) -> String {
@@ -125,7 +130,23 @@ fn every_error_code_is_reached_and_changes_nothing() {
         ("G91 Z-99990", "ERR RANGE"),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=UP", "ERR VALUE DIR"),
         ("ARC X=30 Z=-7 I=0 K=5 DIR=CW MODE=FAST", "ERR VALUE MODE"),
-        ("ARC X=30 Z=-7 I=0 K=5 DIR=CW F=100", "ERR SYNTAX"),
+        ("ARC X=30 Z=-7 I=0 K=5 DIR=CW F=0", "ERR VALUE F"),
+        ("MOVE X=1 F=0", "ERR VALUE F"),
+        ("MOVE X=1 F=-1", "ERR VALUE F"),
+        ("MOVE X=1 F=100.1234567", "ERR VALUE F"),
+        ("MOVE X=1 F=100001", "ERR VALUE F"),
+        ("G01 X1", "ERR VALUE F"),
+        ("G01 X1 F0", "ERR VALUE F"),
+        ("LIMITS VX=0", "ERR VALUE VX"),
+        ("LIMITS VZ=-5", "ERR VALUE VZ"),
+        ("LIMITS AX=9.999999", "ERR VALUE AX"),
+        ("LIMITS AZ=100000.000001", "ERR VALUE AZ"),
+        ("LIMITS JD=10.000001", "ERR VALUE JD"),
+        ("LIMITS VX=100 VZ=99999", "ERR VALUE VZ"),
+        ("LIMITS VX=1 QX=2", "ERR SYNTAX"),
+        ("DRIVE RATE=1000", "ERR VALUE RATE"),
+        ("SYNC NOW", "ERR SYNTAX"),
+        ("STATUS 1", "ERR SYNTAX"),
         (
             "ARC X=30 Z=-7 I=0 K=5 DIR=CW MODE=DIRECT F=0",
             "ERR VALUE F",
@@ -185,6 +206,9 @@ fn range_of_increments_and_block_length() {
     let before = state(&mut dev);
     assert!(ask1(&mut dev, "CFG HX=0.000005").starts_with("ERR RANGE"));
     assert_eq!(state(&mut dev), before);
+    // So fine a price needs a slow rapid rate: VX/HX within DRIVE RATE.
+    assert!(ask1(&mut dev, "CFG HX=0.000006").starts_with("ERR VALUE HX"));
+    assert!(ask1(&mut dev, "LIMITS VX=10").starts_with("OK VX=10.0000 "));
     assert!(ask1(&mut dev, "CFG HX=0.000006").starts_with("OK"));
     assert!(ask1(&mut dev, "POS").starts_with("OK PX=833333333 "));
 }
@@ -278,7 +302,7 @@ fn gcode_blocks_run_in_modal_state() {
     // Krylenko Fig. 22 as written (diameters), with its R arcs.
     let program = [
         ("G00 X10 Z10", "DATA G00 X10.0000 Z10.0000"),
-        ("N9 G01 X7.2 Z0 ; point 2", "DATA G01 X7.2000 Z0.0000"),
+        ("N9 G01 X7.2 Z0 F100 ; point 2", "DATA G01 X7.2000 Z0.0000"),
         (
             "G03 X12 Z-2.4 R2.4",
             "DATA G03 X12.0000 Z-2.4000 I0.0000 K-2.4000",
@@ -332,12 +356,12 @@ fn gcode_arcs_equal_arc_requests() {
         (keys, ask1(&mut dev, "POS"))
     };
     let by_arc = run("MOVE X=14.6 Z=-17", "ARC X=19 Z=-21.4 I=0 K=-4.4 DIR=CCW");
-    let by_ik = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 I0 K-4.4");
-    let by_r = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 R4.4");
+    let by_ik = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 I0 K-4.4 F100");
+    let by_r = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 R4.4 F100");
     assert_eq!(by_arc, by_ik);
     assert_eq!(by_arc, by_r);
     // The long way round with a negative R: 270° instead of 90°.
-    let long = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 R-4.4");
+    let long = run("MOVE X=14.6 Z=-17", "G03 X19 Z-21.4 R-4.4 F100");
     assert_ne!(long.0, by_r.0);
     assert_eq!(long.1, by_r.1);
 }
@@ -383,7 +407,7 @@ fn request_ids_make_retries_idempotent() {
     // G-code blocks take ids as well.
     let r = ask(
         &mut dev,
-        std::format!("{}\n", with_crc("@10 G01 X4")).as_bytes(),
+        std::format!("{}\n", with_crc("@10 G01 X4 F100")).as_bytes(),
     );
     assert!(r[0].starts_with("DATA G01 X4.0000 Z0.0000 @10 ~"), "{r:?}");
     assert!(r[1].contains(" @10 ~"));
@@ -502,7 +526,8 @@ proptest! {
             prev_cr = is_cr;
         }
         let finals = io.out.iter().filter(|l| l.starts_with("OK") || l.starts_with("ERR ")).count();
-        prop_assert_eq!(finals, io.out.len());
+        let data = io.out.iter().filter(|l| l.starts_with("DATA ")).count();
+        prop_assert_eq!(finals + data, io.out.len());
         prop_assert_eq!(finals, expected);
     }
 
@@ -549,7 +574,7 @@ fn krylenko_fig_22_from_a_g42_contour() {
         &mut dev,
         &[
             "G00 X0 Z5",
-            "N1 G42 G01 Z0",
+            "N1 G42 G01 Z0 F100",
             "N2 X8",
             "N3 G03 X12 Z-2 R2",
             "N4 G01 Z-14",
@@ -587,7 +612,7 @@ fn krylenko_fig_22_from_a_g42_contour() {
 
 #[test]
 fn compensation_refusals_name_the_block_and_change_nothing() {
-    let prefix = ["CFG RN=0.8", "G00 X20 Z5", "G42 G01 Z0", "N10 X40"];
+    let prefix = ["CFG RN=0.8", "G00 X20 Z5", "G42 G01 Z0 F100", "N10 X40"];
     // (bad block, expected error, a good block to send after it)
     let cases: &[(&[&str], &str, &str, &str)] = &[
         // A concave arc of radius 0.5 with a 0.8 nose.
@@ -694,7 +719,7 @@ fn corner_modes_and_tip_codes() {
         let lines = [
             "G00 X20 Z5",
             corner,
-            "G41 G01 X10",
+            "G41 G01 X10 F100",
             "X10 Z-10",
             "X20",
             "G40 X30 Z-20",
@@ -732,7 +757,7 @@ fn reset_abandons_a_contour_whose_corner_cannot_be_cut() {
     let program = [
         "CFG RN=0.8",
         "G00 X20 Z5",
-        "G42 G01 Z0",
+        "G42 G01 Z0 F100",
         "N10 X40",
         "N20 Z-10",
         "N30 X40.4 Z-10.2",

@@ -1,0 +1,227 @@
+//! The motion pipeline's last stages behind one front: blocks go into the
+//! planner, start as the look-ahead window fills (or at a flush), and their
+//! timed step events go to the outputs, recorded for `SYNC`.
+//!
+//! This is the virtual-clock device of `docs/motion.md`: block `k` starts
+//! when `W − 1` blocks are queued behind it, or at a flush, and its events
+//! are issued at once to a [`StepSink`] with their ticks; a sink on a board
+//! waits for each tick, one in a simulator records it.
+
+use crate::impulse::ImpulsePrice;
+use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
+use crate::plan::{Block, Feed, Limits, Planner, Point, Rates, WINDOW};
+use crate::step::{FixedRate, Record, TickRate, TimedBlock};
+use crate::wide::{mul_div, sqrt_shl};
+
+/// Blocks the queue holds.
+pub const QUEUE: usize = WINDOW;
+
+/// Where timed step events go.
+pub trait StepSink {
+    /// A run begins: its tick 0 is now.
+    fn run_start(&mut self) {}
+    /// A linear block starts; its events follow.
+    fn block_start(&mut self, block: &LinearBlock) {
+        let _ = block;
+    }
+    /// A step event at `tick` of the current run.
+    fn step(&mut self, event: StepEvent, tick: u64);
+    /// The run ended `ticks` after it began; the axes are at rest.
+    fn run_end(&mut self, ticks: u64) {
+        let _ = ticks;
+    }
+}
+
+/// What the axes are doing (`STATUS`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// Blocks queued and not started.
+    pub queued: usize,
+    /// The registers of the steps issued.
+    pub issued: ImpulsePoint,
+    /// The speed now, Q64 (Å/tick)² (squared).
+    pub speed2: u128,
+}
+
+impl Status {
+    /// The speed now in 10⁻⁴ mm/min on a clock of `tick`, rounded half up.
+    pub fn speed(&self, tick: TickRate) -> i64 {
+        // √v² Å/tick · TICK ticks/s · 60 s/min / 1000 Å per 10⁻⁴ mm.
+        let v = sqrt_shl(self.speed2, 64); // Q64 Å/tick
+        let scaled = mul_div(v, 60 * u128::from(tick.hz()), 1000);
+        i64::try_from(scaled.saturating_add(1 << 63) >> 64).unwrap_or(i64::MAX)
+    }
+}
+
+/// The planner, the run in progress and what has been issued.
+#[derive(Clone, Debug)]
+pub struct Machine {
+    rates: Rates,
+    planner: Planner<QUEUE>,
+    record: Record,
+    /// Registers of the steps issued.
+    issued: ImpulsePoint,
+    /// Where the next queued block starts, Å·2³².
+    point: Point,
+}
+
+impl Default for Machine {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Machine {
+    /// At rest at the origin, default limits on the device's timer.
+    pub const fn new() -> Machine {
+        Self::with_window(WINDOW)
+    }
+
+    /// As [`Machine::new`], looking `window` blocks ahead (1 … [`QUEUE`]).
+    pub const fn with_window(window: usize) -> Machine {
+        Machine {
+            rates: Rates::DEFAULT,
+            planner: Planner::new(window),
+            record: Record::new(),
+            issued: ImpulsePoint {
+                x: crate::impulse::Impulses(0),
+                z: crate::impulse::Impulses(0),
+            },
+            point: [0, 0],
+        }
+    }
+
+    /// The limits in force.
+    pub const fn limits(&self) -> &Limits {
+        self.rates.limits()
+    }
+
+    /// The clock events are timed on.
+    pub const fn tick(&self) -> TickRate {
+        self.rates.tick()
+    }
+
+    /// New limits; the caller has flushed (they apply at rest).
+    pub fn set_limits(&mut self, limits: Limits) {
+        self.rates = Rates::new(limits, self.rates.tick());
+    }
+
+    /// Where the axes are now and will be, at rest (after `ZERO` or a price
+    /// change); the caller has flushed.
+    pub fn set_position(&mut self, point: Point, registers: ImpulsePoint) {
+        self.point = point;
+        self.issued = registers;
+    }
+
+    /// Queues the block from the current point to `to`, issuing `events` at
+    /// prices `h` and `feed` (rapid when `None`); blocks start as the window
+    /// fills. A block without length takes no time and issues nothing.
+    pub fn queue<S: StepSink>(
+        &mut self,
+        to: Point,
+        events: LinearBlock,
+        feed: Option<Feed>,
+        h: [ImpulsePrice; 2],
+        sink: &mut S,
+    ) {
+        let from = self.point;
+        self.point = to;
+        let Some(block) = Block::new(from, to, events, feed, h, &self.rates) else {
+            return;
+        };
+        if self.planner.window_full() {
+            self.start_one(sink);
+        }
+        // The window is not full now: there is room.
+        let _ = self.planner.push(block, &self.rates);
+        if self.planner.window_full() {
+            self.start_one(sink);
+        }
+    }
+
+    /// A flush: every queued block starts in turn, the last one ends at
+    /// rest, and the run ends.
+    pub fn flush<S: StepSink>(&mut self, sink: &mut S) {
+        while self.start_one(sink) {}
+        if let Some(ticks) = self.planner.end_run() {
+            self.record.run_end(ticks);
+            sink.run_end(ticks);
+        }
+    }
+
+    /// A flush, then `events` at a fixed rate as a run of their own (the
+    /// ЭМ-907's direct arc), ending at registers `to` and point `end`.
+    pub fn fixed_rate<S: StepSink, E: Iterator<Item = StepEvent>>(
+        &mut self,
+        events: E,
+        rate_hz: u32,
+        to: ImpulsePoint,
+        end: Point,
+        sink: &mut S,
+    ) {
+        self.flush(sink);
+        let rate = FixedRate::new(self.rates.tick(), rate_hz);
+        let mut n = 0u32;
+        for e in events {
+            if n == 0 {
+                sink.run_start();
+            }
+            n += 1;
+            let tick = rate.tick(n);
+            self.record.event(e, tick);
+            sink.step(e, tick);
+        }
+        if n > 0 {
+            let ticks = rate.tick(n);
+            self.record.run_end(ticks);
+            sink.run_end(ticks);
+        }
+        self.issued = to;
+        self.point = end;
+    }
+
+    /// `SYNC`: a flush, then what ran since the previous `SYNC` or `ZERO`;
+    /// the record starts again.
+    pub fn sync<S: StepSink>(&mut self, sink: &mut S) -> Record {
+        self.flush(sink);
+        core::mem::take(&mut self.record)
+    }
+
+    /// Forgets what was recorded (`ZERO`); the caller has flushed.
+    pub fn clear_record(&mut self) {
+        self.record = Record::new();
+    }
+
+    /// What the axes are doing.
+    pub fn status(&self) -> Status {
+        Status {
+            queued: self.planner.queued(),
+            issued: self.issued,
+            speed2: self.planner.exit2(),
+        }
+    }
+
+    /// Starts the first queued block and issues its events; false when none
+    /// is queued.
+    fn start_one<S: StepSink>(&mut self, sink: &mut S) -> bool {
+        let fresh = !self.planner.in_run();
+        let Some(timed) = self.planner.start(&self.rates) else {
+            return false;
+        };
+        if fresh {
+            sink.run_start();
+        }
+        self.issue(&timed, sink);
+        true
+    }
+
+    fn issue<S: StepSink>(&mut self, timed: &TimedBlock, sink: &mut S) {
+        sink.block_start(timed.block());
+        for (e, tick) in timed.events() {
+            self.record.event(e, tick);
+            sink.step(e, tick);
+        }
+        self.issued = timed.block().to();
+    }
+}
