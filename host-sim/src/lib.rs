@@ -12,6 +12,8 @@
 //!   reference;
 //! - [`reliable`]: requests that survive a faulty link, and the fault
 //!   injector; [`soak`]: long faulted sessions against the reference;
+//! - [`reference_motion`]: the f64 reference of motion in time (planner and
+//!   step timer), written from `docs/motion.md`;
 //! - [`reference_comp`]: the f64 reference of nose radius compensation
 //!   (G41/G42 contours), written from `docs/compensation.md`;
 //! - [`contour`]: random compensated contours and their block-by-block
@@ -30,6 +32,7 @@ pub mod reference;
 pub mod reference_arc;
 pub mod reference_comp;
 pub mod reference_cone;
+pub mod reference_motion;
 pub mod reliable;
 pub mod scenario;
 pub mod soak;
