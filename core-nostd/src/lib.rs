@@ -54,4 +54,3 @@ pub mod step;
 pub mod stepdir;
 pub mod trig;
 mod wide;
-

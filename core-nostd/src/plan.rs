@@ -43,9 +43,9 @@ pub const WINDOW: usize = 64;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum LimitsError {
-    /// A rapid rate outside (0, 100 000] mm/min (axis 0 X, 1 Z).
+    /// A rapid rate outside (0, 99 999.999999] mm/min (axis 0 X, 1 Z).
     Rate(usize),
-    /// An acceleration outside [10, 100 000] mm/s².
+    /// An acceleration outside [10, 99 999.999999] mm/s².
     Accel(usize),
     /// A junction deviation outside [0, 10] mm.
     Junction,
@@ -54,8 +54,8 @@ pub enum LimitsError {
 impl fmt::Display for LimitsError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
-            LimitsError::Rate(_) => "rapid rate must be over 0, at most 100000 mm/min",
-            LimitsError::Accel(_) => "acceleration must be 10 to 100000 mm/s2",
+            LimitsError::Rate(_) => "rapid rate must be over 0, at most 99999.999999 mm/min",
+            LimitsError::Accel(_) => "acceleration must be 10 to 99999.999999 mm/s2",
             LimitsError::Junction => "junction deviation must be 0 to 10 mm",
         })
     }
@@ -165,7 +165,7 @@ fn length(angstrom: u64) -> Length {
     Length::from_angstrom(angstrom as i64).unwrap_or(Length::ZERO)
 }
 
-/// A programmed feed along the path, 0.001 … 100 000 mm/min.
+/// A programmed feed along the path, 0.001 … 99 999.999999 mm/min.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Feed {
@@ -174,7 +174,7 @@ pub struct Feed {
 }
 
 impl Feed {
-    /// A feed from mm/min, if 0.001 … 100 000.
+    /// A feed from mm/min, if 0.001 … 99 999.999999.
     ///
     /// ```
     /// use core_nostd::{length::Length, plan::Feed};

@@ -84,9 +84,9 @@
 //!   is the f64 nearest such a decimal `m·10⁻⁶` is taken as that decimal (to
 //!   double-double accuracy), not as its f64 rounding; any other value is
 //!   taken as given.
-//! * **Time ties.** A computed `T·TICK` within `2⁻⁸⁰·TICK·S` of a half-integer
-//!   (`S` the time scale of the run, below) is an exact tie and rounds up
-//!   (half away from zero; times are never negative). Exact ties do happen:
+//! * **Time ties** (`docs/motion.md`). A computed `T·TICK` within `2⁻³⁶`
+//!   tick of a half-integer is taken as the tie and rounds up (half away
+//!   from zero; times are never negative). Exact ties do happen:
 //!   a cruise at a rational speed between rational boundaries is at a
 //!   rational time (tests show one). They are counted in
 //!   [`TieStats::exact_ties`]; every other rounding feeds
@@ -157,11 +157,10 @@
 //! and the sum of durations adds at most `3N·u²·T·TICK ≤ 3N·u²·TICK·S`
 //! (included above). With `u² = 2⁻¹⁰⁶ ≈ 1.2·10⁻³²`: a run of 10⁶ blocks
 //! with `S ≤ 10⁶ s` (hours of motion plus 1 s of ramp scale per block) at
-//! 1 MHz stays below `4·10⁻¹⁴` tick. The exact-tie tolerance `2⁻⁸⁰·TICK·S`
-//! exceeds this bound while `3N + 3W + 300 < 2²⁶`, i.e. for runs of up to
-//! 2·10⁷ blocks, so an exact tie is always recognised; a non-tie is taken
-//! for a tie only if it lies within `2⁻⁸⁰` (relative to `S`) of one, and then
-//! it is visible in the count of exact ties.
+//! 1 MHz stays below `4·10⁻¹⁴` tick. The tie band of `2⁻³⁶ ≈ 1.5·10⁻¹¹`
+//! tick exceeds this bound by far, so an exact tie is always recognised; a
+//! non-tie is taken for a tie only if it lies within the band, and then it
+//! is visible in the count of exact ties.
 //!
 //! For lines this is the whole error: the model's `T·TICK` is exact to far
 //! below 10⁻⁹ tick. For arcs it is exact *for the chord ends it is given*:
@@ -191,9 +190,9 @@ use crate::reference::{step_events, TieStats};
 /// Length unit of [`Point`]: 10⁻⁷ mm per unit.
 pub const UNITS_PER_MM: i64 = 10_000_000;
 
-/// Relative tolerance (of `TICK·S`, `S` the run's time scale) under which a
-/// computed `T·TICK` counts as an exact half-tick tie: `2⁻⁸⁰`.
-pub const TIME_TIE_TOLERANCE_REL: f64 = 1.0 / (1u128 << 80) as f64;
+/// The tie band of `docs/motion.md`: a computed `T·TICK` this close to a
+/// half-integer is the tie and rounds up: `2⁻³⁶` tick.
+pub const TIME_TIE_BAND_TICKS: f64 = 1.0 / (1u64 << 36) as f64;
 
 /// Relative tolerance (of the lead coordinates' magnitude) by which an event
 /// boundary may lie outside its block before the registers are taken as
@@ -1062,8 +1061,8 @@ impl RefMotion {
         }
         let d = f.minus(Dd::from_f64(0.5));
         let dist = d.abs().to_f64();
-        let tol = TIME_TIE_TOLERANCE_REL * scale.times(self.lim.tick).to_f64();
-        let up = if dist <= tol {
+        let _ = scale;
+        let up = if dist <= TIME_TIE_BAND_TICKS {
             self.ties.exact_ties += 1;
             true
         } else {

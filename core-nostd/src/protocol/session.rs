@@ -16,7 +16,7 @@ use crate::crc32::Crc32;
 use crate::gcode::{is_block, parse_block, BlockError, Motion};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
-use crate::length::{div_round_half_away, write_mm4, Length};
+use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
 use crate::machine::{Machine, StepSink};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
 use crate::stepdir::{DriveTiming, TimingError};
@@ -471,7 +471,10 @@ impl Session {
             .too_fast([cfg.hx, cfg.hz], self.drive.rate_hz())
         {
             let key = ["HX", "HZ"][axis & 1];
-            return Err(Refusal::Value(key, "needs more step events than DRIVE RATE at the rapid rate"));
+            return Err(Refusal::Value(
+                key,
+                "needs more step events than DRIVE RATE at the rapid rate",
+            ));
         }
         self.machine.flush(&mut Sink::new(io, self.drive));
         self.machine.set_position(point_q32(self.cmd), pos);
@@ -690,7 +693,8 @@ impl Session {
             incremental: b.incremental.unwrap_or(self.modal.incremental),
             feed: match b.f {
                 Some(f) => Some(
-                    Feed::new(f).ok_or(Refusal::Value("F", "must be 0.001 to 100000 mm/min"))?,
+                    Feed::new(f)
+                        .ok_or(Refusal::Value("F", "must be 0.001 to 99999.999999 mm/min"))?,
                 ),
                 None => self.modal.feed,
             },
@@ -766,7 +770,10 @@ impl Session {
             .block(&tool, b.compensation, b.corner, element)
             .map_err(Refusal::Contour)?;
         if feeds && modal.feed.is_none() {
-            return Err(Refusal::Value("F", "not programmed: a feed move needs F (mm/min)"));
+            return Err(Refusal::Value(
+                "F",
+                "not programmed: a feed move needs F (mm/min)",
+            ));
         }
         // Plan and check every block before the first one moves.
         let mut planned = heapless::Vec::<Planned, MAX_MOVES>::new();
@@ -1093,19 +1100,26 @@ impl Session {
         let mut v = old;
         for ((slot, value), key) in v.iter_mut().zip(values).zip(keys) {
             if let Some(text) = value {
-                *slot = parse_length(key, text)?;
+                *slot = parse_rate(key, text, Refusal::Value(key, "too large"))?;
             }
         }
         let limits = Limits::new([v[0], v[1]], [v[2], v[3]], v[4]).map_err(|e| match e {
-            LimitsError::Rate(0) => Refusal::Value("VX", "must be over 0, at most 100000 mm/min"),
-            LimitsError::Rate(_) => Refusal::Value("VZ", "must be over 0, at most 100000 mm/min"),
-            LimitsError::Accel(0) => Refusal::Value("AX", "must be 10 to 100000 mm/s2"),
-            LimitsError::Accel(_) => Refusal::Value("AZ", "must be 10 to 100000 mm/s2"),
+            LimitsError::Rate(0) => {
+                Refusal::Value("VX", "must be over 0, at most 99999.999999 mm/min")
+            }
+            LimitsError::Rate(_) => {
+                Refusal::Value("VZ", "must be over 0, at most 99999.999999 mm/min")
+            }
+            LimitsError::Accel(0) => Refusal::Value("AX", "must be 10 to 99999.999999 mm/s2"),
+            LimitsError::Accel(_) => Refusal::Value("AZ", "must be 10 to 99999.999999 mm/s2"),
             LimitsError::Junction => Refusal::Value("JD", "must be 0 to 10 mm"),
         })?;
         if let Some(axis) = limits.too_fast([self.cfg.hx, self.cfg.hz], self.drive.rate_hz()) {
             let key = ["VX", "VZ"][axis & 1];
-            return Err(Refusal::Value(key, "needs more step events than DRIVE RATE"));
+            return Err(Refusal::Value(
+                key,
+                "needs more step events than DRIVE RATE",
+            ));
         }
         if limits != now {
             self.machine.flush(&mut Sink::new(io, self.drive));
@@ -1469,9 +1483,23 @@ fn parse_count(key: &'static str, v: Option<&str>, default: u32) -> Result<u32, 
     Ok(v.bytes().fold(0, |n, b| n * 10 + u32::from(b - b'0')))
 }
 
-/// A feed in mm/min: 0.001 … 100 000, at most 6 decimals.
+/// A feed in mm/min: 0.001 … 99 999.999999, at most 6 decimals.
 fn parse_feed(v: &str) -> Result<Feed, Refusal<'static>> {
-    Feed::new(parse_length("F", v)?).ok_or(Refusal::Value("F", "must be 0.001 to 100000 mm/min"))
+    let range = Refusal::Value("F", "must be 0.001 to 99999.999999 mm/min");
+    let f = parse_rate("F", v, range)?;
+    Feed::new(f).ok_or(Refusal::Value("F", "must be 0.001 to 99999.999999 mm/min"))
+}
+
+/// A rate or acceleration word: a length's syntax, `range` when too large.
+fn parse_rate(
+    key: &'static str,
+    v: &str,
+    range: Refusal<'static>,
+) -> Result<Length, Refusal<'static>> {
+    Length::from_mm_str(v).map_err(|e| match e {
+        LengthError::OutOfRange => range,
+        e => Refusal::Value(key, e.as_str()),
+    })
 }
 
 /// A commanded point as the planner takes it.

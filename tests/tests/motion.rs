@@ -1,0 +1,163 @@
+//! Motion in time: the device's timed step events against the f64
+//! reference of `docs/motion.md`, event by event, and `SYNC` against the
+//! reference's report.
+
+use host_sim::device::{Issued, LocalDevice};
+use host_sim::reference::{RefConfig, RefMachine};
+use host_sim::reference_motion::{MotionLimits, Point, RefMotion, TimedEvent};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A length in 10⁻⁷ mm as a request word.
+fn word(units: i64) -> String {
+    let sign = if units < 0 { "-" } else { "" };
+    let a = units.unsigned_abs();
+    format!("{sign}{}.{:07}", a / 10_000_000, a % 10_000_000)
+        .trim_end_matches('0')
+        .trim_end_matches('.')
+        .to_string()
+}
+
+fn one(dev: &mut LocalDevice, line: &str) -> String {
+    let r = dev.request(line);
+    assert_eq!(r.len(), 1, "{line} -> {r:?}");
+    let (body, _) = r[0].rsplit_once('*').unwrap();
+    body.to_string()
+}
+
+/// A device and the two references driven alike, DIAM=0.
+struct Pair {
+    dev: LocalDevice,
+    imp: RefMachine,
+    time: RefMotion,
+}
+
+impl Pair {
+    fn new() -> Pair {
+        let mut dev = LocalDevice::recording();
+        assert!(one(&mut dev, "CFG DIAM=0").starts_with("OK"));
+        let cfg = RefConfig {
+            diam: false,
+            ..RefConfig::default()
+        };
+        Pair {
+            dev,
+            imp: RefMachine::new(cfg),
+            time: RefMotion::new(MotionLimits::default(), [0.005, 0.01]),
+        }
+    }
+
+    /// `MOVE` to a point (10⁻⁷ mm) at a feed (mm/min) or rapid.
+    fn to(&mut self, x: i64, z: i64, feed: Option<&str>) {
+        let (wx, wz) = (word(x), word(z));
+        let f = feed.map(|f| format!(" F={f}")).unwrap_or_default();
+        let r = one(&mut self.dev, &format!("MOVE X={wx} Z={wz}{f}"));
+        let b = self.imp.move_block(Some(&wx), Some(&wz), false);
+        assert!(
+            r.starts_with(&format!("OK NX={} NZ={} ", b.nx, b.nz)),
+            "{r}"
+        );
+        self.time.push(
+            Point::from_units(x, z),
+            [b.px, b.pz],
+            feed.map(|f| f.parse().unwrap()),
+        );
+    }
+
+    /// `SYNC` on both; every event since the last one compared.
+    fn sync(&mut self) -> (u64, u64) {
+        let r = one(&mut self.dev, "SYNC");
+        let want = self.time.sync();
+        assert_eq!(
+            r,
+            format!("OK EV={} T={} TSEQ={:08X}", want.ev, want.t, want.tseq)
+        );
+        let got = self.dev.take_events();
+        let expected = self.time.take_events();
+        compare(&got, &expected);
+        (want.ev, want.t)
+    }
+}
+
+/// Event by event: bytes and ticks, ticks strictly increasing within a
+/// block.
+fn compare(got: &[Issued], expected: &[TimedEvent]) {
+    assert_eq!(got.len(), expected.len(), "number of events");
+    for (i, (g, e)) in got.iter().zip(expected).enumerate() {
+        assert_eq!(
+            (g.bits, g.tick),
+            (e.byte, e.tick),
+            "event {i}: device {g:?}, reference {e:?}"
+        );
+    }
+    for w in expected.windows(2) {
+        if w[0].block == w[1].block && w[0].run == w[1].run {
+            assert!(w[1].tick > w[0].tick, "ticks within a block: {w:?}");
+        }
+    }
+}
+
+#[test]
+fn single_blocks_from_rest_to_rest() {
+    let mut p = Pair::new();
+    // Rapids and feeds, along each axis and across, long and short.
+    let moves: [(i64, i64, Option<&str>); 8] = [
+        (0, -1_000_000_000, None),
+        (200_000_000, -1_000_000_000, Some("300")),
+        (150_000_000, -980_000_000, Some("50.5")),
+        (150_000_000, -979_990_000, Some("1200")),
+        (0, 0, None),
+        (12_345_670, -7_000_010, Some("123.456789")),
+        (12_345_670, -7_000_010, Some("10")),
+        (40_000_000, -7_000_010, Some("0.5")),
+    ];
+    for (x, z, f) in moves {
+        p.to(x, z, f);
+        p.sync();
+    }
+    assert_eq!(p.time.ties().min_distance > 0.0, true);
+}
+
+#[test]
+fn random_programs_with_look_ahead() {
+    let mut rng = ChaCha8Rng::seed_from_u64(10);
+    let mut p = Pair::new();
+    let (mut x, mut z) = (0i64, 0i64);
+    let feeds = ["20", "100", "250.5", "600", "1200", "3000", "99999"];
+    let mut events = 0;
+    for block in 0..3000 {
+        // Mostly short blocks, some long ones and straight continuations.
+        let (dx, dz) = match rng.random_range(0..10) {
+            0 => (0, rng.random_range(-400..400) * 1_000_000),
+            1..=3 => {
+                // Continue in the same direction (a split line).
+                (
+                    rng.random_range(1..5) * 10_000,
+                    -rng.random_range(1..5) * 10_000,
+                )
+            }
+            _ => (
+                rng.random_range(-300..300) * 10_000,
+                rng.random_range(-600..300) * 10_000,
+            ),
+        };
+        x = (x + dx).clamp(-2_000_000_000, 2_000_000_000);
+        z = (z + dz).clamp(-5_000_000_000, 1_000_000_000);
+        let feed = if rng.random_bool(0.2) {
+            None
+        } else {
+            Some(feeds[rng.random_range(0..feeds.len())])
+        };
+        p.to(x, z, feed);
+        if block % 500 == 499 {
+            events += p.sync().0;
+        }
+    }
+    events += p.sync().0;
+    assert!(events > 100_000, "{events} events");
+    let ties = p.time.ties();
+    println!(
+        "{events} events, min tie distance {:e} tick, {} exact ties",
+        ties.min_distance, ties.exact_ties
+    );
+}
