@@ -2,12 +2,16 @@
 //!
 //! Every step of a scenario goes to the device over a [`Transport`] and to
 //! the [`RefMachine`]; for every block the device's `NX`, `NZ`, `PX`, `PZ` and
-//! `SEQ` must equal the reference's. The tally keeps how close the rounding
-//! decisions came to a tie (SPEC §7), so the margin is visible.
+//! `SEQ` must equal the reference's. Every block also goes to the
+//! [`RefMotion`], and at every `SYNC` the device's `EV`, `T` and `TSEQ`
+//! (the CRC of every step event with its tick) must equal the reference's:
+//! the time of every step event is compared. The tally keeps how close the
+//! rounding decisions came to a tie (SPEC §7), so the margin is visible.
 
 use crate::link::{LinkError, Reply, Transport};
 use crate::reference::{RefBlock, RefConfig, RefMachine, TieStats};
-use crate::reference_arc::{RefArc, RefArcError, RefDirect};
+use crate::reference_arc::{ChordCoord, RefArc, RefArcError, RefDirect};
+use crate::reference_motion::{MotionLimits, Point, RefMotion};
 use std::fmt::Write as _;
 
 /// One request of a scenario.
@@ -42,7 +46,8 @@ pub enum Step {
         rough: Option<bool>,
         /// `MODE=DIRECT`.
         direct: bool,
-        /// `F=` (direct mode), mm/min.
+        /// `F=`, mm/min: the feed along the chords, or the ЭМ-907 feed word
+        /// of a direct arc.
         feed: Option<String>,
     },
     /// `MOVE`, words as written.
@@ -53,7 +58,11 @@ pub enum Step {
         z: Option<String>,
         /// `INC=1`.
         inc: bool,
+        /// `F=`, mm/min (rapid when `None`).
+        feed: Option<String>,
     },
+    /// `SYNC`: everything queued runs; its events and ticks are compared.
+    Sync,
 }
 
 impl Step {
@@ -68,6 +77,17 @@ impl Step {
             x: Some(x.into()),
             z: Some(z.into()),
             inc: false,
+            feed: None,
+        }
+    }
+
+    /// An absolute move at a feed (mm/min).
+    pub fn feed_to(x: impl Into<String>, z: impl Into<String>, feed: &str) -> Step {
+        Step::Move {
+            x: Some(x.into()),
+            z: Some(z.into()),
+            inc: false,
+            feed: Some(feed.into()),
         }
     }
 
@@ -114,7 +134,7 @@ impl Step {
                     let _ = write!(line, " F={f}");
                 }
             }
-            Step::Move { x, z, inc } => {
+            Step::Move { x, z, inc, feed } => {
                 line.push_str("MOVE");
                 if let Some(v) = x {
                     let _ = write!(line, " X={v}");
@@ -125,7 +145,11 @@ impl Step {
                 if *inc {
                     line.push_str(" INC=1");
                 }
+                if let Some(f) = feed {
+                    let _ = write!(line, " F={f}");
+                }
             }
+            Step::Sync => line.push_str("SYNC"),
         }
         line
     }
@@ -192,6 +216,16 @@ pub struct Tally {
     pub dphi_margin: f64,
     /// Nearest sweep/Δφ came to a whole number (chord count decision).
     pub n_margin: f64,
+    /// Step events whose ticks were compared (through `SYNC`).
+    pub timed: u64,
+    /// `SYNC` replies compared.
+    pub syncs: u64,
+    /// Runs and their total length, ticks.
+    pub runs: u64,
+    /// Rounding decisions of the event ticks `Q(T·TICK)`.
+    pub ticks: TieStats,
+    /// The longest `T` a `SYNC` reported, ticks.
+    pub longest_run: u64,
 }
 
 impl Default for Tally {
@@ -210,6 +244,11 @@ impl Default for Tally {
             worst_direct_deviation: 0.0,
             dphi_margin: f64::INFINITY,
             n_margin: f64::INFINITY,
+            timed: 0,
+            syncs: 0,
+            runs: 0,
+            ticks: TieStats::new(),
+            longest_run: 0,
         }
     }
 }
@@ -226,6 +265,18 @@ impl Tally {
     /// Exact ties met, over both sources.
     pub fn exact_ties(&self) -> u64 {
         self.quantizer.exact_ties + self.interleave.exact_ties
+    }
+
+    /// The time line of the report.
+    pub fn time_line(&self) -> String {
+        format!(
+            "time: {} step events timed in {} runs, {} SYNC compared; {} exact half-tick ties decided up, nearest non-tie {} ticks from a tie",
+            self.timed,
+            self.runs,
+            self.syncs,
+            self.ticks.exact_ties,
+            format_distance(self.ticks.min_distance)
+        )
     }
 
     /// The closing line of the main job.
@@ -252,6 +303,7 @@ pub fn format_distance(d: f64) -> String {
 pub struct Comparator<T: Transport> {
     link: T,
     reference: RefMachine,
+    motion: RefMotion,
     /// `TOL` and `PASS` of the session, for arcs that do not name their own.
     default_tol: String,
     default_rough: bool,
@@ -263,7 +315,13 @@ impl<T: Transport> Comparator<T> {
     /// Starts from power-on state on both sides. The device is brought there
     /// with `CFG` defaults and `ZERO`.
     pub fn new(mut link: T) -> Result<Self, LinkError> {
-        for line in ["CFG HX=0.005 HZ=0.01 DIAM=1 TOL=0.01 PASS=FIN", "ZERO"] {
+        for line in [
+            "LIMITS VX=1500 VZ=3000 AX=100 AZ=150 JD=0.01",
+            "DRIVE RATE=50000",
+            "CFG HX=0.005 HZ=0.01 DIAM=1 TOL=0.01 PASS=FIN",
+            "ZERO",
+            "SYNC",
+        ] {
             let r = link.request(line)?;
             if !r.is_ok() {
                 return Err(LinkError::Io(std::io::Error::other(format!(
@@ -275,6 +333,7 @@ impl<T: Transport> Comparator<T> {
         Ok(Comparator {
             link,
             reference: RefMachine::new(RefConfig::default()),
+            motion: RefMotion::new(MotionLimits::default(), [0.005, 0.01]),
             default_tol: "0.01".into(),
             default_rough: false,
             tally: Tally::default(),
@@ -326,6 +385,8 @@ impl<T: Transport> Comparator<T> {
                 }
                 self.reference.set_config(cfg);
                 let (px, pz) = self.reference.position();
+                self.motion.set_prices([cfg.hx_mm, cfg.hz_mm]);
+                self.motion.set_position(self.commanded(), [px, pz]);
                 if !reply.is_ok() {
                     self.tally
                         .mismatches
@@ -334,6 +395,8 @@ impl<T: Transport> Comparator<T> {
             }
             Step::Zero => {
                 self.reference.zero();
+                self.motion.zero_counters();
+                self.motion.set_position(Point::from_units(0, 0), [0, 0]);
                 if !reply.is_ok() {
                     self.tally.mismatches.push(mismatch("OK".into(), &reply));
                 }
@@ -351,18 +414,45 @@ impl<T: Transport> Comparator<T> {
             } => {
                 let cfg = self.reference.config();
                 if *direct {
-                    let expected = self.reference.arc_direct(x, z, i, k, *ccw, feed.as_deref());
+                    let mut bytes = Vec::new();
+                    let expected = self.reference.arc_direct_with_steps(
+                        x,
+                        z,
+                        i,
+                        k,
+                        *ccw,
+                        feed.as_deref(),
+                        &mut |b| bytes.extend_from_slice(b),
+                    );
+                    if let Ok(d) = &expected {
+                        self.motion
+                            .direct(&bytes, DRIVE_RATE, self.commanded(), [d.px, d.pz]);
+                    }
                     self.compare_direct(&reply, expected, &cfg, &mismatch);
                 } else {
                     let tol_s = tol.clone().unwrap_or_else(|| self.default_tol.clone());
                     let rough = rough.unwrap_or(self.default_rough);
+                    let start = self.reference.position();
                     let expected = self.reference.arc(x, z, i, k, *ccw, &tol_s, rough);
+                    if let Ok(a) = &expected {
+                        let speed = feed.as_deref().map(parse_mm);
+                        let (mut px, mut pz) = start;
+                        for (end, &(nx, nz)) in a.ends.iter().zip(&a.chords) {
+                            (px, pz) = (px + nx, pz + nz);
+                            self.motion.push(chord_point(end), [px, pz], speed);
+                        }
+                    }
                     let tol_mm = parse_mm(&tol_s);
                     self.compare_chords(&reply, expected, rough, tol_mm, &mismatch);
                 }
             }
-            Step::Move { x, z, inc } => {
+            Step::Move { x, z, inc, feed } => {
                 let expected = self.reference.move_block(x.as_deref(), z.as_deref(), *inc);
+                self.motion.push(
+                    self.commanded(),
+                    [expected.px, expected.pz],
+                    feed.as_deref().map(parse_mm),
+                );
                 self.tally.blocks += 1;
                 self.tally.events += expected.events;
                 self.tally.impulses += expected.nx.unsigned_abs() + expected.nz.unsigned_abs();
@@ -374,9 +464,57 @@ impl<T: Transport> Comparator<T> {
                         .push(mismatch(expected_line(&expected), &reply));
                 }
             }
+            Step::Sync => {
+                let runs = self.motion.runs();
+                let r = self.motion.sync();
+                self.tally.syncs += 1;
+                self.tally.timed += r.ev;
+                self.tally.runs = runs.max(self.motion.runs());
+                self.tally.ticks = self.motion.ties();
+                self.tally.longest_run = self.tally.longest_run.max(r.t);
+                // Events are compared through TSEQ; the reference's own list
+                // is not needed once reported.
+                self.motion.take_events();
+                let expected = format!("OK EV={} T={} TSEQ={:08X}", r.ev, r.t, r.tseq);
+                if reply.last != expected {
+                    self.tally.mismatches.push(mismatch(expected, &reply));
+                }
+            }
         }
         Ok(())
     }
+
+    /// The reference's commanded point.
+    fn commanded(&self) -> Point {
+        let (x, z) = self.reference.commanded_half_nm();
+        Point::from_half_nm(x, z)
+    }
+
+    /// The motion reference (profiles, ties).
+    pub fn motion(&self) -> &RefMotion {
+        &self.motion
+    }
+}
+
+/// The step event rate of direct arcs the comparator sets (`DRIVE RATE`).
+const DRIVE_RATE: f64 = 50_000.0;
+
+/// A chord end as a point of the motion reference (10⁻⁷ mm per unit).
+fn chord_point(end: &[ChordCoord; 2]) -> Point {
+    let units = |c: ChordCoord| -> (i64, f64) {
+        match c {
+            // Quarter-nanometres: 2.5 units each.
+            ChordCoord::Exact(q) => {
+                let twice = q * 5;
+                (
+                    (twice.div_euclid(2)) as i64,
+                    (twice.rem_euclid(2)) as f64 / 2.0,
+                )
+            }
+            ChordCoord::OnCircle { centre, offset } => (centre * 5, offset * 5.0),
+        }
+    };
+    Point::from_units_plus(units(end[0]), units(end[1]))
 }
 
 impl<T: Transport> Comparator<T> {

@@ -2,7 +2,13 @@
 //! device's compensated blocks with the f64 reference, block by block.
 
 use crate::link::{Reply, Transport};
+use crate::reference::{RefConfig, RefMachine, TieStats};
+use crate::reference_arc::ChordCoord;
 use crate::reference_comp::{tie_margin, CompSettings, RefContour};
+use crate::reference_motion::{MotionLimits, Point, RefMotion};
+use crate::scenario::nm_to_decimal;
+use core_nostd::arc::ArcDir;
+use core_nostd::comp::Shape;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -15,6 +21,8 @@ pub struct ContourCase {
     pub tip: u8,
     /// The program: G-code blocks, diameters.
     pub lines: Vec<String>,
+    /// Its feed, mm/min as written (the `F` of its start-up block).
+    pub feed: String,
 }
 
 impl ContourCase {
@@ -48,8 +56,9 @@ pub fn random_contour(rng: &mut impl Rng) -> ContourCase {
     let mut x = rng.random_range(2.0..6.0f64);
     let mut z = 0.0f64;
     let corner = if rng.random_bool(0.5) { "G450" } else { "G451" };
+    let feed = ["40", "80", "120.5", "200", "350"][rng.random_range(0..5usize)].to_string();
     lines.push(format!("G00 X{} Z{}", mm3(2.0 * x + 1.0), mm3(2.0)));
-    lines.push(format!("N1 {corner} G42 G01 Z0"));
+    lines.push(format!("N1 {corner} G42 G01 Z0 F{feed}"));
     x = (x + rng.random_range(min..min + 6.0)).min(40.0);
     let mut n = 2;
     lines.push(format!("N{n} X{}", mm3(2.0 * x)));
@@ -185,6 +194,7 @@ pub fn random_contour(rng: &mut impl Rng) -> ContourCase {
         rn: format!("{rn}"),
         tip,
         lines,
+        feed,
     }
 }
 
@@ -212,6 +222,10 @@ pub struct ContourTally {
     pub position_near_ties: usize,
     /// Disagreements, described.
     pub mismatches: Vec<String>,
+    /// Step events whose ticks were compared (`SYNC` after each program).
+    pub timed: u64,
+    /// Rounding decisions of their ticks.
+    pub ticks: TieStats,
 }
 
 /// Runs `case` on the device behind `link` and on the f64 reference; adds
@@ -224,8 +238,11 @@ pub fn compare_contour<T: Transport>(
 ) -> Result<(), crate::link::LinkError> {
     if tally.programs == 0 {
         tally.closest_tie_mm = f64::INFINITY;
+        tally.ticks = TieStats::new();
     }
     tally.programs += 1;
+    // Whatever ran before is not this program's.
+    link.request("SYNC")?;
     let cfg = link.request(&format!(
         "CFG HX=0.005 HZ=0.01 DIAM=1 RN={} TIP={}",
         case.rn, case.tip
@@ -236,7 +253,122 @@ pub fn compare_contour<T: Transport>(
     }
     // Both start at the program zero, in the power-on modal state.
     link.request("RESET")?;
-    link.request("G00 X0 Z0")?;
+    link.request("ZERO")?;
+    let mut motion = RefMotion::new(MotionLimits::default(), [0.005, 0.01]);
+    // The compensated points to time, exactly (10⁻⁷ mm): those of the
+    // core's contour engine, in a device of its own. They are the points the
+    // device printed, which the contour reference checks to the printed
+    // 10⁻⁴ mm above; what is compared here is their timing.
+    let mut shadow = crate::device::LocalDevice::new();
+    for l in [
+        format!(
+            "CFG HX=0.005 HZ=0.01 DIAM=1 TOL=0.01 PASS=FIN RN={} TIP={}",
+            case.rn, case.tip
+        ),
+        "ZERO".into(),
+    ] {
+        shadow.request(&l);
+    }
+    run_contour(link, case, tally, &mut motion, &mut shadow)?;
+    // Everything the program queued runs: its events and ticks.
+    let dev = link.request("SYNC")?;
+    let r = motion.sync();
+    tally.timed += r.ev;
+    let t = motion.ties();
+    tally.ticks.exact_ties += t.exact_ties;
+    tally.ticks.min_distance = tally.ticks.min_distance.min(t.min_distance);
+    let want = format!("OK EV={} T={} TSEQ={:08X}", r.ev, r.t, r.tseq);
+    if dev.last != want {
+        tally.mismatches.push(format!(
+            "SYNC after {}: device {}, reference {want}",
+            case.lines.first().map_or("", String::as_str),
+            dev.last
+        ));
+    }
+    Ok(())
+}
+
+/// `Q(u/h)` of a coordinate in 10⁻⁷ mm.
+fn q(u: i64, h: i64) -> i64 {
+    let m = u.abs() / h + i64::from(2 * (u.abs() % h) >= h);
+    if u < 0 {
+        -m
+    } else {
+        m
+    }
+}
+
+/// Queues a compensated block on the motion reference: the line from
+/// `from` to `to`, or the chords of the arc about `centre` (10⁻⁷ mm, X
+/// radius), cut as SPEC §3 says with the session's tolerance (0.01 mm,
+/// finishing). The chords come from the reference's arc machine run at ten
+/// times scale, where the 10⁻⁷ mm grid of compensated points is its
+/// nanometre grid of words (Δφ, the chord count and `Q(P/h)` do not change
+/// with the scale).
+pub fn push_block(
+    motion: &mut RefMotion,
+    from: [i64; 2],
+    to: [i64; 2],
+    arc: Option<([i64; 2], bool)>,
+    feed: Option<f64>,
+) {
+    let line = |motion: &mut RefMotion| {
+        motion.push(
+            Point::from_units(to[0], to[1]),
+            [q(to[0], 50_000), q(to[1], 100_000)],
+            feed,
+        )
+    };
+    let Some((centre, ccw)) = arc else {
+        return line(motion);
+    };
+    let mut m = RefMachine::scaled(
+        RefConfig {
+            hx_mm: 0.05,
+            hz_mm: 0.1,
+            diam: false,
+        },
+        10,
+    );
+    let w = nm_to_decimal;
+    m.move_block(Some(&w(from[0])), Some(&w(from[1])), false);
+    let (mut px, mut pz) = m.position();
+    let chords = m.arc(
+        &w(to[0]),
+        &w(to[1]),
+        &w(centre[0] - from[0]),
+        &w(centre[1] - from[1]),
+        ccw,
+        "0.1",
+        false,
+    );
+    let Ok(a) = chords else {
+        // Refused here as on the device (the comparison of blocks says so).
+        return line(motion);
+    };
+    for (end, &(nx, nz)) in a.ends.iter().zip(&a.chords) {
+        (px, pz) = (px + nx, pz + nz);
+        // Scaled quarter- and half-nanometres are quarter and half units.
+        let c = |c: ChordCoord| match c {
+            ChordCoord::Exact(v) => (v.div_euclid(4) as i64, v.rem_euclid(4) as f64 / 4.0),
+            ChordCoord::OnCircle { centre, offset } => (
+                centre.div_euclid(2),
+                centre.rem_euclid(2) as f64 / 2.0 + offset / 2.0,
+            ),
+        };
+        motion.push(Point::from_units_plus(c(end[0]), c(end[1])), [px, pz], feed);
+    }
+}
+
+fn run_contour<T: Transport>(
+    link: &mut T,
+    case: &ContourCase,
+    tally: &mut ContourTally,
+    motion: &mut RefMotion,
+    shadow: &mut crate::device::LocalDevice,
+) -> Result<(), crate::link::LinkError> {
+    let feed: f64 = case.feed.parse().unwrap_or(f64::NAN);
+    let at = &mut [0i64, 0];
     let mut reference = RefContour::new(CompSettings {
         rn_mm: case.rn_mm(),
         tip: case.tip,
@@ -247,6 +379,8 @@ pub fn compare_contour<T: Transport>(
         tally.blocks += 1;
         let dev: Reply = link.request(line)?;
         let refr = reference.block(line);
+        shadow.request(line);
+        let exact = shadow.device().session().last_moves().clone();
         match (dev.is_ok(), refr) {
             (true, Ok(blocks)) => {
                 let data: Vec<&str> = dev
@@ -261,8 +395,15 @@ pub fn compare_contour<T: Transport>(
                     ));
                     return Ok(());
                 }
-                for (d, b) in data.iter().zip(&blocks) {
+                for ((d, b), m) in data.iter().zip(&blocks).zip(&exact) {
                     tally.compared += 1;
+                    let speed = (b.motion.word() != "G00").then_some(feed);
+                    let arc = match m.kind {
+                        Shape::Arc { centre, dir } => Some((centre, dir == ArcDir::Ccw)),
+                        Shape::Line { .. } => None,
+                    };
+                    push_block(motion, *at, m.to, arc, speed);
+                    *at = m.to;
                     let margin = tie_margin(b, from, true);
                     tally.closest_tie_mm = tally.closest_tie_mm.min(margin);
                     let want = b.text(from, true);
@@ -314,6 +455,7 @@ pub fn compare_contour<T: Transport>(
                 if !reset.is_ok() {
                     tally.mismatches.push(format!("RESET: {}", reset.last));
                 }
+                motion.flush();
                 return Ok(());
             }
             (true, Err(e)) => {

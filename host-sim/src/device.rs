@@ -2,7 +2,7 @@
 //! with a virtual clock: every step event it issues is recorded with its
 //! tick.
 
-use core_nostd::interleave::StepEvent;
+use core_nostd::interleave::{LinearBlock, StepEvent};
 use core_nostd::protocol::{Device, Io};
 use core_nostd::stepdir::DriveTiming;
 
@@ -22,6 +22,7 @@ pub struct Issued {
 struct Collect<'a> {
     out: Vec<u8>,
     events: &'a mut Vec<Issued>,
+    starts: &'a mut Vec<(usize, LinearBlock)>,
     runs: &'a mut u64,
 }
 
@@ -39,6 +40,9 @@ impl Io for Collect<'_> {
     fn run_end(&mut self, _: u64) {
         *self.runs += 1;
     }
+    fn block_start(&mut self, block: &LinearBlock) {
+        self.starts.push((self.events.len(), *block));
+    }
 }
 
 /// The same protocol handler the firmware runs, in this process.
@@ -46,6 +50,7 @@ impl Io for Collect<'_> {
 pub struct LocalDevice {
     dev: Device,
     events: Vec<Issued>,
+    starts: Vec<(usize, LinearBlock)>,
     runs: u64,
     /// Keep the events issued (off: only count them).
     record: bool,
@@ -73,6 +78,7 @@ impl LocalDevice {
         let mut io = Collect {
             out: Vec::new(),
             events: &mut self.events,
+            starts: &mut self.starts,
             runs: &mut self.runs,
         };
         self.dev.receive_bytes(bytes, &mut io);
@@ -80,6 +86,7 @@ impl LocalDevice {
         self.issued += (self.events.len() - before) as u64;
         if !self.record {
             self.events.clear();
+            self.starts.clear();
         }
         out
     }
@@ -98,7 +105,14 @@ impl LocalDevice {
 
     /// The events issued since the last call (kept by a recording device).
     pub fn take_events(&mut self) -> Vec<Issued> {
+        self.starts.clear();
         std::mem::take(&mut self.events)
+    }
+
+    /// The blocks started since the last [`LocalDevice::take_events`], each
+    /// with the index of its first event there.
+    pub fn block_starts(&self) -> &[(usize, LinearBlock)] {
+        &self.starts
     }
 
     /// Step events issued since power-on.

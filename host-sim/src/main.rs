@@ -398,6 +398,15 @@ fn compare_all<T: Transport>(link: T, args: &ScenarioArgs) -> Result<ExitCode, L
         format_distance(t.dphi_margin),
         format_distance(t.n_margin)
     );
+    println!("{}", t.time_line());
+    let machine_s: f64 = cmp.motion().profiles().iter().map(|p| p.duration_s).sum();
+    println!(
+        "time: {:.1} s ({:.1} h) of planned motion in {} blocks, longest SYNC run {} ticks",
+        machine_s,
+        machine_s / 3600.0,
+        cmp.motion().profiles().len(),
+        t.longest_run
+    );
     for m in t.mismatches.iter().take(10) {
         println!(
             "MISMATCH {} step {}: {}\n  device:    {}\n  reference: {}",
@@ -424,14 +433,21 @@ fn compare_all<T: Transport>(link: T, args: &ScenarioArgs) -> Result<ExitCode, L
         "compensation: nearest printed value {:.1e} mm from a printing tie; {} position registers equal Q(P/h) of the reference ({} excused at a 1e-7 mm rounding tie)",
         ct.closest_tie_mm, ct.positions, ct.position_near_ties
     );
+    println!(
+        "compensation: {} step events timed alike ({} exact half-tick ties, nearest non-tie {} ticks from a tie)",
+        ct.timed,
+        ct.ticks.exact_ties,
+        format_distance(ct.ticks.min_distance)
+    );
     for m in ct.mismatches.iter().take(10) {
         println!("MISMATCH compensation: {m}");
     }
     let t = &cmp.tally;
     println!(
-        "total: {} blocks, {} step events, {} impulses in {:.2} s",
+        "total: {} blocks, {} step events ({} timed), {} impulses in {:.2} s",
         t.blocks + ct.blocks as u64,
         t.events,
+        t.timed + ct.timed,
         t.impulses,
         started.elapsed().as_secs_f64()
     );

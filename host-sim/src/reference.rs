@@ -414,6 +414,9 @@ pub struct RefMachine {
     pub(crate) px: i64,
     /// Z register, impulses (`Q(cmd_z/hz)`).
     pub(crate) pz: i64,
+    /// Lengths are this many times larger than the words say (1; see
+    /// [`RefMachine::scaled`]).
+    pub(crate) length_scale: u128,
 }
 
 impl RefMachine {
@@ -428,6 +431,20 @@ impl RefMachine {
             cmd_z: 0,
             px: 0,
             pz: 0,
+            length_scale: 1,
+        }
+    }
+
+    /// A machine whose words are read at `scale` times their size: a word
+    /// of 1 nm stands for `1/scale` nm. Prices, tolerances and every
+    /// coordinate are given scaled alike, so chord angles, chord counts and
+    /// `Q(P/h)` are those of the unscaled arc; the arcs' radius mismatch
+    /// limit (0.002 mm) is scaled with them. At scale 10 the 10⁻⁷ mm grid of
+    /// compensated points becomes the nanometre grid of words.
+    pub fn scaled(cfg: RefConfig, scale: u32) -> Self {
+        RefMachine {
+            length_scale: u128::from(scale.max(1)),
+            ..RefMachine::new(cfg)
         }
     }
 
@@ -550,6 +567,11 @@ impl RefMachine {
     /// `(PX, PZ)` in impulses.
     pub fn position(&self) -> (i64, i64) {
         (self.px, self.pz)
+    }
+
+    /// Commanded `(X radius, Z)` in half-nanometres, exact.
+    pub fn commanded_half_nm(&self) -> (i64, i64) {
+        (self.cmd_x, self.cmd_z)
     }
 
     /// Commanded `(X radius, Z)` in mm.

@@ -163,6 +163,24 @@ pub struct RefArc {
     pub n_margin: f64,
     /// Largest distance between the arc and its chords, mm.
     pub max_chord_error_mm: f64,
+    /// The end of each chord (X radius, Z), as computed: the last one the
+    /// commanded end.
+    pub ends: Vec<[ChordCoord; 2]>,
+}
+
+/// A chord end coordinate as the reference computes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ChordCoord {
+    /// Exact, in quarter-nanometres (2.5·10⁻⁷ mm).
+    Exact(i128),
+    /// The centre's coordinate (exact, half-nanometres) plus an offset on
+    /// the circle (f64, half-nanometres).
+    OnCircle {
+        /// The centre, half-nanometres.
+        centre: i64,
+        /// `R·cos`/`R·sin` term, half-nanometres.
+        offset: f64,
+    },
 }
 
 /// One arc run by the ЭМ-907 circular interpolator.
@@ -326,9 +344,14 @@ fn norm_sq(p: (i128, i128)) -> u128 {
 }
 
 /// `|√a − √b| ≤ 0.002 mm`, decided exactly (`a`, `b` in half-nm²).
+#[cfg(test)]
 fn radii_match(a: u128, b: u128) -> bool {
+    radii_within(a, b, RADIUS_MISMATCH_HALF_NM)
+}
+
+/// `|√a − √b| ≤ d`, decided exactly.
+fn radii_within(a: u128, b: u128, d: u128) -> bool {
     let (big, small) = if a >= b { (a, b) } else { (b, a) };
-    let d = RADIUS_MISMATCH_HALF_NM;
     // √big − √small ≤ d  ⇔  big − small − d² ≤ 2d·√small.
     let diff = big - small;
     if diff <= d * d {
@@ -339,8 +362,9 @@ fn radii_match(a: u128, b: u128) -> bool {
     l <= (4 * d * d * small).isqrt()
 }
 
-fn check_radii(w: &ArcWords) -> Result<(), RefArcError> {
-    if w.r0_sq == 0 || w.r1_sq == 0 || !radii_match(w.r0_sq, w.r1_sq) {
+fn check_radii(w: &ArcWords, scale: u128) -> Result<(), RefArcError> {
+    let d = RADIUS_MISMATCH_HALF_NM * scale;
+    if w.r0_sq == 0 || w.r1_sq == 0 || !radii_within(w.r0_sq, w.r1_sq, d) {
         return Err(RefArcError::Geometry);
     }
     Ok(())
@@ -468,6 +492,20 @@ fn chord_end(w: &ArcWords, alpha: i64) -> (Value<i128>, Value<i128>) {
         Value::Approx(cx as f64 / HALF_NM_F + (uzf * sin + uxf * cos) / HALF_NM_F)
     };
     (x, z)
+}
+
+/// The offsets `(uz·sin α + ux·cos α, uz·cos α − ux·sin α)` of a chord end
+/// from the centre, half-nanometres (X, Z), as [`chord_end`] computes them.
+fn chord_offset(w: &ArcWords, alpha: i64) -> (f64, f64) {
+    let alpha = alpha.rem_euclid(FULL_TURN_ARCSEC);
+    let signed = if alpha > HALF_TURN_ARCSEC {
+        alpha - FULL_TURN_ARCSEC
+    } else {
+        alpha
+    };
+    let (sin, cos) = (signed as f64 * (PI / 648_000.0)).sin_cos();
+    let (ux, uz) = (w.u.0 as f64, w.u.1 as f64);
+    (uz * sin + ux * cos, uz * cos - ux * sin)
 }
 
 /// The price in whole nanometres (prices have at most 6 decimals).
@@ -692,7 +730,7 @@ impl RefMachine {
     ) -> Result<RefArc, RefArcError> {
         let sigma = 2 * word(tol)?;
         let w = self.arc_words(x, z, i, k)?;
-        check_radii(&w)?;
+        check_radii(&w, self.length_scale)?;
 
         let (dphi, dphi_margin) = match dphi_exact(w.r0_sq, sigma) {
             Value::Exact(d) => (d, f64::INFINITY),
@@ -720,6 +758,7 @@ impl RefMachine {
         let (hx, hz) = (self.cfg.hx_mm, self.cfg.hz_mm);
         let mut quantizer_ties = TieStats::new();
         let mut points = Vec::with_capacity(n as usize + 1);
+        let mut ends = Vec::with_capacity(n as usize);
         points.push((self.px, self.pz));
         let sign = if ccw { 1 } else { -1 };
         for i in 1..n {
@@ -728,7 +767,17 @@ impl RefMachine {
                 quantize_coord(cx, hx, &mut quantizer_ties)?,
                 quantize_coord(cz, hz, &mut quantizer_ties)?,
             ));
+            let (ox, oz) = chord_offset(&w, sign * i * dphi);
+            let coord = |c: Value<i128>, centre: i64, offset: f64| match c {
+                Value::Exact(q) => ChordCoord::Exact(q),
+                Value::Approx(_) => ChordCoord::OnCircle { centre, offset },
+            };
+            ends.push([coord(cx, w.centre.0, ox), coord(cz, w.centre.1, oz)]);
         }
+        ends.push([
+            ChordCoord::Exact(2 * i128::from(w.end.0)),
+            ChordCoord::Exact(2 * i128::from(w.end.1)),
+        ]);
         let end = (
             register(w.end.0, hx, &mut quantizer_ties),
             register(w.end.1, hz, &mut quantizer_ties),
@@ -777,6 +826,7 @@ impl RefMachine {
             dphi_margin,
             n_margin,
             max_chord_error_mm,
+            ends,
         })
     }
 
@@ -839,7 +889,7 @@ impl RefMachine {
     ) -> Result<RefDirect, RefArcError> {
         let feed_nm = feed.map(word).transpose()?;
         let w = self.arc_words(x, z, i, k)?;
-        check_radii(&w)?;
+        check_radii(&w, self.length_scale)?;
         if w.end == w.start {
             return Err(RefArcError::Geometry);
         }

@@ -483,6 +483,14 @@ impl Point {
         }
     }
 
+    /// A point given per axis as a whole number of 10⁻⁷ mm plus an f64
+    /// offset in the same unit (a chord end: its exact centre plus its
+    /// offset on the circle).
+    pub fn from_units_plus(x: (i64, f64), z: (i64, f64)) -> Point {
+        let c = |(whole, off): (i64, f64)| Dd::from_i128(whole as i128).plus(Dd::from_f64(off));
+        Point { c: [c(x), c(z)] }
+    }
+
     /// The point in mm (X radius, Z), rounded to f64.
     pub fn mm(&self) -> [f64; 2] {
         let f = |v: Dd| v.over(Dd::from_f64(UNITS_PER_MM as f64)).to_f64();

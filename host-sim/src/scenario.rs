@@ -123,11 +123,18 @@ fn from_zero(diam: bool) -> Vec<Step> {
 pub fn table21() -> Scenario {
     let mut steps = from_zero(false);
     for path in TABLE21_PATHS {
-        for r in path {
-            steps.push(Step::to(r.x, r.z));
+        // To the reference point at the rapid rate, then the path at a feed.
+        for (n, r) in path.iter().enumerate() {
+            steps.push(if n == 0 {
+                Step::to(r.x, r.z)
+            } else {
+                Step::feed_to(r.x, r.z, "250")
+            });
         }
+        steps.push(Step::Sync);
     }
     steps.push(Step::to("0", "0"));
+    steps.push(Step::Sync);
     Scenario {
         name: "Kosenko table 21 (АТПр-2М12 tool paths)".into(),
         steps,
@@ -185,11 +192,19 @@ pub fn krylenko() -> Scenario {
     ];
     let mut steps = from_zero(true);
     for program in programs {
-        for &(x, z) in program {
-            steps.push(Step::to(x, z));
+        // Approach and retract at the rapid rate, the contour at F120.
+        let last = program.len() - 1;
+        for (n, &(x, z)) in program.iter().enumerate() {
+            steps.push(if n == 0 || n >= last - 1 {
+                Step::to(x, z)
+            } else {
+                Step::feed_to(x, z, "120")
+            });
         }
+        steps.push(Step::Sync);
     }
     steps.push(Step::to("0", "0"));
+    steps.push(Step::Sync);
     Scenario {
         name: "Krylenko part contours (Fig. 12, 17, 22, 24) as moves".into(),
         steps,
@@ -206,7 +221,7 @@ fn arc(x: &str, z: &str, i: &str, k: &str, ccw: bool) -> Step {
         tol: None,
         rough: None,
         direct: false,
-        feed: None,
+        feed: Some("80".into()),
     }
 }
 
@@ -220,7 +235,13 @@ pub fn krylenko_arcs() -> Scenario {
     for (tol, rough) in [("0.01", false), ("0.002", false), ("0.05", true)] {
         let with = |s: Step| match s {
             Step::Arc {
-                x, z, i, k, ccw, ..
+                x,
+                z,
+                i,
+                k,
+                ccw,
+                feed,
+                ..
             } => Step::Arc {
                 x,
                 z,
@@ -230,28 +251,30 @@ pub fn krylenko_arcs() -> Scenario {
                 tol: Some(tol.into()),
                 rough: Some(rough),
                 direct: false,
-                feed: None,
+                feed,
             },
             other => other,
         };
         for s in [
             Step::to("10", "10"),
-            Step::to("7.2", "0"),
+            Step::feed_to("7.2", "0", "80"),
             arc("12", "-2.4", "0", "-2.4", true),
-            Step::to("12", "-14.4"),
+            Step::feed_to("12", "-14.4", "80"),
             arc("17.2", "-17", "2.6", "0", false),
-            Step::to("29.2", "-17"),
+            Step::feed_to("29.2", "-17", "80"),
             arc("38", "-21.4", "0", "-4.4", true),
             Step::to("38", "10"),
             Step::to("30", "10"),
-            Step::to("20.8", "0"),
+            Step::feed_to("20.8", "0", "80"),
             arc("0", "-10.4", "-10.4", "0", true),
             Step::to("0", "10"),
+            Step::Sync,
         ] {
             steps.push(with(s));
         }
     }
     steps.push(Step::to("0", "0"));
+    steps.push(Step::Sync);
     Scenario {
         name: "Krylenko Fig. 22, 24 with arcs by chords".into(),
         steps,
@@ -329,10 +352,14 @@ pub fn random_arcs(seed: u64, chords: usize, direct: usize) -> Scenario {
             at(a1, r + off)
         };
         let word_x = |x: i64| nm_to_decimal(if diam { 2 * x } else { x });
+        if n % 10 == 0 {
+            steps.push(Step::Sync);
+        }
         steps.push(Step::Move {
             x: Some(word_x(sx)),
             z: Some(nm_to_decimal(sz)),
             inc: false,
+            feed: None,
         });
         steps.push(Step::Arc {
             x: word_x(ex),
@@ -343,13 +370,16 @@ pub fn random_arcs(seed: u64, chords: usize, direct: usize) -> Scenario {
             tol: Some(tols[rng.random_range(0..tols.len())].into()),
             rough: Some(rng.random_bool(0.3)),
             direct: is_direct,
-            feed: if is_direct && rng.random_bool(0.5) {
+            // The ЭМ-907 feed word of a direct arc, the path feed of chords
+            // (or the rapid rate).
+            feed: if rng.random_bool(if is_direct { 0.5 } else { 0.8 }) {
                 Some(nm_to_decimal(rng.random_range(1_000_000..2_000_000_000)))
             } else {
                 None
             },
         });
     }
+    steps.push(Step::Sync);
     // Direct arcs take no TOL or PASS.
     for s in &mut steps {
         if let Step::Arc {
@@ -383,6 +413,9 @@ pub fn nm_to_decimal(nm: i64) -> String {
     }
 }
 
+/// Round feeds (mm/min) of the random scenario.
+const FEEDS: [&str; 8] = ["50", "100", "120", "200", "250", "600", "1000", "2500"];
+
 /// Prices the random scenario switches between, in nm (X on the radius).
 const X_PRICES_NM: [i64; 5] = [5_000, 1_000, 2_500, 10_000, 2_000];
 const Z_PRICES_NM: [i64; 5] = [10_000, 5_000, 1_000, 2_500, 2_000];
@@ -410,6 +443,7 @@ pub fn random(seed: u64, n: usize) -> Scenario {
                     x: Some(nm_to_decimal(cx)),
                     z: None,
                     inc: false,
+                    feed: None,
                 });
                 blocks += 1;
             }
@@ -463,9 +497,19 @@ pub fn random(seed: u64, n: usize) -> Scenario {
         } else {
             None
         };
-        steps.push(Step::Move { x, z, inc });
+        // Feeds as programs write them, and rapids.
+        let feed = match rng.random_range(0..10) {
+            0..=1 => None,
+            2..=5 => Some(FEEDS[rng.random_range(0..FEEDS.len())].to_string()),
+            _ => Some(nm_to_decimal(rng.random_range(1_000_000..3_000_000_000))),
+        };
+        steps.push(Step::Move { x, z, inc, feed });
         blocks += 1;
+        if blocks % 100 == 0 {
+            steps.push(Step::Sync);
+        }
     }
+    steps.push(Step::Sync);
     Scenario {
         name: format!("random blocks (seed {seed})"),
         steps,

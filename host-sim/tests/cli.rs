@@ -113,7 +113,7 @@ fn compensate_prints_the_tool_tip_program_or_refuses_it() {
     let bad = dir.join("bad.nc");
     std::fs::write(
         &bad,
-        "G00 X20 Z2\nG42 G01 Z0\nX40\nG02 X41 Z-0.5 R0.36\nZ-10\n",
+        "G00 X20 Z2\nG42 G01 Z0 F100\nX40\nG02 X41 Z-0.5 R0.36\nZ-10\n",
     )
     .unwrap();
     let out = Command::new(BIN)

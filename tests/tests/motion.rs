@@ -115,7 +115,7 @@ fn single_blocks_from_rest_to_rest() {
         p.to(x, z, f);
         p.sync();
     }
-    assert_eq!(p.time.ties().min_distance > 0.0, true);
+    assert!(p.time.ties().min_distance > 0.0);
 }
 
 #[test]

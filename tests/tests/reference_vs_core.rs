@@ -22,12 +22,15 @@ fn word_nm(max_mm: i64) -> impl Strategy<Value = i64> {
 
 fn step() -> impl Strategy<Value = Step> {
     prop_oneof![
-        12 => (proptest::option::weighted(0.85, word_nm(200)), proptest::option::weighted(0.85, word_nm(200)), any::<bool>())
-            .prop_map(|(x, z, inc)| Step::Move {
+        12 => (proptest::option::weighted(0.85, word_nm(200)), proptest::option::weighted(0.85, word_nm(200)), any::<bool>(),
+               proptest::option::weighted(0.7, 1_000u32..3_000_000_000))
+            .prop_map(|(x, z, inc, f)| Step::Move {
                 x: x.map(|v| nm_to_decimal(if inc { v / 10 } else { v })),
                 z: z.map(|v| nm_to_decimal(if inc { v / 10 } else { v })),
                 inc,
+                feed: f.map(|f| nm_to_decimal(i64::from(f))),
             }),
+        1 => Just(Step::Sync),
         1 => (prop_oneof![Just("0.005"), Just("0.001"), Just("0.0025"), Just("0.002")],
               prop_oneof![Just("0.01"), Just("0.005"), Just("0.001"), Just("0.0025")],
               any::<bool>())
@@ -45,9 +48,11 @@ fn reply_int(r: &host_sim::link::Reply, key: &str) -> i64 {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
-    /// Random sessions: every block's NX, NZ, PX, PZ and SEQ equal the reference's.
+    /// Random sessions: every block's NX, NZ, PX, PZ and SEQ equal the
+    /// reference's, and every SYNC's EV, T and TSEQ (the tick of every event).
     #[test]
-    fn core_equals_reference(steps in proptest::collection::vec(step(), 1..40)) {
+    fn core_equals_reference(mut steps in proptest::collection::vec(step(), 1..40)) {
+        steps.push(Step::Sync);
         let scenario = Scenario { name: "proptest".into(), steps };
         let mut cmp = Comparator::new(LocalDevice::new()).unwrap();
         cmp.run(&scenario, |_| {}).unwrap();

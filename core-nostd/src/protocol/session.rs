@@ -780,9 +780,12 @@ impl Session {
         let mut cmd = self.cmd;
         let mut pos = self.pos;
         for m in &moves {
+            // A corner belongs to the cut on either side of it: at this
+            // block's feed, or the previous one's into a rapid.
             let feed = match m.origin {
                 Origin::Previous => self.element_feed,
-                Origin::Corner | Origin::Current => now,
+                Origin::Current => now,
+                Origin::Corner => now.or(self.element_feed),
             };
             let p = self.plan_move(cmd, pos, m, feed)?;
             (cmd, pos) = (p.end(), p.registers());
