@@ -268,9 +268,10 @@ impl ChordPlan {
     }
 
     /// The end of chord `i` (1 … n): its impulse position with the carry
-    /// rule, and the point itself in ångström · 2³² (rounded half away from
-    /// zero from the 2⁻⁶² Å it is computed to; chord `n` ends exactly on the
-    /// commanded end).
+    /// rule (of the point as computed, to 2⁻⁶² Å), and the point rounded half
+    /// away from zero to the 10⁻⁷ mm grid, in ångström · 2³², as the planner
+    /// times it (`docs/motion.md`; chord `n` ends exactly on the commanded
+    /// end).
     pub fn chord_point(
         &self,
         i: u32,
@@ -299,15 +300,10 @@ impl ChordPlan {
         // Rotate (z, x) by the angle: z' = z·c − x·s, x' = z·s + x·c (Å·2⁶²).
         let z = (i128::from(self.centre[1]) << 62) + uz * c - ux * s;
         let x = (i128::from(self.centre[0]) << 62) + uz * s + ux * c;
-        // Å·2⁶² to Å·2³², half away from zero.
+        // Å·2⁶² to whole Å (half away from zero), as Å·2³².
         let q32 = |v: i128| {
-            let m = (v.unsigned_abs() + (1 << 29)) >> 30;
-            let m = m as i128;
-            if v < 0 {
-                -m
-            } else {
-                m
-            }
+            let m = ((v.unsigned_abs() + (1 << 61)) >> 62) as i128;
+            (if v < 0 { -m } else { m }) << 32
         };
         Ok((
             ImpulsePoint {

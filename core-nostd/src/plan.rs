@@ -32,7 +32,7 @@ use crate::interleave::LinearBlock;
 use crate::length::{Length, ANGSTROM_PER_MM};
 use crate::step::{Cruise, Ramp, TickRate, TimedBlock, HALF, TIE};
 use crate::trig::isqrt;
-use crate::wide::{mul_div, mul_shl_div, mul_shr, shl_div, sqrt_shl, U256};
+use crate::wide::{mul_div, mul_shr, shl_div, sqrt_shl, U256};
 use core::fmt;
 use heapless::Deque;
 
@@ -293,7 +293,7 @@ pub struct Block {
     /// `|d| = ln · 2^scale` (Å·2³²).
     scale: i32,
     /// The lead axis: distance from the start to the first event's boundary
-    /// and the whole move along it (Å·2³²), its price (Å), `|dn|` on it.
+    /// and the whole move along it (Å·2⁶⁴), its price (Å), `|dn|` on it.
     lead_first: u128,
     lead_len: u128,
     lead_price: u64,
@@ -376,7 +376,13 @@ impl Block {
         }
         // 2aL = 2·a·ln·2^scale, Q96·Q32 → Q64.
         let two_al = mul_shr(accel, u128::from(ln), (63 - scale) as u32);
-        // The lead axis by impulses, X when equal (SPEC §2).
+        // The lead axis by impulses, X when equal (SPEC §2); a block
+        // without impulses is measured along the axis that moves most.
+        let lead = if nx == 0 && nz == 0 {
+            usize::from(d[1].unsigned_abs() > d[0].unsigned_abs())
+        } else {
+            lead
+        };
         let (a0, n) = if lead == 0 {
             (events.from().x.get(), nx)
         } else {
@@ -386,7 +392,7 @@ impl Block {
         // Boundary of the first impulse, (a0 + σ/2)·h, in Å·2³².
         let sigma: i128 = if n < 0 { -1 } else { 1 };
         let boundary = ((2 * i128::from(a0) + sigma) * i128::from(price)) << 31;
-        let first = (sigma * (boundary - from[lead])).max(0) as u128;
+        let first = ((sigma * (boundary - from[lead])).max(0) as u128) << 32;
         Some(Block {
             events,
             d,
@@ -394,7 +400,7 @@ impl Block {
             ln,
             scale,
             lead_first: first,
-            lead_len: d[lead].unsigned_abs(),
+            lead_len: d[lead].unsigned_abs() << 32,
             lead_price: price as u64,
             lead_dn: dn[lead].unsigned_abs().max(1),
             vmax2,
@@ -632,7 +638,7 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
     let (ue, uc, ux) = (u(ve), u(vc), u(vx));
     let t_accel = uc.saturating_sub(ue);
     let t_decel = uc.saturating_sub(ux);
-    // Where the ramps end and start along the lead axis (Å·2³²).
+    // Where the ramps end and start along the lead axis (Å·2⁶⁴).
     let len = b.lead_len;
     let l_accel = mul_div(da, len, tal).min(len);
     let l_decel = (len - mul_div(dd, len, tal).min(len)).max(l_accel);
@@ -647,20 +653,20 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
             return 0;
         }
         match cruise_source {
-            Some(Source::Feed(f)) => mul_shl_div(dl * per_min, ln, 32, dn_lead * u128::from(f)),
+            Some(Source::Feed(f)) => mul_div(dl, per_min * ln, dn_lead * u128::from(f)),
             Some(Source::Axis(axis)) => {
                 let vmax = u128::from(rates.limits.vmax[axis & 1]);
                 let m = u128::from(b.dn[axis & 1].unsigned_abs());
-                mul_shl_div(dl * per_min, m, 32, dn_lead * vmax)
+                mul_div(dl, per_min * m, dn_lead * vmax)
             }
-            None => shl_div(mul_shl_div(dl, ln, 32, dn_lead), 64, vc),
+            None => shl_div(mul_div(dl, ln, dn_lead), 64, vc),
         }
     };
     let t_cruise = cruise_time(l_decel - l_accel);
     // Event i is at o + (i − 1)·h along the lead axis.
     let n = b.lead_events();
     let o = b.lead_first;
-    let h = u128::from(b.lead_price) << 32;
+    let h = u128::from(b.lead_price) << 64;
     let upto = |limit: u128, inclusive: bool| -> u32 {
         let reach = if inclusive {
             limit
@@ -678,7 +684,7 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
     let accel_events = upto(l_accel, true);
     let cruise_end = upto(l_decel, false).max(accel_events);
     // 2s/a for a lead-axis distance, Q64 ticks².
-    let two_s_over_a = |dl: u128| shl_div(mul_shl_div(dl, ln, 32, dn_lead), 97, b.accel);
+    let two_s_over_a = |dl: u128| shl_div(mul_div(dl, ln, dn_lead), 97, b.accel);
     let per_event = two_s_over_a(h);
     let at = |i: u32| o.saturating_add(u128::from(i) * h);
     let signed = |v: u128| i128::try_from(v).unwrap_or(i128::MAX);
@@ -812,6 +818,19 @@ mod tests {
             block(["0", "-40"], ["0", "-60"], Some("1200")),
         ]);
         assert_eq!(one, split);
+    }
+
+    #[test]
+    fn a_block_without_impulses_takes_its_time() {
+        // Z 0.004 mm from 0 at 0.01 mm per impulse: no impulse, but the
+        // slide moves for 2·√(L/a) (a triangle at 150 mm/s²).
+        let (ev, end) = run(&[block(["0", "0"], ["0", "-0.004"], None)]);
+        assert!(ev.is_empty());
+        let t = 2.0 * libm::sqrt(0.004 / 150.0);
+        assert_eq!(end, libm::round(t * 1e6) as u64);
+        // Measured along Z even though X leads a block without impulses.
+        let (_, end) = run(&[block(["0.001", "0"], ["0.001", "-0.004"], None)]);
+        assert_eq!(end, libm::round(t * 1e6) as u64);
     }
 
     #[test]

@@ -146,6 +146,7 @@ impl TimedBlock {
             block: *self,
             state: State::Start,
             tick: 0,
+            end: self.end_tick(),
         }
     }
 }
@@ -185,6 +186,8 @@ pub struct TimedEvents {
     state: State,
     /// The tick of the last event.
     tick: u64,
+    /// The block's end, whole ticks.
+    end: u64,
 }
 
 /// Which phase event `i` (1-based) belongs to.
@@ -218,7 +221,7 @@ impl Iterator for TimedEvents {
                 | (Phase::Cruise, State::Cruise { .. })
                 | (Phase::Decel, State::Decel { .. })
         );
-        self.tick = match phase {
+        let tick = match phase {
             Phase::Cruise => {
                 let t = if first {
                     b.cruise.first
@@ -233,6 +236,9 @@ impl Iterator for TimedEvents {
             Phase::Accel => self.accel(first),
             Phase::Decel => self.decel(first),
         };
+        // A chord's last boundary may lie up to half a grid unit beyond its
+        // rounded end: that event happens at the end.
+        self.tick = tick.min(self.end);
         Some((event, self.tick))
     }
 

@@ -145,14 +145,6 @@ impl U256 {
     }
 }
 
-/// `⌊a · b · 2^s / d⌋` for `s < 128`, saturating at `u128::MAX`.
-pub(crate) const fn mul_shl_div(a: u128, b: u128, s: u32, d: u128) -> u128 {
-    match U256::mul(a, b).shl_by(s) {
-        Some(p) => p.div(d),
-        None => u128::MAX,
-    }
-}
-
 /// `⌊a · b / d⌋`, saturating at `u128::MAX`.
 pub(crate) const fn mul_div(a: u128, b: u128, d: u128) -> u128 {
     U256::mul(a, b).div(d)
@@ -241,7 +233,6 @@ mod tests {
         fn small_values_agree_with_u128(a in 0..(1u128 << 64), b in 0..(1u128 << 64), d in 1..u128::MAX) {
             prop_assert_eq!(mul_div(a, b, d), a * b / d);
             prop_assert_eq!(mul_shr(a, b, 7), (a * b) >> 7);
-            prop_assert_eq!(mul_shl_div(a, b, 60, d), mul_div(a << 28, b << 32, d));
         }
     }
 }

@@ -226,6 +226,9 @@ pub struct Tally {
     pub ticks: TieStats,
     /// The longest `T` a `SYNC` reported, ticks.
     pub longest_run: u64,
+    /// Chord ends rounded to the 10⁻⁷ mm grid for timing: distance of the
+    /// computed point from a rounding tie, units of 10⁻⁷ mm.
+    pub chord_grid: TieStats,
 }
 
 impl Default for Tally {
@@ -249,6 +252,7 @@ impl Default for Tally {
             runs: 0,
             ticks: TieStats::new(),
             longest_run: 0,
+            chord_grid: TieStats::new(),
         }
     }
 }
@@ -270,12 +274,13 @@ impl Tally {
     /// The time line of the report.
     pub fn time_line(&self) -> String {
         format!(
-            "time: {} step events timed in {} runs, {} SYNC compared; {} exact half-tick ties decided up, nearest non-tie {} ticks from a tie",
+            "time: {} step events timed in {} runs, {} SYNC compared; {} exact half-tick ties decided up, nearest non-tie {} ticks from a tie; chord ends on the 1e-7 mm grid: nearest {} units from a rounding tie",
             self.timed,
             self.runs,
             self.syncs,
             self.ticks.exact_ties,
-            format_distance(self.ticks.min_distance)
+            format_distance(self.ticks.min_distance),
+            format_distance(self.chord_grid.min_distance)
         )
     }
 
@@ -309,6 +314,9 @@ pub struct Comparator<T: Transport> {
     default_rough: bool,
     /// Totals so far.
     pub tally: Tally,
+    /// Keep the reference's events of the last `SYNC` ([`Self::last_events`]).
+    pub keep_events: bool,
+    last_events: Vec<crate::reference_motion::TimedEvent>,
 }
 
 impl<T: Transport> Comparator<T> {
@@ -337,6 +345,8 @@ impl<T: Transport> Comparator<T> {
             default_tol: "0.01".into(),
             default_rough: false,
             tally: Tally::default(),
+            keep_events: false,
+            last_events: Vec::new(),
         })
     }
 
@@ -383,10 +393,14 @@ impl<T: Transport> Comparator<T> {
                 if let Some(d) = diam {
                     cfg.diam = *d;
                 }
+                let old = self.reference.config();
                 self.reference.set_config(cfg);
                 let (px, pz) = self.reference.position();
-                self.motion.set_prices([cfg.hx_mm, cfg.hz_mm]);
-                self.motion.set_position(self.commanded(), [px, pz]);
+                // A new price is a flush; the rest of CFG is not.
+                if (old.hx_mm, old.hz_mm) != (cfg.hx_mm, cfg.hz_mm) {
+                    self.motion.set_prices([cfg.hx_mm, cfg.hz_mm]);
+                    self.motion.set_position(self.commanded(), [px, pz]);
+                }
                 if !reply.is_ok() {
                     self.tally
                         .mismatches
@@ -439,7 +453,13 @@ impl<T: Transport> Comparator<T> {
                         let (mut px, mut pz) = start;
                         for (end, &(nx, nz)) in a.ends.iter().zip(&a.chords) {
                             (px, pz) = (px + nx, pz + nz);
-                            self.motion.push(chord_point(end), [px, pz], speed);
+                            let (point, tie) = chord_point(end);
+                            self.tally.chord_grid.min_distance =
+                                self.tally.chord_grid.min_distance.min(tie);
+                            if tie == 0.0 {
+                                self.tally.chord_grid.exact_ties += 1;
+                            }
+                            self.motion.push(point, [px, pz], speed);
                         }
                     }
                     let tol_mm = parse_mm(&tol_s);
@@ -473,8 +493,11 @@ impl<T: Transport> Comparator<T> {
                 self.tally.ticks = self.motion.ties();
                 self.tally.longest_run = self.tally.longest_run.max(r.t);
                 // Events are compared through TSEQ; the reference's own list
-                // is not needed once reported.
-                self.motion.take_events();
+                // is kept only when asked for (to find a differing event).
+                let events = self.motion.take_events();
+                if self.keep_events {
+                    self.last_events = events;
+                }
                 let expected = format!("OK EV={} T={} TSEQ={:08X}", r.ev, r.t, r.tseq);
                 if reply.last != expected {
                     self.tally.mismatches.push(mismatch(expected, &reply));
@@ -494,27 +517,36 @@ impl<T: Transport> Comparator<T> {
     pub fn motion(&self) -> &RefMotion {
         &self.motion
     }
+
+    /// The reference's events of the last `SYNC`, when kept.
+    pub fn last_events(&self) -> &[crate::reference_motion::TimedEvent] {
+        &self.last_events
+    }
 }
 
 /// The step event rate of direct arcs the comparator sets (`DRIVE RATE`).
 const DRIVE_RATE: f64 = 50_000.0;
 
-/// A chord end as a point of the motion reference (10⁻⁷ mm per unit).
-fn chord_point(end: &[ChordCoord; 2]) -> Point {
-    let units = |c: ChordCoord| -> (i64, f64) {
+/// A chord end as a point of the motion reference: on the 10⁻⁷ mm grid
+/// (`docs/motion.md`), with its distance from a rounding tie in units.
+fn chord_point(end: &[ChordCoord; 2]) -> (Point, f64) {
+    let units = |c: ChordCoord| -> (i64, [f64; 2]) {
         match c {
             // Quarter-nanometres: 2.5 units each.
             ChordCoord::Exact(q) => {
                 let twice = q * 5;
                 (
-                    (twice.div_euclid(2)) as i64,
-                    (twice.rem_euclid(2)) as f64 / 2.0,
+                    twice.div_euclid(2) as i64,
+                    [(twice.rem_euclid(2)) as f64 / 2.0, 0.0],
                 )
             }
-            ChordCoord::OnCircle { centre, offset } => (centre * 5, offset * 5.0),
+            // Half-nanometres: 5 units each (exact in f64).
+            ChordCoord::OnCircle { centre, offset } => {
+                (centre * 5, [offset[0] * 5.0, offset[1] * 5.0])
+            }
         }
     };
-    Point::from_units_plus(units(end[0]), units(end[1]))
+    Point::grid_rounded(units(end[0]), units(end[1]))
 }
 
 impl<T: Transport> Comparator<T> {

@@ -193,6 +193,10 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
             reason: strip_sum(err),
         });
     }
+    // The device refuses a feed move before any F; the printed program is
+    // geometry, which no feed changes, so a program without F words is
+    // compensated all the same (its own F words take over where given).
+    dev.request("F1000");
     let mut out = Compensated::default();
     // The source whose motion waits for the next block, and the lines that
     // followed it.

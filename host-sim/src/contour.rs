@@ -350,13 +350,18 @@ pub fn push_block(
         (px, pz) = (px + nx, pz + nz);
         // Scaled quarter- and half-nanometres are quarter and half units.
         let c = |c: ChordCoord| match c {
-            ChordCoord::Exact(v) => (v.div_euclid(4) as i64, v.rem_euclid(4) as f64 / 4.0),
+            ChordCoord::Exact(v) => (v.div_euclid(4) as i64, [v.rem_euclid(4) as f64 / 4.0, 0.0]),
             ChordCoord::OnCircle { centre, offset } => (
                 centre.div_euclid(2),
-                centre.rem_euclid(2) as f64 / 2.0 + offset / 2.0,
+                [
+                    centre.rem_euclid(2) as f64 / 2.0 + offset[0] / 2.0,
+                    offset[1] / 2.0,
+                ],
             ),
         };
-        motion.push(Point::from_units_plus(c(end[0]), c(end[1])), [px, pz], feed);
+        // Timed on the 10⁻⁷ mm grid (`docs/motion.md`).
+        let (point, _) = Point::grid_rounded(c(end[0]), c(end[1]));
+        motion.push(point, [px, pz], feed);
     }
 }
 

@@ -25,6 +25,7 @@
 pub mod compare;
 pub mod compensate;
 pub mod contour;
+mod dd;
 pub mod device;
 pub mod link;
 pub mod qemu;

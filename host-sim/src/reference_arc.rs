@@ -174,12 +174,12 @@ pub enum ChordCoord {
     /// Exact, in quarter-nanometres (2.5·10⁻⁷ mm).
     Exact(i128),
     /// The centre's coordinate (exact, half-nanometres) plus an offset on
-    /// the circle (f64, half-nanometres).
+    /// the circle (half-nanometres, as a double-double `hi + lo`).
     OnCircle {
         /// The centre, half-nanometres.
         centre: i64,
-        /// `R·cos`/`R·sin` term, half-nanometres.
-        offset: f64,
+        /// `R·cos`/`R·sin` term, half-nanometres: `[hi, lo]`.
+        offset: [f64; 2],
     },
 }
 
@@ -495,17 +495,18 @@ fn chord_end(w: &ArcWords, alpha: i64) -> (Value<i128>, Value<i128>) {
 }
 
 /// The offsets `(uz·sin α + ux·cos α, uz·cos α − ux·sin α)` of a chord end
-/// from the centre, half-nanometres (X, Z), as [`chord_end`] computes them.
-fn chord_offset(w: &ArcWords, alpha: i64) -> (f64, f64) {
-    let alpha = alpha.rem_euclid(FULL_TURN_ARCSEC);
-    let signed = if alpha > HALF_TURN_ARCSEC {
-        alpha - FULL_TURN_ARCSEC
-    } else {
-        alpha
-    };
-    let (sin, cos) = (signed as f64 * (PI / 648_000.0)).sin_cos();
-    let (ux, uz) = (w.u.0 as f64, w.u.1 as f64);
-    (uz * sin + ux * cos, uz * cos - ux * sin)
+/// from the centre, half-nanometres (X, Z), in double-double: the chord ends
+/// the motion reference times (far more precise than the f64 ones the
+/// impulse decisions above take, whose ties are decided apart).
+fn chord_offset(w: &ArcWords, alpha: i64) -> ([f64; 2], [f64; 2]) {
+    let (sin, cos) = crate::dd::sin_cos_arcsec(alpha);
+    let (ux, uz) = (
+        crate::dd::Dd::from_i128(w.u.0),
+        crate::dd::Dd::from_i128(w.u.1),
+    );
+    let x = uz.times(sin).plus(ux.times(cos));
+    let z = uz.times(cos).minus(ux.times(sin));
+    ([x.hi, x.lo], [z.hi, z.lo])
 }
 
 /// The price in whole nanometres (prices have at most 6 decimals).
@@ -768,7 +769,7 @@ impl RefMachine {
                 quantize_coord(cz, hz, &mut quantizer_ties)?,
             ));
             let (ox, oz) = chord_offset(&w, sign * i * dphi);
-            let coord = |c: Value<i128>, centre: i64, offset: f64| match c {
+            let coord = |c: Value<i128>, centre: i64, offset: [f64; 2]| match c {
                 Value::Exact(q) => ChordCoord::Exact(q),
                 Value::Approx(_) => ChordCoord::OnCircle { centre, offset },
             };

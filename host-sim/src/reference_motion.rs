@@ -185,6 +185,7 @@
 
 use std::collections::VecDeque;
 
+use crate::dd::Dd;
 use crate::reference::{step_events, TieStats};
 
 /// Length unit of [`Point`]: 10⁻⁷ mm per unit.
@@ -198,193 +199,6 @@ pub const TIME_TIE_BAND_TICKS: f64 = 1.0 / (1u64 << 36) as f64;
 /// boundary may lie outside its block before the registers are taken as
 /// inconsistent with the points: `2⁻⁴⁰`.
 const BOUNDARY_SLACK_REL: f64 = 1.0 / (1u64 << 40) as f64;
-
-// ---------------------------------------------------------------------------
-// Double-double arithmetic.
-
-/// `a + b` exactly, as `(sum, error)`.
-#[inline]
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    let bb = s - a;
-    (s, (a - (s - bb)) + (b - bb))
-}
-
-/// `a + b` exactly, as `(sum, error)`, when `|a| ≥ |b|` (or `a = 0`).
-#[inline]
-fn fast_two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    (s, b - (s - a))
-}
-
-/// `a·b` exactly, as `(product, error)` (the error by a fused multiply-add).
-#[inline]
-fn two_prod(a: f64, b: f64) -> (f64, f64) {
-    let p = a * b;
-    (p, a.mul_add(b, -p))
-}
-
-/// A double-double number `hi + lo`, `|lo| ≤ ulp(hi)/2`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Dd {
-    hi: f64,
-    lo: f64,
-}
-
-impl Dd {
-    const ZERO: Dd = Dd { hi: 0.0, lo: 0.0 };
-
-    #[inline]
-    fn from_f64(x: f64) -> Dd {
-        Dd { hi: x, lo: 0.0 }
-    }
-
-    #[inline]
-    fn norm(hi: f64, lo: f64) -> Dd {
-        let (hi, lo) = fast_two_sum(hi, lo);
-        Dd { hi, lo }
-    }
-
-    /// Exact for `|x| < 2¹⁰⁶`.
-    fn from_i128(x: i128) -> Dd {
-        let hi = x as f64;
-        let lo = (x - hi as i128) as f64;
-        Dd::norm(hi, lo)
-    }
-
-    /// `a·b`, exact.
-    #[inline]
-    fn prod(a: f64, b: f64) -> Dd {
-        let (hi, lo) = two_prod(a, b);
-        Dd { hi, lo }
-    }
-
-    #[inline]
-    fn to_f64(self) -> f64 {
-        self.hi + self.lo
-    }
-
-    #[inline]
-    fn is_zero(self) -> bool {
-        self.hi == 0.0
-    }
-
-    #[inline]
-    fn neg(self) -> Dd {
-        Dd {
-            hi: -self.hi,
-            lo: -self.lo,
-        }
-    }
-
-    #[inline]
-    fn abs(self) -> Dd {
-        if self.is_neg() {
-            self.neg()
-        } else {
-            self
-        }
-    }
-
-    #[inline]
-    fn is_neg(self) -> bool {
-        self.hi < 0.0 || (self.hi == 0.0 && self.lo < 0.0)
-    }
-
-    #[inline]
-    fn lt(self, y: Dd) -> bool {
-        self.hi < y.hi || (self.hi == y.hi && self.lo < y.lo)
-    }
-
-    #[inline]
-    fn le(self, y: Dd) -> bool {
-        !y.lt(self)
-    }
-
-    #[inline]
-    fn min(self, y: Dd) -> Dd {
-        if y.lt(self) {
-            y
-        } else {
-            self
-        }
-    }
-
-    #[inline]
-    fn max(self, y: Dd) -> Dd {
-        if self.lt(y) {
-            y
-        } else {
-            self
-        }
-    }
-
-    /// Sum (accurate double-word addition, relative error ≤ 3u² + 13u³).
-    #[inline]
-    fn plus(self, y: Dd) -> Dd {
-        let (sh, sl) = two_sum(self.hi, y.hi);
-        let (th, tl) = two_sum(self.lo, y.lo);
-        let c = sl + th;
-        let (vh, vl) = fast_two_sum(sh, c);
-        let w = tl + vl;
-        Dd::norm(vh, w)
-    }
-
-    #[inline]
-    fn minus(self, y: Dd) -> Dd {
-        self.plus(y.neg())
-    }
-
-    /// Product (relative error ≤ 5u²).
-    #[inline]
-    fn times(self, y: Dd) -> Dd {
-        let (ch, cl1) = two_prod(self.hi, y.hi);
-        let tl0 = self.lo * y.lo;
-        let tl1 = self.hi.mul_add(y.lo, tl0);
-        let cl2 = self.lo.mul_add(y.hi, tl1);
-        Dd::norm(ch, cl1 + cl2)
-    }
-
-    /// Product by an f64 (relative error ≤ 2u²).
-    #[inline]
-    fn times_f64(self, y: f64) -> Dd {
-        let (ch, cl1) = two_prod(self.hi, y);
-        let cl3 = self.lo.mul_add(y, cl1);
-        Dd::norm(ch, cl3)
-    }
-
-    /// Quotient (relative error ≤ 15u² + 56u³). `y ≠ 0`.
-    #[inline]
-    fn over(self, y: Dd) -> Dd {
-        let th = self.hi / y.hi;
-        let r = y.times_f64(th);
-        let pih = self.hi - r.hi;
-        let dl = self.lo - r.lo;
-        let tl = (pih + dl) / y.hi;
-        Dd::norm(th, tl)
-    }
-
-    /// Square root (one Newton step with the exact residual; relative error
-    /// below 4u²). Negative values (only rounding noise around 0) give 0.
-    #[inline]
-    fn sqrt(self) -> Dd {
-        if self.hi <= 0.0 {
-            return Dd::ZERO;
-        }
-        let s = self.hi.sqrt();
-        let (p, e) = two_prod(s, s);
-        let r = self.minus(Dd { hi: p, lo: e });
-        Dd::norm(s, r.hi / (2.0 * s))
-    }
-
-    #[inline]
-    fn half(self) -> Dd {
-        Dd {
-            hi: self.hi * 0.5,
-            lo: self.lo * 0.5,
-        }
-    }
-}
 
 /// The integer `m` when `x` is the f64 nearest the decimal `m·10⁻⁶`
 /// (decided exactly), else `None`.
@@ -483,12 +297,37 @@ impl Point {
         }
     }
 
-    /// A point given per axis as a whole number of 10⁻⁷ mm plus an f64
-    /// offset in the same unit (a chord end: its exact centre plus its
-    /// offset on the circle).
-    pub fn from_units_plus(x: (i64, f64), z: (i64, f64)) -> Point {
-        let c = |(whole, off): (i64, f64)| Dd::from_i128(whole as i128).plus(Dd::from_f64(off));
+    /// A point given per axis as a whole number of 10⁻⁷ mm plus an offset
+    /// in the same unit as a double-double `[hi, lo]` (a chord end: its
+    /// exact centre plus its offset on the circle).
+    pub fn from_units_plus(x: (i64, [f64; 2]), z: (i64, [f64; 2])) -> Point {
+        let c = |(whole, off): (i64, [f64; 2])| {
+            Dd::from_i128(whole as i128).plus(Dd::norm(off[0], off[1]))
+        };
         Point { c: [c(x), c(z)] }
+    }
+
+    /// A chord end given as in [`Point::from_units_plus`], rounded half away
+    /// from zero to the grid of 10⁻⁷ mm as `docs/motion.md` times it; also
+    /// the smallest distance (in units) of a coordinate from a rounding tie.
+    pub fn grid_rounded(x: (i64, [f64; 2]), z: (i64, [f64; 2])) -> (Point, f64) {
+        let round = |(whole, off): (i64, [f64; 2])| -> (i64, f64) {
+            let f = Dd::norm(off[0], off[1]);
+            let k = f.hi.floor();
+            let frac = f.minus(Dd::from_f64(k)).to_f64();
+            let (k, frac) = if frac < 0.0 {
+                (k - 1.0, frac + 1.0)
+            } else if frac >= 1.0 {
+                (k + 1.0, frac - 1.0)
+            } else {
+                (k, frac)
+            };
+            let v = whole as f64 + k + frac;
+            let up = if v < 0.0 { frac > 0.5 } else { frac >= 0.5 };
+            (whole + k as i64 + i64::from(up), (frac - 0.5).abs())
+        };
+        let ((x, dx), (z, dz)) = (round(x), round(z));
+        (Point::from_units(x, z), dx.min(dz))
     }
 
     /// The point in mm (X radius, Z), rounded to f64.
@@ -1148,7 +987,9 @@ impl RefMotion {
         } else {
             p1.minus(p0)
         };
-        let slack = BOUNDARY_SLACK_REL * (p0.hi.abs() + p1.hi.abs() + UNITS_PER_MM as f64);
+        // Chord ends are on the grid, their impulses of the points before
+        // rounding: a boundary may lie up to half a unit beyond.
+        let slack = 0.5 + BOUNDARY_SLACK_REL * (p0.hi.abs() + p1.hi.abs() + UNITS_PER_MM as f64);
         assert!(
             block.bytes.is_empty() || (!span.is_neg() && !span.is_zero()),
             "the registers move the lead axis against its coordinate"

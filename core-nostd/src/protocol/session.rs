@@ -476,8 +476,11 @@ impl Session {
                 "needs more step events than DRIVE RATE at the rapid rate",
             ));
         }
-        self.machine.flush(&mut Sink::new(io, self.drive));
-        self.machine.set_position(point_q32(self.cmd), pos);
+        if (cfg.hx, cfg.hz) != (self.cfg.hx, self.cfg.hz) {
+            // New prices re-express the registers: at rest.
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            self.machine.set_position(point_q32(self.cmd), pos);
+        }
         self.cfg = cfg;
         self.pos = pos;
         let c = &self.cfg;
@@ -1024,8 +1027,10 @@ impl Session {
                 "below what the rapid rates need (VX/HX, VZ/HZ)",
             ));
         }
-        self.machine.flush(&mut Sink::new(io, self.drive));
-        self.drive = drive;
+        if drive != self.drive {
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            self.drive = drive;
+        }
         send_ok(
             io,
             Some(format_args!(
