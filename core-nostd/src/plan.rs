@@ -583,7 +583,18 @@ impl<const N: usize> Planner<N> {
         // Backward: the highest entry v² of block 1 that still lets every
         // block up to the window's end stop in time.
         let mut next = 0u128;
-        for b in self.blocks.iter().take(n).skip(1).rev() {
+        // The window behind the head, from its far end: the deque's two
+        // slices cut to `n` blocks, the head left out (slices, not a
+        // reversed `Skip`, whose length check could panic).
+        let (a, b) = self.blocks.as_slices();
+        let wa = a.get(..n.min(a.len())).unwrap_or(&[]);
+        let wb = b.get(..n.saturating_sub(a.len())).unwrap_or(&[]);
+        let (wa, wb) = match wa.split_first() {
+            Some((_, rest)) => (rest, wb),
+            None => (wa, wb.get(1..).unwrap_or(&[])),
+        };
+        let behind = wb.iter().rev().chain(wa.iter().rev());
+        for b in behind {
             next = b.junction2.min(next.saturating_add(b.two_al));
         }
         let head = self.blocks.pop_front()?;
@@ -818,6 +829,20 @@ mod tests {
             block(["0", "-40"], ["0", "-60"], Some("1200")),
         ]);
         assert_eq!(one, split);
+    }
+
+    #[test]
+    fn ramps_take_a_square_root_only_where_the_interval_changes_fast() {
+        use core::sync::atomic::Ordering;
+        let before = crate::step::DIRECT.load(Ordering::Relaxed);
+        let (ev, _) = run(&[block(["0", "0"], ["0", "-50"], None)]);
+        let direct = crate::step::DIRECT.load(Ordering::Relaxed) - before;
+        std::println!("{} events, {direct} square roots", ev.len());
+        assert!(
+            direct < 200,
+            "{direct} square roots for {} events",
+            ev.len()
+        );
     }
 
     #[test]

@@ -352,9 +352,14 @@ fn accel_walk(x: u128, k: u64, z: u128, zz: u128, gap: u64) -> Option<(u64, u128
     }
 }
 
+#[cfg(test)]
+pub(crate) static DIRECT: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
 /// The smallest `k` with `x < z_k²`, `z_k = k + origin`, by one square root
 /// and exact checks.
 fn accel_direct(x: u128, origin: i128) -> (u64, u128, u128) {
+    #[cfg(test)]
+    DIRECT.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
     // √x in Q64; k > √x − origin.
     let r = sqrt_shl(x, 64) as i128;
     let d = r.saturating_sub(origin);
@@ -441,6 +446,8 @@ fn decel_walk(y: u128, k: u64, w: i128, ww: u128, gap: u64) -> Option<(u64, i128
 
 /// The smallest `k` with `w_k < 0` or `y > w_k²`, `w_k = origin − k`.
 fn decel_direct(y: u128, origin: i128) -> (u64, i128, u128) {
+    #[cfg(test)]
+    DIRECT.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
     let r = sqrt_shl(y, 64) as i128;
     let holds = |k: u64| {
         let w = origin.saturating_sub(i128::from(k) << 64);
@@ -497,7 +504,11 @@ impl FixedRate {
     /// ```
     pub const fn tick(&self, j: u32) -> u64 {
         let num = 2 * j as u64 * self.tick_hz as u64 + self.rate_hz as u64;
-        num / (2 * self.rate_hz as u64)
+        // rate_hz ≥ 1 by construction.
+        match num.checked_div(2 * self.rate_hz as u64) {
+            Some(t) => t,
+            None => 0,
+        }
     }
 }
 

@@ -1,14 +1,12 @@
-//! Step/dir outputs: a linear block's step events on four `embedded-hal`
-//! output pins, paced by a hardware timer.
+//! Step/dir outputs: timed step events on four `embedded-hal` output pins.
 //!
-//! For each block the DIR pins are set first and left to settle for the
-//! drive's set-up time; then for every event, on the next tick of the step
-//! clock, the STEP pins of the stepping axes rise together, stay high for the
-//! pulse width, and fall. Events come from the core's iterator one at a time;
-//! a block is never materialised as a list.
+//! Each event comes with its tick (`crate::step`); the DIR pins of its axes
+//! are set first and left to settle for the drive's set-up time, then on the
+//! tick the STEP pins of the stepping axes rise together, stay high for the
+//! pulse width, and fall. Events come one at a time; nothing is
+//! materialised as a list.
 
-use crate::arc::DirectArc;
-use crate::interleave::{LinearBlock, StepEvent};
+use crate::interleave::StepEvent;
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::OutputPin;
 
@@ -82,7 +80,7 @@ impl DriveTiming {
     pub const fn pulse_us(&self) -> u32 {
         self.pulse_us
     }
-    /// DIR set-up time before the first step of a block, µs.
+    /// DIR set-up time before a step whose direction changed, µs.
     pub const fn setup_us(&self) -> u32 {
         self.setup_us
     }
@@ -94,14 +92,15 @@ impl Default for DriveTiming {
     }
 }
 
-/// A periodic hardware tick that paces the step events.
-pub trait StepClock {
-    /// Starts ticking at `rate_hz`.
-    fn start(&mut self, rate_hz: u32);
-    /// Waits for the next tick.
-    fn wait_tick(&mut self);
-    /// Stops ticking.
-    fn stop(&mut self);
+/// The clock step events are timed on: ticks of the device's
+/// [`crate::step::TickRate`] since the current run began (a timer now; the
+/// spindle encoder's counts when threading).
+pub trait TickClock {
+    /// A run begins: its tick 0 is now.
+    fn start_run(&mut self);
+    /// Waits until the run's clock reaches `tick` (returns at once when it
+    /// has passed).
+    fn wait_until(&mut self, tick: u64);
 }
 
 /// The four outputs of a two-axis step/dir interface.
@@ -110,6 +109,8 @@ pub struct StepDir<XS, XD, ZS, ZD> {
     x_dir: XD,
     z_step: ZS,
     z_dir: ZD,
+    /// The DIR levels last written (true: negative), unknown at first.
+    dir: [Option<bool>; 2],
 }
 
 /// A pin failed; the outputs were driven low where possible.
@@ -131,6 +132,7 @@ where
             x_dir,
             z_step,
             z_dir,
+            dir: [None; 2],
         };
         s.stop_outputs();
         s
@@ -142,90 +144,57 @@ where
         let _ = self.z_step.set_low();
     }
 
-    /// Issues every step event of `block`. DIR high means the negative
-    /// direction.
-    pub fn run<C: StepClock, D: DelayNs>(
+    /// Issues one step event at `tick` of the run: the DIR lines of the
+    /// stepping axes first (when one changes, the drive's set-up time passes
+    /// before the step, so DIR is written as early as possible: right after
+    /// the event before), then, on the tick, the STEP lines rise together,
+    /// stay high for the pulse width and fall. DIR high means negative. On a
+    /// pin failure both STEP lines are driven low.
+    #[inline]
+    pub fn issue<C: TickClock, D: DelayNs>(
         &mut self,
-        block: &LinearBlock,
+        event: StepEvent,
+        tick: u64,
         timing: &DriveTiming,
         clock: &mut C,
         delay: &mut D,
     ) -> Result<(), PinError> {
-        let (dx, dz) = block.delta();
-        self.run_events(dx, dz, block.events(), timing, clock, delay)
-    }
-
-    /// Issues every step event of a direct arc (one quadrant: each axis
-    /// keeps its direction).
-    pub fn run_direct<C: StepClock, D: DelayNs>(
-        &mut self,
-        arc: &DirectArc,
-        timing: &DriveTiming,
-        clock: &mut C,
-        delay: &mut D,
-    ) -> Result<(), PinError> {
-        let (dx, dz) = arc.delta();
-        self.run_events(dx, dz, arc.events(), timing, clock, delay)
-    }
-
-    /// Issues `events`, the axes moving `dx`, `dz` impulses in all (their
-    /// signs set DIR once, before the first step).
-    pub fn run_events<E, C, D>(
-        &mut self,
-        dx: i32,
-        dz: i32,
-        events: E,
-        timing: &DriveTiming,
-        clock: &mut C,
-        delay: &mut D,
-    ) -> Result<(), PinError>
-    where
-        E: Iterator<Item = StepEvent>,
-        C: StepClock,
-        D: DelayNs,
-    {
-        let result = self.run_inner(dx, dz, events, timing, clock, delay);
-        clock.stop();
+        let result = self.issue_inner(event, tick, timing, clock, delay);
         if result.is_err() {
             self.stop_outputs();
         }
         result
     }
 
-    fn run_inner<E, C, D>(
+    #[inline(always)]
+    fn issue_inner<C: TickClock, D: DelayNs>(
         &mut self,
-        dx: i32,
-        dz: i32,
-        events: E,
+        event: StepEvent,
+        tick: u64,
         timing: &DriveTiming,
         clock: &mut C,
         delay: &mut D,
-    ) -> Result<(), PinError>
-    where
-        E: Iterator<Item = StepEvent>,
-        C: StepClock,
-        D: DelayNs,
-    {
-        if dx == 0 && dz == 0 {
-            return Ok(());
-        }
-        if dx != 0 {
+    ) -> Result<(), PinError> {
+        let mut changed = false;
+        if event.x_steps() && self.dir[0] != Some(event.x_negative()) {
             self.x_dir
-                .set_state((dx < 0).into())
+                .set_state(event.x_negative().into())
                 .map_err(|_| PinError)?;
+            self.dir[0] = Some(event.x_negative());
+            changed = true;
         }
-        if dz != 0 {
+        if event.z_steps() && self.dir[1] != Some(event.z_negative()) {
             self.z_dir
-                .set_state((dz < 0).into())
+                .set_state(event.z_negative().into())
                 .map_err(|_| PinError)?;
+            self.dir[1] = Some(event.z_negative());
+            changed = true;
         }
-        delay.delay_us(timing.setup_us);
-        clock.start(timing.rate_hz);
-        for event in events {
-            clock.wait_tick();
-            self.pulse(event, timing, delay)?;
+        if changed {
+            delay.delay_us(timing.setup_us);
         }
-        Ok(())
+        clock.wait_until(tick);
+        self.pulse(event, timing, delay)
     }
 
     #[inline(always)]
@@ -253,7 +222,7 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::impulse::Impulses;
-    use crate::interleave::ImpulsePoint;
+    use crate::interleave::{ImpulsePoint, LinearBlock};
     use core::cell::RefCell;
     use embedded_hal::digital::ErrorType;
     use std::rc::Rc;
@@ -280,25 +249,22 @@ mod tests {
             Ok(())
         }
     }
-    /// Virtual time: delays and ticks advance the shared clock.
-    struct Time(Log, u64, u64);
+    /// Virtual time in ns: delays advance it; the tick clock (1 µs ticks)
+    /// waits by jumping to the tick when it lies ahead.
+    struct Time(Log, u64);
     impl DelayNs for Time {
         fn delay_ns(&mut self, ns: u32) {
             self.0.borrow_mut().0 += u64::from(ns);
         }
     }
-    impl StepClock for Time {
-        fn start(&mut self, rate_hz: u32) {
-            self.1 = 1_000_000_000 / u64::from(rate_hz);
-            self.2 = self.0.borrow().0;
+    impl TickClock for Time {
+        fn start_run(&mut self) {
+            self.1 = self.0.borrow().0;
         }
-        fn wait_tick(&mut self) {
-            self.2 += self.1;
+        fn wait_until(&mut self, tick: u64) {
             let mut l = self.0.borrow_mut();
-            assert!(l.0 <= self.2, "the event overran its period");
-            l.0 = self.2;
+            l.0 = l.0.max(self.1 + tick * 1000);
         }
-        fn stop(&mut self) {}
     }
 
     const XS: usize = 0;
@@ -306,7 +272,8 @@ mod tests {
     const ZS: usize = 2;
     const ZD: usize = 3;
 
-    fn run(dx: i32, dz: i32, timing: DriveTiming) -> Vec<(u64, usize, bool)> {
+    /// Issues a block's events at `period` µs apart, then a reversal on X.
+    fn run(dx: i32, dz: i32, timing: DriveTiming, period: u64) -> Vec<(u64, usize, bool)> {
         let log: Log = Rc::new(RefCell::new((0, Vec::new())));
         let mut sd = StepDir::new(
             Pin(XS, log.clone()),
@@ -320,18 +287,22 @@ mod tests {
             z: Impulses(z),
         };
         let block = LinearBlock::new(p(10, 10), p(10 + dx, 10 + dz)).unwrap();
-        let mut time = Time(log.clone(), 0, 0);
-        let mut clock = Time(log.clone(), 0, 0);
-        sd.run(&block, &timing, &mut clock, &mut time).unwrap();
+        let mut time = Time(log.clone(), 0);
+        let mut clock = Time(log.clone(), 0);
+        clock.start_run();
+        for (i, e) in block.events().enumerate() {
+            let tick = (i as u64 + 1) * period;
+            sd.issue(e, tick, &timing, &mut clock, &mut time).unwrap();
+        }
         let out = log.borrow().1.clone();
         out
     }
 
     #[test]
-    fn pulses_match_the_events_and_dir_settles_first() {
+    fn pulses_on_their_ticks_and_dir_settles_first() {
         let timing = DriveTiming::new(20_000, 5, 8).unwrap();
         for (dx, dz) in [(7, -3), (-2, 9), (0, -4), (5, 0), (-6, -6)] {
-            let log = run(dx, dz, timing);
+            let log = run(dx, dz, timing, 50);
             // Rising edges per axis = impulses of the block.
             let rises = |pin| log.iter().filter(|e| e.1 == pin && e.2).count() as i32;
             assert_eq!((rises(XS), rises(ZS)), (dx.abs(), dz.abs()));
@@ -348,12 +319,7 @@ mod tests {
                 let first = log.iter().find(|e| e.1 == step && e.2).unwrap();
                 assert!(first.0 >= dirs[0].0 + 8_000);
             }
-            // Each pulse is high for 5 µs; rises are one period (50 µs) apart.
-            let rise_times: Vec<u64> = log
-                .iter()
-                .filter(|e| e.2 && (e.1 == XS || e.1 == ZS))
-                .map(|e| e.0)
-                .collect();
+            // Each pulse is high for 5 µs; rises on their ticks, 50 µs apart.
             for e in log.iter().filter(|e| e.2 && (e.1 == XS || e.1 == ZS)) {
                 let fall = log
                     .iter()
@@ -361,13 +327,30 @@ mod tests {
                     .unwrap();
                 assert_eq!(fall.0 - e.0, 5_000);
             }
-            let mut uniq = rise_times.clone();
-            uniq.dedup();
-            assert_eq!(uniq.len() as i32, dx.abs().max(dz.abs()));
-            for w in uniq.windows(2) {
-                assert_eq!(w[1] - w[0], 50_000);
+            let mut rise_times: Vec<u64> = log
+                .iter()
+                .filter(|e| e.2 && (e.1 == XS || e.1 == ZS))
+                .map(|e| e.0)
+                .collect();
+            rise_times.dedup();
+            assert_eq!(rise_times.len() as i32, dx.abs().max(dz.abs()));
+            for (i, t) in rise_times.iter().enumerate() {
+                assert_eq!(*t, (i as u64 + 1) * 50_000);
             }
         }
+    }
+
+    #[test]
+    fn a_late_tick_steps_at_once() {
+        // Events one tick apart cannot wait for the 8 µs set-up of the first.
+        let timing = DriveTiming::new(20_000, 5, 8).unwrap();
+        let log = run(3, 0, timing, 1);
+        let rises: Vec<u64> = log
+            .iter()
+            .filter(|e| e.1 == XS && e.2)
+            .map(|e| e.0)
+            .collect();
+        assert_eq!(rises, [8_000, 13_000, 18_000]);
     }
 
     #[test]

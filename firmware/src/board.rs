@@ -14,7 +14,8 @@
 use core::cell::RefCell;
 use core::convert::Infallible;
 use core::sync::atomic::{AtomicBool, Ordering};
-use core_nostd::stepdir::StepClock;
+use core_nostd::step::TickRate;
+use core_nostd::stepdir::TickClock;
 use critical_section::Mutex;
 use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
@@ -46,7 +47,6 @@ const BAUD: u32 = 115_200;
 /// made room, so nothing is dropped by this side.
 static RX: Mutex<RefCell<Deque<u8, 512>>> = Mutex::new(RefCell::new(Deque::new()));
 static RX_PAUSED: AtomicBool = AtomicBool::new(false);
-static TICK: AtomicBool = AtomicBool::new(false);
 
 /// Brings up clocks, pins, USART1 and TIM2. Returns the board's devices.
 pub fn init(dp: pac::Peripherals) -> Board {
@@ -107,16 +107,19 @@ pub fn init(dp: pac::Peripherals) -> Board {
             .set_bit()
     });
 
-    // SAFETY: the handlers only touch the critical-section-protected queue
+    // SAFETY: the handler only touches the critical-section-protected queue
     // and atomics.
     unsafe {
         pac::NVIC::unmask(Interrupt::USART1);
-        pac::NVIC::unmask(Interrupt::TIM2);
     }
-    Board {
-        usart,
-        tim2: StepTimer { tim: dp.TIM2 },
-    }
+    let mut tim2 = StepTimer {
+        tim: dp.TIM2,
+        origin: 0,
+        low: 0,
+        high: 0,
+    };
+    tim2.count_ticks();
+    Board { usart, tim2 }
 }
 
 #[cfg(not(feature = "qemu"))]
@@ -244,73 +247,70 @@ fn USART1() {
     }
 }
 
-#[interrupt]
-fn TIM2() {
-    // SAFETY: only the status register's update flag is cleared here.
-    let tim = unsafe { &*pac::TIM2::ptr() };
-    tim.sr().modify(|_, w| w.uif().clear_bit());
-    TICK.store(true, Ordering::Release);
-}
-
-/// TIM2 as the step clock: an update interrupt every step period.
+/// TIM2 as the step clock: a free-running 32-bit counter at the device's
+/// tick rate (1 MHz), extended to 64 bits while a run waits on it.
 pub struct StepTimer {
     tim: pac::TIM2,
+    /// The counter at the run's start.
+    origin: u32,
+    /// Ticks of the run as last read: `high + low`.
+    low: u32,
+    high: u64,
 }
 
 impl StepTimer {
-    /// The timer's counter, in ticks of `TIM2_CLK_HZ / (PSC + 1)`.
+    /// The timer's counter.
     pub fn count(&self) -> u32 {
         self.tim.cnt().read().bits()
     }
 
+    /// Counts freely at the device's tick rate.
+    fn count_ticks(&mut self) {
+        let psc = TIM2_CLK_HZ / TickRate::TIMER.hz() - 1;
+        self.start(psc);
+    }
+
     /// Runs the counter freely at the undivided timer clock (measurements).
     pub fn free_run(&mut self) {
+        self.start(0);
+    }
+
+    fn start(&mut self, psc: u32) {
         self.tim.cr1().modify(|_, w| w.cen().clear_bit());
-        self.tim.psc().write(|w| unsafe { w.bits(0) });
+        self.tim.psc().write(|w| unsafe { w.bits(psc) });
         self.tim.arr().write(|w| unsafe { w.bits(u32::MAX) });
         self.tim.egr().write(|w| w.ug().set_bit());
         self.tim.dier().modify(|_, w| w.uie().clear_bit());
         self.tim.cr1().modify(|_, w| w.cen().set_bit());
     }
-}
 
-/// Under QEMU the steps drive no motor; unless `qemu-paced` is set they are
-/// issued as fast as the core runs, since every timer wake-up costs QEMU tens
-/// of microseconds of host time.
-#[cfg(all(feature = "qemu", not(feature = "qemu-paced")))]
-impl StepClock for StepTimer {
-    fn start(&mut self, _rate_hz: u32) {}
-    fn wait_tick(&mut self) {}
-    fn stop(&mut self) {}
-}
-
-#[cfg(any(not(feature = "qemu"), feature = "qemu-paced"))]
-impl StepClock for StepTimer {
-    fn start(&mut self, rate_hz: u32) {
-        // Count at 1 MHz; one update every 1/rate s (rate ≤ 500 kHz, so ARR ≥ 1).
-        let psc = TIM2_CLK_HZ / 1_000_000 - 1;
-        let arr = (1_000_000 / rate_hz.max(1)).saturating_sub(1).max(1);
-        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
-        self.tim.psc().write(|w| unsafe { w.bits(psc) });
-        self.tim.arr().write(|w| unsafe { w.bits(arr) });
-        self.tim.cnt().write(|w| unsafe { w.bits(0) });
-        self.tim.egr().write(|w| w.ug().set_bit());
-        self.tim.sr().modify(|_, w| w.uif().clear_bit());
-        TICK.store(false, Ordering::Release);
-        self.tim.dier().modify(|_, w| w.uie().set_bit());
-        self.tim.cr1().modify(|_, w| w.cen().set_bit());
-    }
-
-    fn wait_tick(&mut self) {
-        while !TICK.swap(false, Ordering::AcqRel) {
-            sleep_unless(|| TICK.load(Ordering::Acquire));
+    /// Ticks since the run began; read at least once every 2³² ticks (71
+    /// minutes) while a run waits, which every wait does.
+    fn now(&mut self) -> u64 {
+        let c = self.count().wrapping_sub(self.origin);
+        if c < self.low {
+            self.high += 1 << 32;
         }
+        self.low = c;
+        self.high + u64::from(c)
+    }
+}
+
+impl TickClock for StepTimer {
+    fn start_run(&mut self) {
+        self.origin = self.count();
+        self.low = 0;
+        self.high = 0;
     }
 
-    fn stop(&mut self) {
-        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
-        self.tim.dier().modify(|_, w| w.uie().clear_bit());
-        TICK.store(false, Ordering::Release);
+    /// Under QEMU the steps drive no motor; unless `qemu-paced` is set they
+    /// are issued as fast as the core runs (QEMU's timer follows host time).
+    #[cfg(all(feature = "qemu", not(feature = "qemu-paced")))]
+    fn wait_until(&mut self, _tick: u64) {}
+
+    #[cfg(any(not(feature = "qemu"), feature = "qemu-paced"))]
+    fn wait_until(&mut self, tick: u64) {
+        while self.now() < tick {}
     }
 }
 

@@ -2,8 +2,9 @@
 //!
 //! USART1 (115200 8N1) serves the pendant line protocol through the core's
 //! handler, byte for byte as the host simulator's in-process device does.
-//! Every accepted block drives the STEP/DIR outputs, paced by TIM2; the
-//! block's `OK` goes out when its last step has been issued. Received bytes
+//! Blocks start as the planner's window fills (or at a flush); each started
+//! block's events are issued on the STEP/DIR outputs at their ticks of TIM2
+//! (1 MHz) before the request that started it is answered. Received bytes
 //! are queued by the USART1 interrupt while the axes move.
 //!
 //! Release builds contain no panic path: their panic handler calls a symbol
@@ -16,10 +17,9 @@ pub mod board;
 pub mod log;
 
 use board::{Board, CycleDelay, PortCPin};
-use core_nostd::arc::DirectArc;
-use core_nostd::interleave::LinearBlock;
+use core_nostd::interleave::StepEvent;
 use core_nostd::protocol::Io;
-use core_nostd::stepdir::{DriveTiming, StepDir};
+use core_nostd::stepdir::{DriveTiming, StepDir, TickClock};
 
 /// The transport side of the device: UART out, step/dir outputs.
 pub struct Controller {
@@ -41,24 +41,23 @@ impl Io for Controller {
         self.board.send(line);
     }
 
-    fn run_block(&mut self, block: &LinearBlock, timing: &DriveTiming) {
+    fn run_start(&mut self) {
+        self.board.tim2.start_run();
+    }
+
+    #[inline]
+    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
         if self
             .axes
-            .run(block, timing, &mut self.board.tim2, &mut CycleDelay)
+            .issue(event, tick, drive, &mut self.board.tim2, &mut CycleDelay)
             .is_err()
         {
             defmt::error!("step outputs failed");
         }
     }
 
-    fn run_direct(&mut self, arc: &DirectArc, timing: &DriveTiming) {
-        if self
-            .axes
-            .run_direct(arc, timing, &mut self.board.tim2, &mut CycleDelay)
-            .is_err()
-        {
-            defmt::error!("step outputs failed");
-        }
+    fn run_end(&mut self, _ticks: u64) {
+        self.axes.stop_outputs();
     }
 }
 

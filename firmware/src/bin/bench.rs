@@ -12,7 +12,7 @@ use core::fmt::Write;
 use core_nostd::impulse::Impulses;
 use core_nostd::interleave::{ImpulsePoint, LinearBlock};
 use core_nostd::protocol::{Device, Io};
-use core_nostd::stepdir::{DriveTiming, StepClock, StepDir};
+use core_nostd::stepdir::{DriveTiming, StepDir, TickClock};
 use cortex_m_rt::entry;
 use embedded_hal::delay::DelayNs;
 use firmware::board::{PortCPin, StepTimer};
@@ -33,10 +33,9 @@ impl Line {
 
 /// No pacing and no pulse delays: what remains is the code's own cost.
 struct Free;
-impl StepClock for Free {
-    fn start(&mut self, _: u32) {}
-    fn wait_tick(&mut self) {}
-    fn stop(&mut self) {}
+impl TickClock for Free {
+    fn start_run(&mut self) {}
+    fn wait_until(&mut self, _: u64) {}
 }
 impl DelayNs for Free {
     fn delay_ns(&mut self, _: u32) {}
@@ -60,10 +59,10 @@ fn measure(tim: &StepTimer, f: impl FnOnce()) -> u32 {
 /// and whole G-code requests with G42 on.
 fn compensation(tim: &StepTimer) {
     use core_nostd::arc::ArcDir;
+    use core_nostd::comp::TipCode;
     use core_nostd::comp::{Contour, Element, Shape, Tool};
     use core_nostd::gcode::Compensation;
     use core_nostd::length::Length;
-    use core_nostd::comp::TipCode;
     let um = |v: i64| v * 10_000;
     let p = |x: i64, z: i64| [um(x), um(z)];
     let line = |a, b| Element::line(a, b, false, None);
@@ -123,7 +122,7 @@ fn compensation(tim: &StepTimer) {
     ));
     let mut dev = Device::new();
     let mut quiet = Quiet(0);
-    dev.receive_bytes(b"G00 X20 Z2\r\nG42 G01 Z0\r\nX28\r\n", &mut quiet);
+    dev.receive_bytes(b"G00 X20 Z2\r\nG42 G01 Z0 F200\r\nX28\r\n", &mut quiet);
     let t = measure(tim, || dev.receive_bytes(b"X48 Z-10\r\n", &mut quiet));
     Line::print(format_args!(
         "G-code request with G42 (taper, its motion sent with the next block): {t} instructions"
@@ -131,6 +130,107 @@ fn compensation(tim: &StepTimer) {
     let t = measure(tim, || dev.receive_bytes(b"Z-10.5\r\n", &mut quiet));
     Line::print(format_args!(
         "G-code request with G42 (short cylinder, sends the 10 mm taper's 2 047 events): {t} instructions"
+    ));
+}
+
+/// The planner and the timed step generator on blocks along Z at the
+/// default limits (3000 mm/min, 150 mm/s², 0.01 mm per impulse).
+fn timed(tim: &StepTimer) {
+    use core_nostd::impulse::{quantize, ImpulsePrice};
+    use core_nostd::length::Length;
+    use core_nostd::plan::{q32, Block, Feed, Planner, Rates, WINDOW};
+    let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
+    let rates = Rates::DEFAULT;
+    let mm = |um: i64| Length::from_um(um).unwrap_or(Length::ZERO);
+    let at = |z: Length| ImpulsePoint {
+        x: Impulses(0),
+        z: quantize(z, h[1]).unwrap_or(Impulses(0)),
+    };
+    let block = |from_um: i64, to_um: i64| {
+        let (a, b) = (mm(from_um), mm(to_um));
+        let events = LinearBlock::new(at(a), at(b)).ok()?;
+        Block::new([0, q32(a)], [0, q32(b)], events, None, h, &rates)
+    };
+    let mut sink = 0u32;
+    let mut run = |t: &core_nostd::step::TimedBlock| {
+        let mut n = 0u32;
+        let c = measure(tim, || {
+            for (e, tick) in t.events() {
+                sink = sink
+                    .wrapping_add(u32::from(e.bits()))
+                    .wrapping_add(tick as u32);
+                n += 1;
+            }
+        });
+        (c, n.max(1))
+    };
+    // Ramps: 5 mm from rest to rest (a triangle: every event in a ramp).
+    let mut p = Planner::<WINDOW>::new(WINDOW);
+    let Some(b) = block(0, -5_000) else { return };
+    let _ = p.push(b, &rates);
+    let Some(t) = p.start(&rates) else { return };
+    let (c, n) = run(&t);
+    Line::print(format_args!(
+        "timed step events, ramps: {n} events, {}.{:02} instructions per event",
+        c / n,
+        (c % n) * 100 / n
+    ));
+    // Cruise: 400 mm between 10 mm of acceleration and 10 mm of braking.
+    let mut p = Planner::<WINDOW>::new(WINDOW);
+    for (a, b) in [(0, -10_000), (-10_000, -410_000), (-410_000, -420_000)] {
+        let Some(b) = block(a, b) else { return };
+        let _ = p.push(b, &rates);
+    }
+    let Some(_) = p.start(&rates) else { return };
+    let Some(t) = p.start(&rates) else { return };
+    let (c, n) = run(&t);
+    Line::print(format_args!(
+        "timed step events, cruise: {n} events, {}.{:02} instructions per event ({sink})",
+        c / n,
+        (c % n) * 100 / n
+    ));
+    // Planning: short blocks along a polygon (chords of a circle at F600),
+    // the window full: making the block, its junction, queueing it and
+    // starting the one 64 blocks before (backward pass, trapezoid, timing).
+    let feed = Feed::new(mm(600_000));
+    let mut p = Planner::<WINDOW>::new(WINDOW);
+    let mut z = 0i64;
+    let mut x = 0i64;
+    let (mut total, mut count) = (0u32, 0u32);
+    for k in 0..200i64 {
+        let (dx, dz) = (((k * 37) % 11 - 5) * 100, -500);
+        let (from, to) = ([mm(x), mm(z)], [mm(x + dx), mm(z + dz)]);
+        let pt = |p: [Length; 2]| ImpulsePoint {
+            x: quantize(p[0], h[0]).unwrap_or(Impulses(0)),
+            z: quantize(p[1], h[1]).unwrap_or(Impulses(0)),
+        };
+        let Ok(events) = LinearBlock::new(pt(from), pt(to)) else {
+            return;
+        };
+        let c = measure(tim, || {
+            if let Some(b) = Block::new(
+                [q32(from[0]), q32(from[1])],
+                [q32(to[0]), q32(to[1])],
+                events,
+                feed,
+                h,
+                &rates,
+            ) {
+                let _ = p.push(b, &rates);
+            }
+            if p.window_full() {
+                let _ = p.start(&rates);
+            }
+        });
+        if k >= WINDOW as i64 {
+            total = total.wrapping_add(c);
+            count += 1;
+        }
+        (x, z) = (x + dx, z + dz);
+    }
+    Line::print(format_args!(
+        "planned block (made, queued, its window planned, started): {} instructions on average over {count}",
+        total / count.max(1)
     ));
 }
 
@@ -232,7 +332,9 @@ fn main() -> ! {
     let mut axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
     let timing = DriveTiming::DEFAULT;
     let t = measure(tim, || {
-        let _ = axes.run(&block, &timing, &mut Free, &mut Free);
+        for (i, e) in block.events().enumerate() {
+            let _ = axes.issue(e, i as u64, &timing, &mut Free, &mut Free);
+        }
     });
     Line::print(format_args!(
         "step/dir outputs (GPIO writes, no waits): {t} instructions, {}.{:02} per event",
@@ -255,6 +357,13 @@ fn main() -> ! {
         per / n,
         (per % n) * 100 / n
     ));
+    // The queued block runs at SYNC: planned, timed, TSEQ over every event.
+    let t = measure(tim, || dev.receive_bytes(b"SYNC\r\n", &mut quiet));
+    Line::print(format_args!(
+        "SYNC running it: {t} instructions, {}.{:02} per timed event (with TSEQ)",
+        t / n,
+        (t % n) * 100 / n
+    ));
     let t = measure(tim, || dev.receive_bytes(b"POS\r\n", &mut quiet));
     Line::print(format_args!("POS request: {t} instructions"));
     let t = measure(tim, || dev.receive_bytes(b"CONE A=45\r\n", &mut quiet));
@@ -269,6 +378,7 @@ fn main() -> ! {
     Line::print(format_args!("CFG request: {t} instructions"));
 
     arcs(tim);
+    timed(tim);
     compensation(tim);
 
     #[cfg(feature = "qemu")]
