@@ -15,7 +15,12 @@
 //! intersections far from the corner (beyond 2⁴⁰ Å) are treated as having no
 //! intersection. A unit vector is within 2⁻⁶⁰ of exact, so a compensated
 //! point carries far less than 10⁻³ Å of arithmetic error before it is
-//! rounded, half away from zero, to the ångström grid.
+//! rounded, half away from zero, to the ångström grid. One exception: two
+//! offset circles are intersected from their centres, and where they are
+//! nearly tangent (an inside corner between two arcs turning by `θ`, little
+//! more than the smooth limit) the point can move along them by the order
+//! of 2⁻¹⁵/θ Å. A line and a circle are intersected from the corner, without
+//! that loss (see `intersect`).
 //!
 //! ```
 //! use core_nostd::comp::{Contour, Element, Tool};
@@ -56,7 +61,7 @@ const SWEEP_SLACK: i64 = 2 << FRAC;
 /// `2⁶³/π` (2 935 890 503 282 001 226, rounded down): turns (2⁶⁴ = 360°) per
 /// radian. An angle of `a` turns on a circle of radius `ρ` is `a·ρ·2π/2⁶⁴`
 /// long, so it is at most `L` long exactly when `a·ρ ≤ L·TURNS_PER_RADIAN`.
-const TURNS_PER_RADIAN: u128 = (1 << 124) / PI_Q61;
+const TURNS_PER_RADIAN: u64 = ((1 << 124) / PI_Q61) as u64;
 
 /// A vector `(X, Z)`; its unit depends on use (ångström, ångström · 2¹⁶
 /// relative to a corner, or Q62 for a unit vector). Every use stays below
@@ -248,9 +253,9 @@ impl Element {
         }
     }
 
-    /// The offset radius at `p` (ångström · 2¹⁶): `R − r` when the tool is
-    /// inside the circle, `R + r` otherwise; `None` for a line.
-    fn offset_radius(&self, p: [i64; 2], side: Side, r: i64) -> Option<i64> {
+    /// The radius at `p` (ångström · 2¹⁶, below 2⁵⁸) and whether the tool
+    /// is inside the circle; `None` for a line.
+    fn radius(&self, p: [i64; 2], side: Side) -> Option<(i64, bool)> {
         let Shape::Arc { centre, dir } = self.shape else {
             return None;
         };
@@ -261,7 +266,14 @@ impl Element {
             (side, dir),
             (Side::Left, ArcDir::Ccw) | (Side::Right, ArcDir::Cw)
         );
-        Some(if inside { radius - r } else { radius + r })
+        Some((radius, inside))
+    }
+
+    /// The offset radius at `p` (ångström · 2¹⁶): `R − r` when the tool is
+    /// inside the circle, `R + r` otherwise; `None` for a line.
+    fn offset_radius(&self, p: [i64; 2], side: Side, r: i64) -> Option<i64> {
+        self.radius(p, side)
+            .map(|(radius, inside)| if inside { radius - r } else { radius + r })
     }
 }
 
@@ -281,11 +293,14 @@ const fn off(n: V, r: i64) -> V {
     }
 }
 
-/// An offset element near a corner.
+/// An offset element near a corner, relative to the corner: a line through
+/// `a` along `t`, or a circle about `c` of radius `rho`. `n` is the tool-side
+/// unit normal of the element at the corner (Q62); `s` is the circle's
+/// programmed radius, negative when the tool is inside it (ångström · 2¹⁶).
 #[derive(Clone, Copy, Debug)]
 enum Offset {
-    Line { a: V, t: V },
-    Circle { c: V, rho: i64 },
+    Line { a: V, t: V, n: V },
+    Circle { c: V, rho: i64, s: i64, n: V },
 }
 
 /// `a · b`, exact. One shared
@@ -304,16 +319,28 @@ const fn div(a: i128, b: i128) -> i128 {
     }
 }
 
-/// The intersection of two offset elements nearest the origin.
+/// The intersection of two offset elements nearest the origin, for the nose
+/// radius `r` (ångström · 2¹⁶).
 ///
 /// Inputs are relative to the corner: line points within `2r < 2⁴⁶`, unit
-/// directions in Q62, centres within 2⁴¹ Å (2⁵⁷ in these units) and offset
-/// radii below 2⁵⁸. Under those bounds no product below exceeds 2¹²², so the
+/// vectors in Q62, centres within 2⁴¹ Å (2⁵⁷ in these units) and radii
+/// below 2⁵⁸. Under those bounds no product below exceeds 2¹²², so the
 /// arithmetic is unchecked; quotients that could grow are bounded first.
+///
+/// A line and a circle are intersected through the corner's own quantities,
+/// so that a corner turning by little (the two elements nearly tangent)
+/// loses no precision: both offset elements pass within `2r` of the corner
+/// `P`, and with `s` the circle's signed radius and `n` its normal at `P`,
+/// its centre is `P − s·n` and its radius `|s + r|`, that is
+/// `|X|² − r² + 2s(X·n − r) = 0` for `X` relative to `P`. On the offset line
+/// `X = r·nₗ + u·t` (`nₗ ⟂ t`) this is `u² + 2s·w·u − s·r·|nₗ − n|² = 0` with
+/// `w = t·n`: small terms computed from unit vectors, never a difference of
+/// squares of radii. The two points carry a few units of 2⁻¹⁶ Å of error
+/// whatever the angle between the elements.
 #[inline(never)]
-fn intersect(a: Offset, b: Offset) -> Option<V> {
+fn intersect(a: Offset, b: Offset, r: i64) -> Option<V> {
     let points = match (a, b) {
-        (Offset::Line { a: a1, t: t1 }, Offset::Line { a: a2, t: t2 }) => {
+        (Offset::Line { a: a1, t: t1, .. }, Offset::Line { a: a2, t: t2, .. }) => {
             let w = a2.sub(a1);
             let den = i128::from(cross(t1, t2));
             if den == 0 {
@@ -325,21 +352,28 @@ fn intersect(a: Offset, b: Offset) -> Option<V> {
             }
             [Some(a1.add(off(t1, s as i64))), None]
         }
-        (Offset::Line { a, t }, Offset::Circle { c, rho })
-        | (Offset::Circle { c, rho }, Offset::Line { a, t }) => {
-            let w = a.sub(c);
-            let b = dot(w, t);
-            let disc = mul(b, b) - (norm2(w) - mul(rho, rho));
+        (Offset::Line { a, t, n: nl }, Offset::Circle { s, n, .. })
+        | (Offset::Circle { s, n, .. }, Offset::Line { a, t, n: nl }) => {
+            // |s| < 2⁵⁸, |w| ≤ 2⁶²: s·w < 2¹²⁰; |nₗ − n| ≤ 2 (2⁶³ in Q62):
+            // s·|d| < 2¹²¹, r·|d| < 2¹⁰⁸; the discriminant stays below 2¹¹⁷.
+            let sw = (mul(s, dot(t, n)) >> 62) as i64;
+            // |nₗ − n|² = |nₗ|² + |n|² − 2 nₗ·n, exact in Q124; an inside
+            // corner is no reversal, so |nₗ − n| < 2 − 2⁻⁴⁶: below 2⁶³ in Q62.
+            let cos = mul(nl.x, n.x) + mul(nl.z, n.z);
+            let d = isqrt(((norm2(nl) - cos) + (norm2(n) - cos)) as u128) as i64;
+            let sd = mul(s, d) >> 62;
+            let rd = mul(r, d) >> 62;
+            let disc = mul(sw, sw) + sd * rd;
             if disc < 0 {
                 return None;
             }
             let root = isqrt(disc as u128) as i64;
             [
-                Some(a.add(off(t, root - b))),
-                Some(a.add(off(t, -root - b))),
+                Some(a.add(off(t, root - sw))),
+                Some(a.add(off(t, -root - sw))),
             ]
         }
-        (Offset::Circle { c: c1, rho: r1 }, Offset::Circle { c: c2, rho: r2 }) => {
+        (Offset::Circle { c: c1, rho: r1, .. }, Offset::Circle { c: c2, rho: r2, .. }) => {
             let d = c2.sub(c1);
             let dd = norm2(d);
             let dist = i128::from(isqrt(dd as u128));
@@ -788,12 +822,14 @@ fn check_direction(
                 // ångström · 2¹⁶ stays below 2¹²².
                 let radius = |p| e.offset_radius(p, side, r).unwrap_or(0);
                 let rho = radius(e.from).min(radius(e.to));
-                let Ok(rho) = u128::try_from(rho) else {
+                let Ok(rho @ 1..) = u64::try_from(rho) else {
                     return short;
                 };
-                let excess = u128::from(done.wrapping_sub(programmed)).saturating_mul(rho);
-                let slack = u128::from(sweep_slack(r).unsigned_abs());
-                if rho == 0 || excess > slack.saturating_mul(TURNS_PER_RADIAN) {
+                let excess = u128::from(done.wrapping_sub(programmed)) * u128::from(rho);
+                // Below 2²⁴ · 2⁶².
+                let slack =
+                    u128::from(sweep_slack(r).unsigned_abs()) * u128::from(TURNS_PER_RADIAN);
+                if excess > slack {
                     return short;
                 }
             }
@@ -847,15 +883,20 @@ fn corner_of(
         // Inside: intersect the offset elements.
         // The offset elements relative to the corner: a line through its
         // perpendicular offset point, a circle about the arc's centre.
-        let offset = |e: &Element, t: V, a: V| match e.shape {
-            Shape::Line { .. } => Offset::Line { a, t },
-            Shape::Arc { centre, .. } => Offset::Circle {
-                c: shl(V::of(centre).sub(V::of(p))),
-                rho: e.offset_radius(p, side, r).unwrap_or(0),
-            },
+        let offset = |e: &Element, t: V, a: V| {
+            let n = side.normal(t);
+            match (e.shape, e.radius(p, side)) {
+                (Shape::Arc { centre, .. }, Some((radius, inside))) => Offset::Circle {
+                    c: shl(V::of(centre).sub(V::of(p))),
+                    rho: if inside { radius - r } else { radius + r },
+                    s: if inside { -radius } else { radius },
+                    n,
+                },
+                _ => Offset::Line { a, t, n },
+            }
         };
-        let x =
-            intersect(offset(e1, t1, a1), offset(e2, t2, a2)).ok_or(CompError::NoCorner(n1, n2))?;
+        let x = intersect(offset(e1, t1, a1), offset(e2, t2, a2), r)
+            .ok_or(CompError::NoCorner(n1, n2))?;
         let x = at(x)?;
         return Ok(CornerPlan {
             end: x,

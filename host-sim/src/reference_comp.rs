@@ -85,6 +85,13 @@
 //!   5·10⁻⁸ mm).
 //! * `I`, `K` or `R` in a linear block, and `R` together with `I`/`K`, are
 //!   refused (`SYNTAX`).
+//! * An inside corner between a line and an arc is intersected from the
+//!   corner (`line_circle`), not from the circle's centre: near a smooth
+//!   corner the two offset elements are nearly tangent, and the centre-based
+//!   form loses the intersection's position along them in the difference
+//!   of two squared radii (by more than the arc check's slack on large arcs,
+//!   or when the line is long). Two circles are still intersected from their
+//!   centres.
 
 use std::f64::consts::PI;
 use std::fmt;
@@ -847,7 +854,7 @@ struct Corner {
     start2: V2,
 }
 
-/// The intersection of two offset elements nearest to `p`.
+/// The intersection nearest to `p` of two offset lines or two offset circles.
 fn intersect(o1: Offset, o2: Offset, p: V2) -> Option<V2> {
     let nearest = |a: V2, b: V2| {
         if (a - p).len() <= (b - p).len() {
@@ -865,22 +872,9 @@ fn intersect(o1: Offset, o2: Offset, p: V2) -> Option<V2> {
             let a = (q2 - q1).cross(t2) / den;
             Some(q1 + t1 * a)
         }
-        (Offset::Line { p: q, t }, Offset::Circle { c, rho })
-        | (Offset::Circle { c, rho }, Offset::Line { p: q, t }) => {
-            let w = q - c;
-            let b = w.dot(t);
-            let cc = w.dot(w) - rho * rho;
-            let mut disc = b * b - cc;
-            if disc < 0.0 {
-                if disc > -1e-14 * (w.dot(w) + rho * rho) {
-                    disc = 0.0;
-                } else {
-                    return None;
-                }
-            }
-            let s = disc.sqrt();
-            Some(nearest(q + t * (-b - s), q + t * (-b + s)))
-        }
+        // A line and a circle meet through `line_circle`, from the corner.
+        (Offset::Line { .. }, Offset::Circle { .. })
+        | (Offset::Circle { .. }, Offset::Line { .. }) => None,
         (Offset::Circle { c: c1, rho: r1 }, Offset::Circle { c: c2, rho: r2 }) => {
             let d_vec = c2 - c1;
             let d = d_vec.len();
@@ -902,6 +896,40 @@ fn intersect(o1: Offset, o2: Offset, p: V2) -> Option<V2> {
             Some(nearest(m + e.left() * h, m - e.left() * h))
         }
     }
+}
+
+/// The intersection nearest the corner `p` of a line's offset (the line
+/// along `t` through its perpendicular offset point at `p`) with the offset
+/// circle of the arc `arc` at `p` (its end when `at_end`), computed from the
+/// corner rather than from the circle's centre: with `s` the arc's radius,
+/// negative when the tool is inside the circle, and `n` its normal at `p`,
+/// the offset circle is `|X|² − r² + 2s(X·n − r) = 0` for `X` relative to
+/// `p`, and on the offset line `X = r·nₗ + u·t` this is
+/// `u² + 2s(t·n)u − s·r·|nₗ − n|² = 0`. No term is a difference of squared
+/// radii, so nearly tangent elements (a corner turning by little) keep their
+/// precision. The nearest point has the smaller `|u|`.
+fn line_circle(p: V2, t: V2, arc: &Element, at_end: bool, side: CompSide, r: f64) -> Option<V2> {
+    let a = arc.arc.as_ref()?;
+    let big_r = if at_end { a.r1 } else { a.r0 };
+    let s = if arc.tool_inside(side) { -big_r } else { big_r };
+    let n = normal(arc_tangent(a, p), side);
+    let nl = normal(t, side);
+    let d = nl - n;
+    let b = s * t.dot(n);
+    let c = s * r * d.dot(d);
+    let mut disc = b * b + c;
+    if disc < 0.0 {
+        // A line just touching the circle.
+        if disc > -1e-14 * (b * b + c.abs()) {
+            disc = 0.0;
+        } else {
+            return None;
+        }
+    }
+    let root = disc.sqrt();
+    let (u1, u2) = (-b - root, -b + root);
+    let u = if u1.abs() <= u2.abs() { u1 } else { u2 };
+    Some(p + nl * r + t * u)
 }
 
 /// Whether the compensated motion of `e` from `s` to `end` (nose centre)
@@ -1269,9 +1297,12 @@ impl RefContour {
         }
         let reversal = cos < 0.0 && sin.abs() < SMOOTH_SIN;
         if !reversal && sin * side.sign() > 0.0 {
-            let o1 = e1.offset(side, r, true);
-            let o2 = e2.offset(side, r, false);
-            let x = intersect(o1, o2, p).ok_or_else(|| {
+            let x = match (&e1.arc, &e2.arc) {
+                (None, Some(_)) => line_circle(p, t1, e2, false, side, r),
+                (Some(_), None) => line_circle(p, t2, e1, true, side, r),
+                _ => intersect(e1.offset(side, r, true), e2.offset(side, r, false), p),
+            };
+            let x = x.ok_or_else(|| {
                 RefRefusal::geometry(format!(
                     "the nose does not fit the corner between block {} and block {}",
                     e1.label, e2.label

@@ -746,3 +746,112 @@ proptest! {
         prop_assert!(tally.compared >= case.lines.len(), "{:?}: {:?}", case, tally);
     }
 }
+
+/// Lines that meet arcs at inside corners turning by little (from below the
+/// smooth limit of 2⁻²² rad up to 10⁻² rad), arcs of 0.25 mm to 1000 mm,
+/// convex and concave: the offset elements are nearly tangent, and their
+/// intersection must still be precise enough that the arc check (a few
+/// 10⁻⁷ mm along the arc) passes. The device cuts them all, as the f64
+/// reference does, with the same blocks.
+#[test]
+fn near_tangent_inside_corners_between_lines_and_arcs() {
+    let mut tally = ContourTally::default();
+    let add = |a: [i64; 2], b: [i64; 2]| [a[0] + b[0], a[1] + b[1]];
+    let sub = |a: [i64; 2], b: [i64; 2]| [a[0] - b[0], a[1] - b[1]];
+    // Coordinates in nm (10⁻⁶ mm, the finest a word can write).
+    let nm = |v: i64| format!("{:.6}", v as f64 / 1e6);
+    let xz = |p: [i64; 2]| format!("X{} Z{}", nm(2 * p[0]), nm(p[1]));
+    // The turn of `a` to `b` in the (Z right, X up) plane: positive left.
+    let cross = |a: [i64; 2], b: [i64; 2]| a[1] * b[0] - a[0] * b[1];
+    for rn in [200_000i64, 400_000, 800_000] {
+        for big_r in [
+            250_000i64,
+            500_000,
+            1_000_000,
+            10_000_000,
+            100_000_000,
+            1_000_000_000,
+        ] {
+            for ccw in [true, false] {
+                // From the top of the circle (its X is 50 mm) to 53° on.
+                let c = [50_000_000 - big_r, -100_000_000];
+                let s = add(c, [big_r, 0]);
+                let e = add(c, [3 * big_r / 5, if ccw { -4 } else { 4 } * big_r / 5]);
+                // The direction of travel, as long as the radius.
+                let tangent = |p: [i64; 2]| {
+                    let v = sub(p, c);
+                    if ccw {
+                        [v[1], -v[0]]
+                    } else {
+                        [-v[1], v[0]]
+                    }
+                };
+                let (ts, te) = (tangent(s), tangent(e));
+                let along = |t: [i64; 2], len: i64| [t[0] * len / big_r, t[1] * len / big_r];
+                let arc = format!(
+                    "{} {} I{} K{}",
+                    if ccw { "G03" } else { "G02" },
+                    xz(e),
+                    nm(c[0] - s[0]),
+                    nm(c[1] - s[1])
+                );
+                for dev in [-20_000i64, -200, -20, -5, -1, 1, 5, 20, 200, 20_000] {
+                    for len in [2_000_000i64, 10_000_000, 40_000_000] {
+                        // Into the arc: a line from `dev` nm off the tangent;
+                        // out of it: a line to `dev` nm off the tangent.
+                        let lead_in = add(sub(s, along(ts, len)), [dev, 0]);
+                        let lead_out = add(add(e, along(te, len)), [dev, 0]);
+                        for out in [false, true] {
+                            let turn = if out {
+                                cross(te, sub(lead_out, e))
+                            } else {
+                                cross(sub(s, lead_in), ts)
+                            };
+                            // The tool on the inside of the corner.
+                            let left = turn > 0;
+                            if left == ccw && big_r <= rn {
+                                continue;
+                            }
+                            let first = if out {
+                                sub(s, along(ts, 2_000_000))
+                            } else {
+                                lead_in
+                            };
+                            let mut lines = vec![
+                                format!("G00 {}", xz(add(first, [5_000_000, 5_000_000]))),
+                                format!(
+                                    "N1 {} G01 {}",
+                                    if left { "G41" } else { "G42" },
+                                    xz(first)
+                                ),
+                                format!("N2 G01 {}", xz(s)),
+                                format!("N3 {arc}"),
+                            ];
+                            if out {
+                                lines.push(format!("N4 G01 {}", xz(lead_out)));
+                            }
+                            lines.push(format!("N5 G40 G00 {}", xz(add(c, [0, 5_000_000]))));
+                            for tip in [0, 3] {
+                                let case = ContourCase {
+                                    rn: nm(rn),
+                                    tip,
+                                    lines: lines.clone(),
+                                };
+                                compare_contour(&mut LocalDevice::new(), &case, &mut tally)
+                                    .unwrap();
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        tally.mismatches.is_empty(),
+        "{} mismatches: {:#?}",
+        tally.mismatches.len(),
+        &tally.mismatches[..tally.mismatches.len().min(5)]
+    );
+    assert_eq!(tally.refused_alike, 0, "{tally:?}");
+    assert!(tally.programs > 3_000, "{tally:?}");
+}
