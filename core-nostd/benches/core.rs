@@ -153,10 +153,10 @@ fn arcs(c: &mut Criterion) {
 /// The nose radius calculator and the contour engine.
 fn compensation(c: &mut Criterion) {
     use core_nostd::arc::ArcDir;
+    use core_nostd::comp::TipCode;
     use core_nostd::comp::{Contour, Element, Shape, Tool};
     use core_nostd::cone::{cone, Angle};
     use core_nostd::gcode::Compensation;
-    use core_nostd::comp::TipCode;
     let mut g = c.benchmark_group("compensation");
     let rn = Length::from_um(400).unwrap();
     g.bench_function("CONE corrections (exact angle, Q62 tangents)", |b| {
