@@ -15,7 +15,12 @@
 //! intersections far from the corner (beyond 2⁴⁰ Å) are treated as having no
 //! intersection. A unit vector is within 2⁻⁶⁰ of exact, so a compensated
 //! point carries far less than 10⁻³ Å of arithmetic error before it is
-//! rounded, half away from zero, to the ångström grid.
+//! rounded, half away from zero, to the ångström grid. One exception: two
+//! offset circles are intersected from their centres, and where they are
+//! nearly tangent (an inside corner between two arcs turning by `θ`, little
+//! more than the smooth limit) the point can move along them by the order
+//! of 2⁻¹⁵/θ Å. A line and a circle are intersected from the corner, without
+//! that loss (see `intersect`).
 //!
 //! ```
 //! use core_nostd::comp::{Contour, Element, Tool};
@@ -37,7 +42,7 @@
 use crate::arc::ArcDir;
 use crate::gcode::{Compensation, Corner};
 use crate::length::{Length, LENGTH_LIMIT};
-use crate::trig::{atan2, isqrt};
+use crate::trig::{atan2, isqrt, PI_Q61};
 
 /// Fractional bits of an ångström in corner arithmetic.
 const FRAC: u32 = 16;
@@ -47,9 +52,16 @@ const ONE: i128 = 1 << 62;
 const SMOOTH_SIN: i64 = 1 << 40;
 /// Intersections farther than 2⁴⁰ Å from the corner do not count.
 const FAR: i64 = 1 << (40 + FRAC);
-/// Sweep slack for rounding when comparing an arc's compensated sweep with
-/// its programmed one: 2⁻²⁴ turn.
-const SWEEP_SLACK: u64 = 1 << 40;
+/// Fixed part of the slack by which an arc's compensated sweep may exceed
+/// its programmed one, as a length along the offset circle: 2 Å (two steps of
+/// the ångström grid, in ångström · 2¹⁶). Rounding each end of the
+/// compensated arc to the grid moves it at most √2/2 Å along the arc. The
+/// nose radius adds `r·2⁻²¹` (see [`sweep_slack`]).
+const SWEEP_SLACK: i64 = 2 << FRAC;
+/// `2⁶³/π` (2 935 890 503 282 001 226, rounded down): turns (2⁶⁴ = 360°) per
+/// radian. An angle of `a` turns on a circle of radius `ρ` is `a·ρ·2π/2⁶⁴`
+/// long, so it is at most `L` long exactly when `a·ρ ≤ L·TURNS_PER_RADIAN`.
+const TURNS_PER_RADIAN: u64 = ((1 << 124) / PI_Q61) as u64;
 
 /// A vector `(X, Z)`; its unit depends on use (ångström, ångström · 2¹⁶
 /// relative to a corner, or Q62 for a unit vector). Every use stays below
@@ -241,9 +253,9 @@ impl Element {
         }
     }
 
-    /// The offset radius at `p` (ångström · 2¹⁶): `R − r` when the tool is
-    /// inside the circle, `R + r` otherwise; `None` for a line.
-    fn offset_radius(&self, p: [i64; 2], side: Side, r: i64) -> Option<i64> {
+    /// The radius at `p` (ångström · 2¹⁶, below 2⁵⁸) and whether the tool
+    /// is inside the circle; `None` for a line.
+    fn radius(&self, p: [i64; 2], side: Side) -> Option<(i64, bool)> {
         let Shape::Arc { centre, dir } = self.shape else {
             return None;
         };
@@ -254,7 +266,14 @@ impl Element {
             (side, dir),
             (Side::Left, ArcDir::Ccw) | (Side::Right, ArcDir::Cw)
         );
-        Some(if inside { radius - r } else { radius + r })
+        Some((radius, inside))
+    }
+
+    /// The offset radius at `p` (ångström · 2¹⁶): `R − r` when the tool is
+    /// inside the circle, `R + r` otherwise; `None` for a line.
+    fn offset_radius(&self, p: [i64; 2], side: Side, r: i64) -> Option<i64> {
+        self.radius(p, side)
+            .map(|(radius, inside)| if inside { radius - r } else { radius + r })
     }
 }
 
@@ -274,11 +293,14 @@ const fn off(n: V, r: i64) -> V {
     }
 }
 
-/// An offset element near a corner.
+/// An offset element near a corner, relative to the corner: a line through
+/// `a` along `t`, or a circle about `c` of radius `rho`. `n` is the tool-side
+/// unit normal of the element at the corner (Q62); `s` is the circle's
+/// programmed radius, negative when the tool is inside it (ångström · 2¹⁶).
 #[derive(Clone, Copy, Debug)]
 enum Offset {
-    Line { a: V, t: V },
-    Circle { c: V, rho: i64 },
+    Line { a: V, t: V, n: V },
+    Circle { c: V, rho: i64, s: i64, n: V },
 }
 
 /// `a · b`, exact. One shared
@@ -297,16 +319,28 @@ const fn div(a: i128, b: i128) -> i128 {
     }
 }
 
-/// The intersection of two offset elements nearest the origin.
+/// The intersection of two offset elements nearest the origin, for the nose
+/// radius `r` (ångström · 2¹⁶).
 ///
 /// Inputs are relative to the corner: line points within `2r < 2⁴⁶`, unit
-/// directions in Q62, centres within 2⁴¹ Å (2⁵⁷ in these units) and offset
-/// radii below 2⁵⁸. Under those bounds no product below exceeds 2¹²², so the
+/// vectors in Q62, centres within 2⁴¹ Å (2⁵⁷ in these units) and radii
+/// below 2⁵⁸. Under those bounds no product below exceeds 2¹²², so the
 /// arithmetic is unchecked; quotients that could grow are bounded first.
+///
+/// A line and a circle are intersected through the corner's own quantities,
+/// so that a corner turning by little (the two elements nearly tangent)
+/// loses no precision: both offset elements pass within `2r` of the corner
+/// `P`, and with `s` the circle's signed radius and `n` its normal at `P`,
+/// its centre is `P − s·n` and its radius `|s + r|`, that is
+/// `|X|² − r² + 2s(X·n − r) = 0` for `X` relative to `P`. On the offset line
+/// `X = r·nₗ + u·t` (`nₗ ⟂ t`) this is `u² + 2s·w·u − s·r·|nₗ − n|² = 0` with
+/// `w = t·n`: small terms computed from unit vectors, never a difference of
+/// squares of radii. The two points carry a few units of 2⁻¹⁶ Å of error
+/// whatever the angle between the elements.
 #[inline(never)]
-fn intersect(a: Offset, b: Offset) -> Option<V> {
+fn intersect(a: Offset, b: Offset, r: i64) -> Option<V> {
     let points = match (a, b) {
-        (Offset::Line { a: a1, t: t1 }, Offset::Line { a: a2, t: t2 }) => {
+        (Offset::Line { a: a1, t: t1, .. }, Offset::Line { a: a2, t: t2, .. }) => {
             let w = a2.sub(a1);
             let den = i128::from(cross(t1, t2));
             if den == 0 {
@@ -318,21 +352,28 @@ fn intersect(a: Offset, b: Offset) -> Option<V> {
             }
             [Some(a1.add(off(t1, s as i64))), None]
         }
-        (Offset::Line { a, t }, Offset::Circle { c, rho })
-        | (Offset::Circle { c, rho }, Offset::Line { a, t }) => {
-            let w = a.sub(c);
-            let b = dot(w, t);
-            let disc = mul(b, b) - (norm2(w) - mul(rho, rho));
+        (Offset::Line { a, t, n: nl }, Offset::Circle { s, n, .. })
+        | (Offset::Circle { s, n, .. }, Offset::Line { a, t, n: nl }) => {
+            // |s| < 2⁵⁸, |w| ≤ 2⁶²: s·w < 2¹²⁰; |nₗ − n| ≤ 2 (2⁶³ in Q62):
+            // s·|d| < 2¹²¹, r·|d| < 2¹⁰⁸; the discriminant stays below 2¹¹⁷.
+            let sw = (mul(s, dot(t, n)) >> 62) as i64;
+            // |nₗ − n|² = |nₗ|² + |n|² − 2 nₗ·n, exact in Q124; an inside
+            // corner is no reversal, so |nₗ − n| < 2 − 2⁻⁴⁶: below 2⁶³ in Q62.
+            let cos = mul(nl.x, n.x) + mul(nl.z, n.z);
+            let d = isqrt(((norm2(nl) - cos) + (norm2(n) - cos)) as u128) as i64;
+            let sd = mul(s, d) >> 62;
+            let rd = mul(r, d) >> 62;
+            let disc = mul(sw, sw) + sd * rd;
             if disc < 0 {
                 return None;
             }
             let root = isqrt(disc as u128) as i64;
             [
-                Some(a.add(off(t, root - b))),
-                Some(a.add(off(t, -root - b))),
+                Some(a.add(off(t, root - sw))),
+                Some(a.add(off(t, -root - sw))),
             ]
         }
-        (Offset::Circle { c: c1, rho: r1 }, Offset::Circle { c: c2, rho: r2 }) => {
+        (Offset::Circle { c: c1, rho: r1, .. }, Offset::Circle { c: c2, rho: r2, .. }) => {
             let d = c2.sub(c1);
             let dd = norm2(d);
             let dist = i128::from(isqrt(dd as u128));
@@ -599,7 +640,7 @@ impl Contour {
                     State::Pending { e, start } => {
                         let side = Side::of(self.mode).unwrap_or(Side::Left);
                         let end = perpendicular(&e, e.to, side, r)?;
-                        check_direction(&e, start, end, None)?;
+                        check_direction(&e, start, end, None, side, r)?;
                         push(
                             &mut moves,
                             tool.ttt(end),
@@ -639,7 +680,7 @@ impl Contour {
                 if let Some(e2) = motion {
                     check_concave(&e2, side, r)?;
                     let c = corner_of(&e1, &e2, side, next.corner, r)?;
-                    check_direction(&e1, start, c.end, e2.n)?;
+                    check_direction(&e1, start, c.end, e2.n, side, r)?;
                     push(
                         &mut moves,
                         tool.ttt(c.end),
@@ -721,14 +762,29 @@ fn absolute(origin: [i64; 2], v: V, n: Option<u32>) -> Result<[i64; 2], CompErro
     Ok([one(origin[0], v.x)?, one(origin[1], v.z)?])
 }
 
+/// The slack by which an arc's compensated sweep may exceed its programmed
+/// one, as a length along the offset circle (ångström · 2¹⁶): [`SWEEP_SLACK`]
+/// for rounding both ends to the grid, and `r·2⁻²¹` for the nose radius `r`
+/// (ångström · 2¹⁶, at most 25 mm), twice the most a smooth corner moves the
+/// arc's start (`r·sin θ`, `|sin θ| < 2⁻²²`). Below 2²⁴.
+const fn sweep_slack(r: i64) -> i64 {
+    SWEEP_SLACK.saturating_add(r >> 21)
+}
+
 /// Refuses an element whose compensated motion from `start` to `end` does not
-/// keep its programmed direction.
+/// keep its programmed direction: a line whose motion is not ahead along the
+/// programmed direction, an arc whose compensated sweep is zero or longer than
+/// the programmed sweep by more than [`sweep_slack`] along the offset circle
+/// (the excess angle times the smaller of the offset radii at the arc's two
+/// ends). `side` and `r` (ångström · 2¹⁶) are the tool's.
 #[inline(never)]
 fn check_direction(
     e: &Element,
     start: [i64; 2],
     end: [i64; 2],
     next: Option<u32>,
+    side: Side,
+    r: i64,
 ) -> Result<(), CompError> {
     let short = Err(CompError::TooShort(e.n, next));
     match e.shape {
@@ -757,8 +813,25 @@ fn check_direction(
                 if !full {
                     return short;
                 }
-            } else if done > programmed.saturating_add(SWEEP_SLACK) || (full && done < 1 << 63) {
+            } else if full && done < 1 << 63 {
                 return short;
+            } else if done > programmed {
+                // The excess as a length along the offset circle, on the
+                // smaller of its radii (below 2⁵⁸, positive: concave arcs
+                // were checked when they arrived); turns · 2⁶⁴ times
+                // ångström · 2¹⁶ stays below 2¹²².
+                let radius = |p| e.offset_radius(p, side, r).unwrap_or(0);
+                let rho = radius(e.from).min(radius(e.to));
+                let Ok(rho @ 1..) = u64::try_from(rho) else {
+                    return short;
+                };
+                let excess = u128::from(done.wrapping_sub(programmed)) * u128::from(rho);
+                // Below 2²⁴ · 2⁶².
+                let slack =
+                    u128::from(sweep_slack(r).unsigned_abs()) * u128::from(TURNS_PER_RADIAN);
+                if excess > slack {
+                    return short;
+                }
             }
         }
     }
@@ -810,15 +883,20 @@ fn corner_of(
         // Inside: intersect the offset elements.
         // The offset elements relative to the corner: a line through its
         // perpendicular offset point, a circle about the arc's centre.
-        let offset = |e: &Element, t: V, a: V| match e.shape {
-            Shape::Line { .. } => Offset::Line { a, t },
-            Shape::Arc { centre, .. } => Offset::Circle {
-                c: shl(V::of(centre).sub(V::of(p))),
-                rho: e.offset_radius(p, side, r).unwrap_or(0),
-            },
+        let offset = |e: &Element, t: V, a: V| {
+            let n = side.normal(t);
+            match (e.shape, e.radius(p, side)) {
+                (Shape::Arc { centre, .. }, Some((radius, inside))) => Offset::Circle {
+                    c: shl(V::of(centre).sub(V::of(p))),
+                    rho: if inside { radius - r } else { radius + r },
+                    s: if inside { -radius } else { radius },
+                    n,
+                },
+                _ => Offset::Line { a, t, n },
+            }
         };
-        let x =
-            intersect(offset(e1, t1, a1), offset(e2, t2, a2)).ok_or(CompError::NoCorner(n1, n2))?;
+        let x = intersect(offset(e1, t1, a1), offset(e2, t2, a2), r)
+            .ok_or(CompError::NoCorner(n1, n2))?;
         let x = at(x)?;
         return Ok(CornerPlan {
             end: x,
@@ -877,5 +955,113 @@ fn corner_of(
                 start,
             })
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+
+    #[test]
+    fn turns_per_radian_is_two_to_the_63_over_pi() {
+        let exact = 2f64.powi(63) / core::f64::consts::PI;
+        assert!((TURNS_PER_RADIAN as f64 - exact).abs() <= exact * f64::EPSILON);
+    }
+
+    /// The arc check's slack is a length along the offset circle: 2 Å plus
+    /// `r·2⁻²¹`, the same on a 0.01 mm and on a 1000 mm offset radius.
+    #[test]
+    fn sweep_slack_is_a_length_whatever_the_radius() {
+        let r = 2_000_000; // 0.2 mm
+        let slack_a = 2.0 + r as f64 / f64::from(1 << 21);
+        for rho in [100_000i64, 10_000_000, 10_000_000_000] {
+            let big_r = rho + r;
+            // Programmed: a quarter circle G03 from angle 0 (+Z) to 90° (+X);
+            // G41 with G03 puts the tool inside, offset radius ρ.
+            let e = Element {
+                from: [0, big_r],
+                to: [big_r, 0],
+                shape: Shape::Arc {
+                    centre: [0, 0],
+                    dir: ArcDir::Ccw,
+                },
+                n: Some(7),
+            };
+            for excess in 0..8i64 {
+                // Compensated: the quarter circle of radius ρ, its end moved
+                // on by `excess` Å along the tangent.
+                let end = [rho, -excess];
+                let along = rho as f64 * (excess as f64 / rho as f64).atan();
+                let got = check_direction(&e, [0, rho], end, Some(8), Side::Left, r << FRAC);
+                if along <= slack_a - 1e-3 {
+                    assert_eq!(got, Ok(()), "ρ {rho} Å, {along} Å past the end");
+                } else if along > slack_a + 1e-3 {
+                    assert_eq!(
+                        got,
+                        Err(CompError::TooShort(Some(7), Some(8))),
+                        "ρ {rho} Å, {along} Å past the end"
+                    );
+                }
+            }
+            // Reversed by 5 Å: too short on every radius.
+            let back = check_direction(&e, [0, rho], [-5, rho], None, Side::Left, r << FRAC);
+            assert_eq!(back, Err(CompError::TooShort(Some(7), None)), "ρ {rho}");
+        }
+    }
+
+    /// Issue 15: an R0.255 groove bored with a 0.2 mm nose (offset radius
+    /// 0.055 mm, end point rounded) is cut, ending where the geometry says.
+    #[test]
+    fn concave_arc_slightly_larger_than_the_nose_is_cut() {
+        let tool = Tool::new(Length::from_angstrom(2_000_000).unwrap(), TipCode(2));
+        let mm = |x: f64, z: f64| [(x * 1e7).round() as i64, (z * 1e7).round() as i64];
+        let line = |a, b| Element::line(a, b, false, None);
+        let centre = mm(6.007, -9.306);
+        let arc = Element {
+            from: mm(6.262, -9.306),
+            to: mm(6.232, -9.426),
+            shape: Shape::Arc {
+                centre,
+                dir: ArcDir::Ccw,
+            },
+            n: Some(100),
+        };
+        let mut c = Contour::new();
+        let blocks = [
+            (Some(Compensation::Left), line(mm(11.0, 3.0), mm(11.0, 0.0))),
+            (None, line(mm(11.0, 0.0), mm(6.262, 0.0))),
+            (None, line(mm(6.262, 0.0), mm(6.262, -9.306))),
+            (None, arc),
+        ];
+        for (comp, e) in blocks {
+            c = c.block(&tool, comp, Some(Corner::Arc), Some(e)).unwrap().0;
+        }
+        let off = line(mm(6.232, -9.426), mm(5.232, -9.426));
+        let (c, moves) = c
+            .block(&tool, Some(Compensation::Off), None, Some(off))
+            .unwrap();
+        assert!(!c.active());
+        // The nose centre ends on the offset circle, at the end point's
+        // angle: centre + 0.055/0.255 · (0.225, −0.12); the tool tip is
+        // (+r, −r) from it.
+        let k = 0.055 / 0.255;
+        let want = [6.007 + k * 0.225 + 0.2, -9.306 - k * 0.12 - 0.2];
+        let m = moves[0];
+        assert_eq!(m.origin, Origin::Previous);
+        assert_eq!(
+            m.kind,
+            MoveKind::Arc {
+                centre: [centre[0] + 2_000_000, centre[1] - 2_000_000],
+                dir: ArcDir::Ccw
+            }
+        );
+        for i in 0..2 {
+            assert!(
+                (m.to[i] as f64 - want[i] * 1e7).abs() <= 0.5 + 1e-3,
+                "{m:?} {want:?}"
+            );
+        }
+        assert_eq!(moves[1].to, off.to);
     }
 }

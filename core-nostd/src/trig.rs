@@ -41,7 +41,7 @@ pub type Q62 = I2F62;
 /// π/4 · 2⁶⁴, rounded.
 const PI4_Q64: u128 = 14_488_038_916_154_245_685;
 /// π · 2⁶¹, rounded.
-const PI_Q61: u128 = 7_244_019_458_077_122_842;
+pub(crate) const PI_Q61: u128 = 7_244_019_458_077_122_842;
 
 /// Micro-arcseconds in a full turn (360 · 3600 · 10⁶).
 pub const FULL_TURN_UAS: i64 = 1_296_000_000_000;

@@ -60,11 +60,15 @@
 //!   10⁻⁷ mm, equals its rounded start, or when `(end − start)·t ≤ 0`. An arc
 //!   is short when its rounded compensated ends coincide (unless it was
 //!   programmed as a full circle), or when its compensated sweep exceeds the
-//!   programmed sweep by more than [`SWEEP_SLACK_MM`] `+ r·2⁻²¹` of arc length
-//!   on the offset circle. The slack absorbs f64 noise, the core's 10⁻⁷ mm
-//!   rounding and the start mismatch a smooth corner allows (`r·2⁻²²` at each
-//!   end), none of which is a reversal. The start-up block itself is not
-//!   checked (its direction is not the programmed one).
+//!   programmed sweep by more than [`SWEEP_SLACK_MM`] `+ r·2⁻²¹` (2·10⁻⁷ mm
+//!   plus `r·2⁻²¹`) of arc length on the offset circle, the excess angle
+//!   taken on the smaller of the offset radii at the arc's two ends, as
+//!   `docs/compensation.md` says. The slack is a length, whatever the arc's
+//!   radius: it absorbs f64 noise, the core's rounding of both ends to
+//!   10⁻⁷ mm (at most √2/2·10⁻⁷ mm along the arc each) and the start mismatch
+//!   a smooth corner allows (below `r·2⁻²²`), none of which is a reversal.
+//!   The start-up block itself is not checked (its direction is not the
+//!   programmed one).
 //! * A `G40` block with an `X` or `Z` word always sends its uncompensated
 //!   move, even when the programmed point does not change. `G40` while only
 //!   armed (no start-up block yet) just disarms; the motion of that block then
@@ -74,10 +78,20 @@
 //! * The concave-arc test uses both the start and the end radius of an
 //!   `I`/`K` arc; an `R` arc has the radius of its word.
 //! * An `R` arc whose chord is longer than `2·|R|` by more than 10⁻⁹ mm is
-//!   refused; up to that it is a half circle. The `R` centre is not rounded
-//!   to 10⁻⁷ mm (the core rounds it; the difference is below 5·10⁻⁸ mm).
+//!   refused; up to that it is a half circle. The `R` centre's distance from
+//!   the chord comes from `4R² − chord²` taken exactly in (10⁻⁷ mm)² (so a
+//!   half circle's centre is the chord's midpoint); the centre is not
+//!   rounded to 10⁻⁷ mm (the core rounds it; the difference is below
+//!   5·10⁻⁸ mm).
 //! * `I`, `K` or `R` in a linear block, and `R` together with `I`/`K`, are
 //!   refused (`SYNTAX`).
+//! * An inside corner between a line and an arc is intersected from the
+//!   corner (`line_circle`), not from the circle's centre: near a smooth
+//!   corner the two offset elements are nearly tangent, and the centre-based
+//!   form loses the intersection's position along them in the difference
+//!   of two squared radii (by more than the arc check's slack on large arcs,
+//!   or when the line is long). Two circles are still intersected from their
+//!   centres.
 
 use std::f64::consts::PI;
 use std::fmt;
@@ -101,8 +115,17 @@ const R_CHORD_SLACK_MM: f64 = 1e-9;
 
 /// Fixed part of the slack (mm of arc length on the offset circle) by which
 /// an arc's compensated sweep may exceed its programmed sweep before the arc
-/// is too short for the nose; `r·2⁻²¹` is added to it.
-pub const SWEEP_SLACK_MM: f64 = 1e-7;
+/// is too short for the nose: two steps of the 10⁻⁷ mm grid. `r·2⁻²¹` is
+/// added to it ([`sweep_slack_mm`]).
+pub const SWEEP_SLACK_MM: f64 = 2e-7;
+
+/// The slack (mm of arc length on the offset circle, measured on the smaller
+/// of the offset radii at the arc's two ends) by which an arc's compensated
+/// sweep may exceed its programmed sweep, for nose radius `r_mm`:
+/// [`SWEEP_SLACK_MM`]` + r·2⁻²¹`.
+pub fn sweep_slack_mm(r_mm: f64) -> f64 {
+    SWEEP_SLACK_MM + r_mm * 2.0 * SMOOTH_SIN
+}
 
 /// A point or direction in the (Z right, X up) plane, mm on the radius.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -831,7 +854,7 @@ struct Corner {
     start2: V2,
 }
 
-/// The intersection of two offset elements nearest to `p`.
+/// The intersection nearest to `p` of two offset lines or two offset circles.
 fn intersect(o1: Offset, o2: Offset, p: V2) -> Option<V2> {
     let nearest = |a: V2, b: V2| {
         if (a - p).len() <= (b - p).len() {
@@ -849,22 +872,9 @@ fn intersect(o1: Offset, o2: Offset, p: V2) -> Option<V2> {
             let a = (q2 - q1).cross(t2) / den;
             Some(q1 + t1 * a)
         }
-        (Offset::Line { p: q, t }, Offset::Circle { c, rho })
-        | (Offset::Circle { c, rho }, Offset::Line { p: q, t }) => {
-            let w = q - c;
-            let b = w.dot(t);
-            let cc = w.dot(w) - rho * rho;
-            let mut disc = b * b - cc;
-            if disc < 0.0 {
-                if disc > -1e-14 * (w.dot(w) + rho * rho) {
-                    disc = 0.0;
-                } else {
-                    return None;
-                }
-            }
-            let s = disc.sqrt();
-            Some(nearest(q + t * (-b - s), q + t * (-b + s)))
-        }
+        // A line and a circle meet through `line_circle`, from the corner.
+        (Offset::Line { .. }, Offset::Circle { .. })
+        | (Offset::Circle { .. }, Offset::Line { .. }) => None,
         (Offset::Circle { c: c1, rho: r1 }, Offset::Circle { c: c2, rho: r2 }) => {
             let d_vec = c2 - c1;
             let d = d_vec.len();
@@ -888,6 +898,40 @@ fn intersect(o1: Offset, o2: Offset, p: V2) -> Option<V2> {
     }
 }
 
+/// The intersection nearest the corner `p` of a line's offset (the line
+/// along `t` through its perpendicular offset point at `p`) with the offset
+/// circle of the arc `arc` at `p` (its end when `at_end`), computed from the
+/// corner rather than from the circle's centre: with `s` the arc's radius,
+/// negative when the tool is inside the circle, and `n` its normal at `p`,
+/// the offset circle is `|X|² − r² + 2s(X·n − r) = 0` for `X` relative to
+/// `p`, and on the offset line `X = r·nₗ + u·t` this is
+/// `u² + 2s(t·n)u − s·r·|nₗ − n|² = 0`. No term is a difference of squared
+/// radii, so nearly tangent elements (a corner turning by little) keep their
+/// precision. The nearest point has the smaller `|u|`.
+fn line_circle(p: V2, t: V2, arc: &Element, at_end: bool, side: CompSide, r: f64) -> Option<V2> {
+    let a = arc.arc.as_ref()?;
+    let big_r = if at_end { a.r1 } else { a.r0 };
+    let s = if arc.tool_inside(side) { -big_r } else { big_r };
+    let n = normal(arc_tangent(a, p), side);
+    let nl = normal(t, side);
+    let d = nl - n;
+    let b = s * t.dot(n);
+    let c = s * r * d.dot(d);
+    let mut disc = b * b + c;
+    if disc < 0.0 {
+        // A line just touching the circle.
+        if disc > -1e-14 * (b * b + c.abs()) {
+            disc = 0.0;
+        } else {
+            return None;
+        }
+    }
+    let root = disc.sqrt();
+    let (u1, u2) = (-b - root, -b + root);
+    let u = if u1.abs() <= u2.abs() { u1 } else { u2 };
+    Some(p + nl * r + t * u)
+}
+
 /// Whether the compensated motion of `e` from `s` to `end` (nose centre)
 /// keeps the programmed direction.
 fn keeps_direction(e: &Element, s: V2, end: V2, side: CompSide, r: f64) -> bool {
@@ -899,12 +943,14 @@ fn keeps_direction(e: &Element, s: V2, end: V2, side: CompSide, r: f64) -> bool 
                 return a.full;
             }
             let comp = directed_angle(s - a.centre, end - a.centre, a.ccw);
-            let rho = match e.offset(side, r, true) {
+            // The excess is measured on the smaller offset radius of the
+            // arc's two ends.
+            let rho = |at_end| match e.offset(side, r, at_end) {
                 Offset::Circle { rho, .. } => rho,
                 Offset::Line { .. } => a.r1,
             };
-            let slack = SWEEP_SLACK_MM + r * 2.0 * SMOOTH_SIN;
-            comp > 0.0 && (comp - a.sweep) * rho <= slack
+            let rho = rho(false).min(rho(true));
+            comp > 0.0 && (comp - a.sweep) * rho <= sweep_slack_mm(r)
         }
     }
 }
@@ -1137,19 +1183,23 @@ impl RefContour {
             let big_r = r_word.unsigned_abs() as f64 / 1e6;
             let d = e - s;
             let chord = d.len();
-            let mut h2 = big_r * big_r - (chord / 2.0) * (chord / 2.0);
-            if h2 < 0.0 {
-                if chord / 2.0 - big_r <= R_CHORD_SLACK_MM {
-                    h2 = 0.0;
-                } else {
-                    return Err(RefRefusal::geometry(format!(
-                        "block {label}: end point farther than 2R from the start"
-                    )));
-                }
-            }
-            let sgn = if ccw == (r_word > 0) { 1.0 } else { -1.0 };
-            let centre = s + d * 0.5 + d.left().unit() * (sgn * h2.sqrt());
             let r_units = i128::from(r_word.unsigned_abs()) * 10;
+            // (2h)² = 4R² − chord², h the centre's distance from the chord,
+            // exact in (10⁻⁷ mm)²: a half circle has its centre exactly on
+            // the chord.
+            let (dx, dz) = (i128::from(end.x - start.x), i128::from(end.z - start.z));
+            let h2_4 = 4 * r_units * r_units - (dx * dx + dz * dz);
+            let h = if h2_4 >= 0 {
+                (h2_4 as f64).sqrt() / 2.0 / UNITS_PER_MM
+            } else if chord / 2.0 - big_r <= R_CHORD_SLACK_MM {
+                0.0
+            } else {
+                return Err(RefRefusal::geometry(format!(
+                    "block {label}: end point farther than 2R from the start"
+                )));
+            };
+            let sgn = if ccw == (r_word > 0) { 1.0 } else { -1.0 };
+            let centre = s + d * 0.5 + d.left().unit() * (sgn * h);
             ArcGeom {
                 centre,
                 ccw,
@@ -1247,9 +1297,12 @@ impl RefContour {
         }
         let reversal = cos < 0.0 && sin.abs() < SMOOTH_SIN;
         if !reversal && sin * side.sign() > 0.0 {
-            let o1 = e1.offset(side, r, true);
-            let o2 = e2.offset(side, r, false);
-            let x = intersect(o1, o2, p).ok_or_else(|| {
+            let x = match (&e1.arc, &e2.arc) {
+                (None, Some(_)) => line_circle(p, t1, e2, false, side, r),
+                (Some(_), None) => line_circle(p, t2, e1, true, side, r),
+                _ => intersect(e1.offset(side, r, true), e2.offset(side, r, false), p),
+            };
+            let x = x.ok_or_else(|| {
                 RefRefusal::geometry(format!(
                     "the nose does not fit the corner between block {} and block {}",
                     e1.label, e2.label

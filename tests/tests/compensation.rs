@@ -1,14 +1,17 @@
 //! Nose radius compensation across the crates: Krylenko's Fig. 12, 17 and 22
 //! from plain G41/G42 contours, the device against the f64 reference on
-//! random contours, and the geometry of the nose itself: it touches every
-//! programmed element and never enters the part.
+//! random contours and on concave arcs barely larger than the nose, and the
+//! geometry of the nose itself: it touches every programmed element and never
+//! enters the part.
 
 use core_nostd::arc::ArcDir;
 use core_nostd::comp::{MoveKind, Origin};
 use host_sim::compensate::{compensate, Settings};
-use host_sim::contour::{compare_contour, random_contours, ContourTally};
+use host_sim::contour::{compare_contour, random_contours, ContourCase, ContourTally};
 use host_sim::device::LocalDevice;
 use host_sim::link::Transport;
+use host_sim::reference_comp::{CompSettings, RefContour};
+use proptest::prelude::*;
 
 /// The compensated blocks of a program through the device, as printed.
 fn device_blocks(program: &str, rn: &str, tip: u8) -> Vec<String> {
@@ -495,4 +498,360 @@ fn programmed_piece(line: &str, from: [f64; 2]) -> Option<Piece> {
         [from[0] + b.i.map_or(0.0, mm), from[1] + b.k.map_or(0.0, mm)]
     };
     Some(Piece::Arc(from, to, centre, ccw))
+}
+
+/// A millimetre value with four decimals, as the compensated blocks print it.
+fn mm4(v: f64) -> String {
+    let s = format!("{v:.4}");
+    if s == "-0.0000" {
+        "0.0000".into()
+    } else {
+        s
+    }
+}
+
+/// Issue 15: an R0.255 groove bored with a 0.2 mm nose (offset radius
+/// 0.055 mm) was refused as too short because the rounding of its offset end
+/// point moved the end by more than a fixed angle. It is cut, on the offset
+/// circle, as the geometry and the f64 reference say.
+#[test]
+fn concave_arc_just_larger_than_the_nose_is_cut() {
+    let program = "G21 G18 G90 G40\nG00 X22 Z3\nN10 G41 G450 G01 Z0 F0.1\n\
+                   N20 G01 X12.524 Z0.000\nN90 G01 X12.524 Z-9.306\n\
+                   N100 G03 X12.464 Z-9.426 I-0.255 K0.000\nN110 G40 G00 X10.464\nM30\n";
+    // The geometry, X on the radius: the arc's centre and end point, and
+    // for each nose the TTT blocks of the end of the bore and of the arc.
+    let (cx, cz) = (6.262 - 0.255, -9.306);
+    let (ex, ez) = (12.464 / 2.0, -9.426);
+    for rn in ["0.2", "0.254", "0.254999"] {
+        let r: f64 = rn.parse().unwrap();
+        let rho = 0.255 - r;
+        // Tip code 2: the TTT is the nose centre plus (+r, −r) in (X, Z).
+        let ttt = |x: f64, z: f64| (x + r, z - r);
+        // The bore ends at its perpendicular offset point (a smooth corner).
+        let (bx, bz) = ttt(6.262 - r, -9.306);
+        // The arc ends on the offset circle at the end point's angle.
+        let k = rho / 0.255;
+        let (ax, az) = ttt(cx + k * (ex - cx), cz + k * (ez - cz));
+        let (tcx, tcz) = ttt(cx, cz);
+        let bore = format!("N90 G01 X{} Z{}", mm4(2.0 * bx), mm4(bz));
+        let arc = format!(
+            "N100 G03 X{} Z{} I{} K{}",
+            mm4(2.0 * ax),
+            mm4(az),
+            mm4(tcx - bx),
+            mm4(tcz - bz)
+        );
+        let settings = Settings {
+            rn: rn.into(),
+            tip: 2,
+            diam: true,
+        };
+        let out = compensate(program, &settings).unwrap_or_else(|e| panic!("RN {rn}: {e}"));
+        let lines: Vec<&str> = out.text.lines().collect();
+        assert!(lines.contains(&bore.as_str()), "{bore} in {}", out.text);
+        assert!(lines.contains(&arc.as_str()), "{arc} in {}", out.text);
+        // The f64 reference prints the same blocks.
+        let mut reference = RefContour::new(CompSettings {
+            rn_mm: r,
+            tip: 2,
+            diam: true,
+        });
+        let mut printed = Vec::new();
+        for line in program
+            .lines()
+            .filter(|l| l.starts_with('N') || l.starts_with("G00"))
+        {
+            printed.extend(reference.block_text(line).unwrap());
+        }
+        let tail = |b: &str| {
+            b.split_once(' ')
+                .map_or(String::new(), |(_, t)| t.to_string())
+        };
+        assert!(printed.contains(&tail(&bore)), "{bore} in {printed:?}");
+        assert!(printed.contains(&tail(&arc)), "{arc} in {printed:?}");
+    }
+    // The published figures for the 0.2 mm nose (LinuxCNC 2.9 cuts the same).
+    let out = compensate(
+        program,
+        &Settings {
+            rn: "0.2".into(),
+            tip: 2,
+            diam: true,
+        },
+    )
+    .unwrap();
+    assert!(
+        out.text.contains("N90 G01 X12.5240 Z-9.5060\n"),
+        "{}",
+        out.text
+    );
+    assert!(
+        out.text
+            .contains("N100 G03 X12.5111 Z-9.5319 I-0.0550 K0.0000\n"),
+        "{}",
+        out.text
+    );
+    // A nose as large as the arc cannot cut it.
+    let e = compensate(
+        program,
+        &Settings {
+            rn: "0.255".into(),
+            tip: 2,
+            diam: true,
+        },
+    )
+    .unwrap_err();
+    assert!(e.reason.contains("N100: concave arc radius"), "{e}");
+}
+
+/// A unit direction with rational components, as integer `[X, Z]` multiples
+/// of `c`: one of the four axes or one of the eight images of `(a, b)` under
+/// the symmetries of the square, `(a, b, c) = (m² − n², 2mn, m² + n²)`.
+fn rational_direction(m: i64, n: i64, which: usize) -> ([i64; 2], i64) {
+    let (a, b, c) = (m * m - n * n, 2 * m * n, m * m + n * n);
+    let all = [
+        [c, 0],
+        [0, c],
+        [-c, 0],
+        [0, -c],
+        [a, b],
+        [b, a],
+        [-a, b],
+        [-b, a],
+        [a, -b],
+        [b, -a],
+        [-a, -b],
+        [-b, -a],
+    ];
+    (all[which % all.len()], c)
+}
+
+/// Whole micrometres as a millimetre word.
+fn um(v: i64) -> String {
+    format!("{:.3}", v as f64 / 1000.0)
+}
+
+/// A concave arc of radius `R = r + d` (µm), the tool inside it (`G41` with
+/// `G03`, `G42` with `G02`), from and to points in rational directions from
+/// its centre, so that both lie exactly on the circle: a tangent lead-in,
+/// the arc (`I`/`K` or `R` form), an optional tangent lead-out, `G40`.
+#[allow(clippy::too_many_arguments)]
+fn concave_arc_case(
+    (m, n): (i64, i64),
+    from: usize,
+    to: usize,
+    d: i64,
+    r_min: i64,
+    left: bool,
+    tip: u8,
+    r_form: bool,
+    lead_out: bool,
+) -> ContourCase {
+    let ((sx, sz), c) = {
+        let (v, c) = rational_direction(m, n, from);
+        ((v[0], v[1]), c)
+    };
+    let (e, _) = rational_direction(m, n, to);
+    // R = k·c µm, at least r_min + d, and the nose radius r = R − d.
+    let k = (r_min + d + c - 1) / c;
+    let big_r = k * c;
+    let r = big_r - d;
+    let centre = [20_000i64, -10_000i64];
+    let s = [centre[0] + k * sx, centre[1] + k * sz];
+    let e = [centre[0] + k * e[0], centre[1] + k * e[1]];
+    // The direction of travel of a G03 (G02) arc is its radius turned left
+    // (right) in the (Z right, X up) plane: [X, Z] = [vz, −vx] for G03.
+    let ccw = left;
+    let tangent = |p: [i64; 2]| {
+        let v = [p[0] - centre[0], p[1] - centre[1]];
+        if ccw {
+            [v[1], -v[0]]
+        } else {
+            [-v[1], v[0]]
+        }
+    };
+    let (ts, te) = (tangent(s), tangent(e));
+    let lead_in = [s[0] - ts[0], s[1] - ts[1]];
+    let xz = |p: [i64; 2]| format!("X{} Z{}", um(2 * p[0]), um(p[1]));
+    let g = if ccw { "G03" } else { "G02" };
+    let shape = if r_form {
+        // The sweep decides the sign of R: positive up to 180°.
+        let angle = |p: [i64; 2]| ((p[0] - centre[0]) as f64).atan2((p[1] - centre[1]) as f64);
+        let sweep = (if ccw {
+            angle(e) - angle(s)
+        } else {
+            angle(s) - angle(e)
+        })
+        .rem_euclid(std::f64::consts::TAU);
+        let sign = if sweep <= std::f64::consts::PI + 1e-9 {
+            ""
+        } else {
+            "-"
+        };
+        format!("R{sign}{}", um(big_r))
+    } else {
+        format!("I{} K{}", um(centre[0] - s[0]), um(centre[1] - s[1]))
+    };
+    let mut lines = vec![
+        format!("G00 {}", xz([centre[0] + 5_000, centre[1] + 5_000])),
+        format!(
+            "N1 {} G01 {}",
+            if left { "G41" } else { "G42" },
+            xz(lead_in)
+        ),
+        format!("N2 G01 {}", xz(s)),
+        format!("N3 {g} {} {shape}", xz(e)),
+    ];
+    if lead_out {
+        lines.push(format!("N4 G01 {}", xz([e[0] + te[0], e[1] + te[1]])));
+    }
+    lines.push(format!("N5 G40 G00 {}", xz(centre)));
+    ContourCase {
+        rn: um(r),
+        tip,
+        lines,
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(10_000))]
+
+    /// Concave arcs from 0.001 to 0.5 mm larger than the nose, at end angles
+    /// all round the circle: the device cuts every one the f64 reference
+    /// cuts, with the same blocks (end points and centres to 0.0001 mm).
+    #[test]
+    fn concave_arcs_barely_larger_than_the_nose_are_cut(
+        m in 2i64..=12,
+        n_raw in 0i64..11,
+        from in 0usize..12,
+        to_offset in 1usize..12,
+        d in 1i64..=500,
+        r_min in 10i64..=2_000,
+        left in any::<bool>(),
+        tip in 0u8..=9,
+        r_form in any::<bool>(),
+        lead_out in any::<bool>(),
+    ) {
+        let n = 1 + n_raw % (m - 1);
+        let case = concave_arc_case(
+            (m, n), from, (from + to_offset) % 12, d, r_min, left, tip, r_form, lead_out,
+        );
+        let mut tally = ContourTally::default();
+        compare_contour(&mut LocalDevice::new(), &case, &mut tally).unwrap();
+        prop_assert!(tally.mismatches.is_empty(), "{:?}: {:?}", case, tally.mismatches);
+        prop_assert_eq!(tally.refused_alike, 0, "{:?}", case);
+        // Every block of the program was answered and compared.
+        prop_assert_eq!(tally.blocks, case.lines.len());
+        prop_assert!(tally.compared >= case.lines.len(), "{:?}: {:?}", case, tally);
+    }
+}
+
+/// Lines that meet arcs at inside corners turning by little (from below the
+/// smooth limit of 2⁻²² rad up to 10⁻² rad), arcs of 0.25 mm to 1000 mm,
+/// convex and concave: the offset elements are nearly tangent, and their
+/// intersection must still be precise enough that the arc check (a few
+/// 10⁻⁷ mm along the arc) passes. The device cuts them all, as the f64
+/// reference does, with the same blocks.
+#[test]
+fn near_tangent_inside_corners_between_lines_and_arcs() {
+    let mut tally = ContourTally::default();
+    let add = |a: [i64; 2], b: [i64; 2]| [a[0] + b[0], a[1] + b[1]];
+    let sub = |a: [i64; 2], b: [i64; 2]| [a[0] - b[0], a[1] - b[1]];
+    // Coordinates in nm (10⁻⁶ mm, the finest a word can write).
+    let nm = |v: i64| format!("{:.6}", v as f64 / 1e6);
+    let xz = |p: [i64; 2]| format!("X{} Z{}", nm(2 * p[0]), nm(p[1]));
+    // The turn of `a` to `b` in the (Z right, X up) plane: positive left.
+    let cross = |a: [i64; 2], b: [i64; 2]| a[1] * b[0] - a[0] * b[1];
+    for rn in [200_000i64, 400_000, 800_000] {
+        for big_r in [
+            250_000i64,
+            500_000,
+            1_000_000,
+            10_000_000,
+            100_000_000,
+            1_000_000_000,
+        ] {
+            for ccw in [true, false] {
+                // From the top of the circle (its X is 50 mm) to 53° on.
+                let c = [50_000_000 - big_r, -100_000_000];
+                let s = add(c, [big_r, 0]);
+                let e = add(c, [3 * big_r / 5, if ccw { -4 } else { 4 } * big_r / 5]);
+                // The direction of travel, as long as the radius.
+                let tangent = |p: [i64; 2]| {
+                    let v = sub(p, c);
+                    if ccw {
+                        [v[1], -v[0]]
+                    } else {
+                        [-v[1], v[0]]
+                    }
+                };
+                let (ts, te) = (tangent(s), tangent(e));
+                let along = |t: [i64; 2], len: i64| [t[0] * len / big_r, t[1] * len / big_r];
+                let arc = format!(
+                    "{} {} I{} K{}",
+                    if ccw { "G03" } else { "G02" },
+                    xz(e),
+                    nm(c[0] - s[0]),
+                    nm(c[1] - s[1])
+                );
+                for dev in [-20_000i64, -200, -20, -5, -1, 1, 5, 20, 200, 20_000] {
+                    for len in [2_000_000i64, 10_000_000, 40_000_000] {
+                        // Into the arc: a line from `dev` nm off the tangent;
+                        // out of it: a line to `dev` nm off the tangent.
+                        let lead_in = add(sub(s, along(ts, len)), [dev, 0]);
+                        let lead_out = add(add(e, along(te, len)), [dev, 0]);
+                        for out in [false, true] {
+                            let turn = if out {
+                                cross(te, sub(lead_out, e))
+                            } else {
+                                cross(sub(s, lead_in), ts)
+                            };
+                            // The tool on the inside of the corner.
+                            let left = turn > 0;
+                            if left == ccw && big_r <= rn {
+                                continue;
+                            }
+                            let first = if out {
+                                sub(s, along(ts, 2_000_000))
+                            } else {
+                                lead_in
+                            };
+                            let mut lines = vec![
+                                format!("G00 {}", xz(add(first, [5_000_000, 5_000_000]))),
+                                format!(
+                                    "N1 {} G01 {}",
+                                    if left { "G41" } else { "G42" },
+                                    xz(first)
+                                ),
+                                format!("N2 G01 {}", xz(s)),
+                                format!("N3 {arc}"),
+                            ];
+                            if out {
+                                lines.push(format!("N4 G01 {}", xz(lead_out)));
+                            }
+                            lines.push(format!("N5 G40 G00 {}", xz(add(c, [0, 5_000_000]))));
+                            for tip in [0, 3] {
+                                let case = ContourCase {
+                                    rn: nm(rn),
+                                    tip,
+                                    lines: lines.clone(),
+                                };
+                                compare_contour(&mut LocalDevice::new(), &case, &mut tally)
+                                    .unwrap();
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        tally.mismatches.is_empty(),
+        "{} mismatches: {:#?}",
+        tally.mismatches.len(),
+        &tally.mismatches[..tally.mismatches.len().min(5)]
+    );
+    assert_eq!(tally.refused_alike, 0, "{tally:?}");
+    assert!(tally.programs > 3_000, "{tally:?}");
 }
