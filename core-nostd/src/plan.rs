@@ -724,6 +724,7 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
         },
         start,
         end: decel_start.saturating_add(t_decel),
+        speeds2: [e2, c2, x2],
     }
 }
 

@@ -125,6 +125,8 @@ pub struct TimedBlock {
     /// When the block starts and ends in its run, Q64 ticks.
     pub(crate) start: u128,
     pub(crate) end: u128,
+    /// Entry, cruise and exit speeds squared, Q64 (Å/tick)².
+    pub(crate) speeds2: [u128; 3],
 }
 
 impl TimedBlock {
@@ -136,6 +138,17 @@ impl TimedBlock {
     /// When the block ends, in whole ticks of its run (rounded half up).
     pub const fn end_tick(&self) -> u64 {
         round_ticks(self.end)
+    }
+
+    /// When the block starts and ends in its run, ticks · 2⁶⁴.
+    pub const fn span_q64(&self) -> (u128, u128) {
+        (self.start, self.end)
+    }
+
+    /// The squared entry, cruise (peak) and exit speeds of its trapezoid,
+    /// (Å/tick)² · 2⁶⁴.
+    pub const fn speeds2(&self) -> [u128; 3] {
+        self.speeds2
     }
 
     /// The events with their ticks, one at a time.
