@@ -298,6 +298,9 @@ pub struct Block {
     lead_len: u128,
     lead_price: u64,
     lead_dn: u64,
+    /// The rounded segment does not move the lead axis the way its impulses
+    /// go (a chord of a fraction of a grid unit): every event at the end.
+    backwards: bool,
     /// `v_max²`, Q64 (Å/tick)², and what limits it.
     vmax2: u128,
     source: Source,
@@ -393,6 +396,10 @@ impl Block {
         let sigma: i128 = if n < 0 { -1 } else { 1 };
         let boundary = ((2 * i128::from(a0) + sigma) * i128::from(price)) << 31;
         let first = ((sigma * (boundary - from[lead])).max(0) as u128) << 32;
+        // A chord of a fraction of a grid unit that does not move its lead
+        // axis the way its impulses go: every event at its end.
+        let backwards = n != 0 && sigma * d[lead] <= 0;
+        let lead_len = d[lead].unsigned_abs() << 32;
         Some(Block {
             events,
             d,
@@ -400,7 +407,8 @@ impl Block {
             ln,
             scale,
             lead_first: first,
-            lead_len: d[lead].unsigned_abs() << 32,
+            lead_len,
+            backwards,
             lead_price: price as u64,
             lead_dn: dn[lead].unsigned_abs().max(1),
             vmax2,
@@ -692,8 +700,12 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
                 .min(u128::from(n)) as u32
         }
     };
-    let accel_events = upto(l_accel, true);
-    let cruise_end = upto(l_decel, false).max(accel_events);
+    let (accel_events, cruise_end) = if b.backwards {
+        (0, 0)
+    } else {
+        let a = upto(l_accel, true);
+        (a, upto(l_decel, false).max(a))
+    };
     // 2s/a for a lead-axis distance, Q64 ticks².
     let two_s_over_a = |dl: u128| shl_div(mul_div(dl, ln, dn_lead), 97, b.accel);
     let per_event = two_s_over_a(h);
@@ -717,9 +729,13 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
             per_event: cruise_time(h),
         },
         decel: Ramp {
-            first: mul_shr(ux, ux, 64)
-                .saturating_add(two_s_over_a(len.saturating_sub(at(cruise_end)))),
-            per_event,
+            // A backwards block's events are all at its end: Y = u_x².
+            first: mul_shr(ux, ux, 64).saturating_add(if b.backwards {
+                0
+            } else {
+                two_s_over_a(len.saturating_sub(at(cruise_end)))
+            }),
+            per_event: if b.backwards { 0 } else { per_event },
             origin: signed(decel_start.saturating_add(uc)).saturating_sub((HALF - TIE) as i128),
         },
         start,
@@ -839,6 +855,28 @@ mod tests {
         let (ev, _) = run(&[block(["0", "0"], ["0", "-50"], None)]);
         let direct = crate::step::DIRECT.load(Ordering::Relaxed) - before;
         std::println!("{} events, {direct} square roots", ev.len());
+        let before = crate::step::DIRECT.load(Ordering::Relaxed);
+        let s0 = crate::step::STEPS.load(Ordering::Relaxed);
+        let (ev, _) = run(&[block(["0", "0"], ["0", "-5"], None)]);
+        let tri = crate::step::DIRECT.load(Ordering::Relaxed) - before;
+        let steps = crate::step::STEPS.load(Ordering::Relaxed) - s0;
+        std::println!(
+            "triangle: {} events, {tri} square roots, {steps} steps",
+            ev.len()
+        );
+        // The ramp of a long rapid: 8 mm accelerating from rest.
+        let rates = Rates::default();
+        let mut p = Planner::<WINDOW>::new(WINDOW);
+        for (a, b) in [("0", "-8"), ("-8", "-408"), ("-408", "-416")] {
+            p.push(block(["0", a], ["0", b], None), &rates).unwrap();
+        }
+        let t = p.start(&rates).unwrap();
+        let d0 = crate::step::DIRECT.load(Ordering::Relaxed);
+        let s0 = crate::step::STEPS.load(Ordering::Relaxed);
+        let n = t.events().count();
+        let d1 = crate::step::DIRECT.load(Ordering::Relaxed) - d0;
+        let s1 = crate::step::STEPS.load(Ordering::Relaxed) - s0;
+        std::println!("ramp from rest: {n} events, {d1} square roots, {s1} steps; speeds {:?} accel events {} cruise end {}", t.speeds2(), t.accel_events, t.cruise_end);
         assert!(
             direct < 200,
             "{direct} square roots for {} events",

@@ -153,62 +153,61 @@ impl TimedBlock {
 
     /// The events with their ticks, one at a time.
     pub fn events(&self) -> TimedEvents {
+        let steps = self.events.events();
         TimedEvents {
-            steps: self.events.events(),
-            index: 0,
+            total: steps.size_hint().0 as u32,
+            steps,
+            t: 0,
+            fast: 0,
             block: *self,
-            state: State::Start,
+            phase: Phase::Start,
+            a: 0,
+            r: 0,
+            rr: 0,
             tick: 0,
+            predict: Predict::START,
             end: self.end_tick(),
         }
     }
 }
 
-/// The generator's position inside the current phase.
-#[derive(Clone, Copy, Debug)]
-enum State {
+/// The phase the generator is in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
     /// No event yet in this phase: the next one is placed directly.
     Start,
-    /// Accelerating: `x` of the last event, the tick `k` found for it, its
-    /// `z_k` (positive) and `⌊z_k²⌋`, and the last interval in ticks.
-    Accel {
-        x: u128,
-        z: u128,
-        zz: u128,
-        gap: u64,
-    },
-    /// Cruising: the next event's time plus half a tick.
-    Cruise { t: u128 },
-    /// Decelerating: `y` of the last event, `w_k` for its tick, `⌊w_k²⌋`
-    /// (meaningful while `w ≥ 0`), the last interval.
-    Decel {
-        y: u128,
-        w: i128,
-        ww: u128,
-        gap: u64,
-    },
+    /// Accelerating: `a` is `x` of the last event, `r` `z_k` (positive) of
+    /// its tick, `rr` `⌊z_k²⌋`.
+    Accel,
+    /// Cruising: the next event's time is in `TimedEvents::t`.
+    Cruise,
+    /// Decelerating: `a` is `y` of the last event, `r` `w_k` of its tick
+    /// (an `i128`'s bits), `rr` `⌊w_k²⌋` (meaningful while `w ≥ 0`).
+    Decel,
 }
 
 /// The timed step events of a [`TimedBlock`].
 #[derive(Clone, Debug)]
 pub struct TimedEvents {
     steps: StepEvents,
-    /// Events issued so far.
-    index: u32,
+    /// The cruise: the next event's time plus half a tick (and [`TIE`]),
+    /// and how many events take it by one addition each.
+    t: u128,
+    fast: u32,
+    /// Events of the block.
+    total: u32,
     block: TimedBlock,
-    state: State,
-    /// The tick of the last event.
+    phase: Phase,
+    /// The ramp's state (see [`Phase`]).
+    a: u128,
+    r: u128,
+    rr: u128,
+    /// The tick of the last event outside the fast cruise.
     tick: u64,
+    /// Where the next ramp event is expected.
+    predict: Predict,
     /// The block's end, whole ticks.
     end: u64,
-}
-
-/// Which phase event `i` (1-based) belongs to.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Phase {
-    Accel,
-    Cruise,
-    Decel,
 }
 
 impl Iterator for TimedEvents {
@@ -217,42 +216,14 @@ impl Iterator for TimedEvents {
     #[inline]
     fn next(&mut self) -> Option<(StepEvent, u64)> {
         let event = self.steps.next()?;
-        self.index += 1;
-        let i = self.index;
-        let b = &self.block;
-        let phase = if i <= b.accel_events {
-            Phase::Accel
-        } else if i <= b.cruise_end {
-            Phase::Cruise
-        } else {
-            Phase::Decel
-        };
-        // A new phase starts from its own first event.
-        let first = !matches!(
-            (phase, self.state),
-            (Phase::Accel, State::Accel { .. })
-                | (Phase::Cruise, State::Cruise { .. })
-                | (Phase::Decel, State::Decel { .. })
-        );
-        let tick = match phase {
-            Phase::Cruise => {
-                let t = if first {
-                    b.cruise.first
-                } else if let State::Cruise { t } = self.state {
-                    t.saturating_add(b.cruise.per_event)
-                } else {
-                    b.cruise.first
-                };
-                self.state = State::Cruise { t };
-                (t >> 64) as u64
-            }
-            Phase::Accel => self.accel(first),
-            Phase::Decel => self.decel(first),
-        };
-        // A chord's last boundary may lie up to half a grid unit beyond its
-        // rounded end: that event happens at the end.
-        self.tick = tick.min(self.end);
-        Some((event, self.tick))
+        if self.fast > 0 {
+            // The cruise: one addition.
+            self.fast -= 1;
+            let tick = (self.t >> 64) as u64;
+            self.t = self.t.wrapping_add(self.block.cruise.per_event);
+            return Some((event, tick));
+        }
+        Some((event, self.slow()))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
@@ -268,105 +239,274 @@ fn z_of(k: u64, origin: i128) -> Option<u128> {
     u128::try_from(z).ok().filter(|&z| z > 0)
 }
 
-impl TimedEvents {
-    /// The tick of the next accelerating event: the smallest `k` with
-    /// `x < z_k²`.
-    fn accel(&mut self, first: bool) -> u64 {
-        let ramp = self.block.accel;
-        let (x, z, zz, gap) = match self.state {
-            State::Accel { x, z, zz, gap } if !first => {
-                (x.saturating_add(ramp.per_event), z, zz, gap)
-            }
-            _ => (ramp.first, 0, 0, 0),
-        };
-        let found = if first {
-            None
-        } else {
-            accel_walk(x, self.tick, z, zz, gap)
-        };
-        let (k, z, zz) = match found {
-            Some(v) => v,
-            None => accel_direct(x, ramp.origin),
-        };
-        let gap = k.saturating_sub(self.tick);
-        self.state = State::Accel { x, z, zz, gap };
-        k
+/// `⌊num/den⌋` to about 2⁻³⁰ relative, in whole units (at most 2⁴⁰): the
+/// size of a correction, never a result.
+fn approx_div(num: u128, den: u128) -> u64 {
+    // 32 significant bits of the divisor; a 64-by-64-bit division.
+    let s = (128 - den.leading_zeros()).saturating_sub(32);
+    let d = (den >> s) as u64;
+    let n = num >> s;
+    if d == 0 || n >> 64 != 0 {
+        return 1 << 40;
     }
+    ((n as u64) / d).min(1 << 40)
+}
 
-    /// The tick of the next decelerating event: the smallest `k` with
-    /// `w_k < 0` or `y > w_k²`.
-    fn decel(&mut self, first: bool) -> u64 {
-        let ramp = self.block.decel;
-        let (y, w, ww, gap) = match self.state {
-            State::Decel { y, w, ww, gap } if !first => {
-                (y.saturating_sub(ramp.per_event), w, ww, gap)
+/// Corrections after a prediction before the exact root is taken.
+const MAX_STEPS: u32 = 24;
+
+impl TimedEvents {
+    /// The next event outside the fast cruise: a phase's first event, a
+    /// ramp's, or the block's last (which may need to wait for its end).
+    fn slow(&mut self) -> u64 {
+        // The event's number in its block, 1-based.
+        let i = self.total - self.steps.size_hint().0 as u32;
+        let b = &self.block;
+        let tick = if i <= b.accel_events {
+            let (x, found) = if self.phase == Phase::Accel {
+                let x = self.a.wrapping_add(b.accel.per_event);
+                (
+                    x,
+                    accel_walk(x, self.tick, self.r, self.rr, self.predict.jump()),
+                )
+            } else {
+                (b.accel.first, None)
+            };
+            let first = found.is_none();
+            let (k, z, zz) = match found {
+                Some(v) => v,
+                None => accel_direct(x, b.accel.origin),
+            };
+            (self.phase, self.a, self.r, self.rr) = (Phase::Accel, x, z, zz);
+            // φ = z − √x ≈ (z² − x)/2z: how far the event lies below k.
+            self.predict
+                .next(first, k.wrapping_sub(self.tick), phi(zz.wrapping_sub(x), z));
+            k
+        } else if i <= b.cruise_end {
+            if self.phase != Phase::Cruise {
+                self.phase = Phase::Cruise;
+                self.t = b.cruise.first;
+                // The rest of the cruise by additions, but for the block's
+                // last event, which may need the clamp below.
+                self.fast =
+                    (b.cruise_end - i).saturating_sub(u32::from(b.cruise_end == self.total));
             }
-            _ => (ramp.first, 0, 0, 0),
-        };
-        let found = if first {
-            None
+            let tick = (self.t >> 64) as u64;
+            self.t = self.t.wrapping_add(b.cruise.per_event);
+            tick
         } else {
-            decel_walk(y, self.tick, w, ww, gap)
+            let (y, found) = if self.phase == Phase::Decel {
+                let y = self.a.saturating_sub(b.decel.per_event);
+                (
+                    y,
+                    decel_walk(y, self.tick, self.r as i128, self.rr, self.predict.jump()),
+                )
+            } else {
+                (b.decel.first, None)
+            };
+            let first = found.is_none();
+            let (k, w, ww) = match found {
+                Some(v) => v,
+                None => decel_direct(y, b.decel.origin),
+            };
+            (self.phase, self.a, self.r, self.rr) = (Phase::Decel, y, w as u128, ww);
+            // φ = √y − w ≈ (y − w²)/2w; past the virtual stop, unknown.
+            let f = if w > 0 {
+                phi(y.wrapping_sub(ww), w as u128)
+            } else {
+                ONE_Q16
+            };
+            self.predict
+                .next(first || w <= 0, k.wrapping_sub(self.tick), f);
+            k
         };
-        let (k, w, ww) = match found {
-            Some(v) => v,
-            None => decel_direct(y, ramp.origin),
-        };
-        let gap = k.saturating_sub(self.tick);
-        self.state = State::Decel { y, w, ww, gap };
-        k
+        // A chord's last boundary may lie up to half a grid unit beyond its
+        // rounded end: that event happens at the end.
+        let tick = tick.min(self.end);
+        self.tick = tick;
+        tick
     }
 }
 
-/// From the last event's tick `k` (with `z`, `zz`), the next one's by the
-/// last interval and single-tick corrections; `None` when that needs more
-/// than [`MAX_WALK`] corrections.
-#[inline]
-fn accel_walk(x: u128, k: u64, z: u128, zz: u128, gap: u64) -> Option<(u64, u128, u128)> {
-    if x < zz {
-        return Some((k, z, zz));
-    }
-    // Jump by the last interval: z_{k+j}² = z_k² + 2j·z_k + j².
-    let j = gap.clamp(1, 1 << 30);
-    let j128 = u128::from(j);
-    let mut zz = zz
-        .checked_add((2 * j128).checked_mul(z)?)?
-        .checked_add((j128 * j128) << 64)?;
-    let mut z = z.checked_add(j128 << 64)?;
-    let mut k = k + j;
-    let mut walk = 0;
-    if x < zz {
-        // Back while the previous tick still satisfies x < z².
-        // z_{k−1}² = z_k² − 2z_k + 1.
-        while k > 1 && z > ONE {
-            let prev = zz.checked_sub(2 * z - ONE)?;
-            if x >= prev {
-                break;
-            }
-            walk += 1;
-            if walk > MAX_WALK {
-                return None;
-            }
-            (k, z, zz) = (k - 1, z - ONE, prev);
-        }
-        // Never before the last event's tick (times do not decrease).
-        Some((k, z, zz))
+/// One tick in Q16.
+const ONE_Q16: i64 = 1 << 16;
+
+/// `z·m`, exact while the product fits (`z < 2⁹⁶`): four 32-bit multiplies
+/// (a general 128-bit product costs a library call on a Cortex-M4).
+#[inline(always)]
+fn mul_small(z: u128, m: u32) -> u128 {
+    let m = u64::from(m);
+    let w0 = u64::from(z as u32) * m;
+    let w1 = u64::from((z >> 32) as u32) * m + (w0 >> 32);
+    let w2 = u64::from((z >> 64) as u32) * m + (w1 >> 32);
+    let w3 = u64::from((z >> 96) as u32) * m + (w2 >> 32);
+    u128::from(w0 as u32)
+        | u128::from(w1 as u32) << 32
+        | u128::from(w2 as u32) << 64
+        | u128::from(w3 as u32) << 96
+}
+
+/// `(z ± d)² = z² ± 2d·z + d²` for the squares kept in Q64 (`d < 2³⁰`).
+#[inline(always)]
+fn square_step(zz: u128, z: u128, d: u64, up: bool) -> u128 {
+    let (two_dz, dd) = (mul_small(z, 2 * d as u32), u128::from(d * d) << 64);
+    if up {
+        zz.wrapping_add(two_dz).wrapping_add(dd)
     } else {
-        while x >= zz {
-            walk += 1;
-            if walk > MAX_WALK {
-                return None;
-            }
-            zz = zz.checked_add((2 * z).checked_add(ONE)?)?;
-            z = z.checked_add(ONE)?;
-            k += 1;
+        zz.wrapping_sub(two_dz).wrapping_add(dd)
+    }
+}
+
+/// `num/2den` in Q16, clamped to [0, 1], from the leading bits (about 2⁻¹⁴
+/// relative): for the prediction only. `den` is a Q64 tick count below
+/// 2⁹⁴, `num < 2·den`.
+#[inline]
+fn phi(num: u128, den: u128) -> i64 {
+    // Q32 views (shifts by whole words), then 15 significant bits of the
+    // divisor and one 32-bit division.
+    let (n, d) = ((num >> 32) as u64, (den >> 32) as u64);
+    let bits = 64 - d.leading_zeros();
+    if bits < 15 {
+        return ONE_Q16;
+    }
+    let sh = bits - 15;
+    let (n, d) = (n >> sh, (d >> sh) as u32);
+    if d == 0 || n >> 16 != 0 {
+        return ONE_Q16;
+    }
+    // (n / d) / 2 in Q16: n·2¹⁵ / d.
+    i64::from(((n as u32) << 15) / d).min(ONE_Q16)
+}
+
+/// The next ramp event's tick, predicted from the last ones: with `s` the
+/// exact event time less half a tick, each event's tick is `⌊s⌋ + 1` and
+/// `φ = tick − s` (in (0, 1]); the next `s` is extrapolated from the last
+/// two intervals of `s` (second order: a ramp's intervals change smoothly).
+#[derive(Clone, Copy, Debug)]
+struct Predict {
+    /// The last two intervals of `s`, Q16 ticks.
+    d1: i64,
+    d2: i64,
+    /// `φ` of the last event, Q16.
+    phi: i64,
+    /// Intervals known: 0, 1 or 2.
+    known: u8,
+}
+
+impl Predict {
+    const START: Predict = Predict {
+        d1: 0,
+        d2: 0,
+        phi: 0,
+        known: 0,
+    };
+
+    /// After an event `dk` ticks after the one before (`fresh`: a phase's
+    /// first, or one whose `φ` is unknown) at `φ`.
+    #[inline]
+    fn next(&mut self, fresh: bool, dk: u64, phi: i64) {
+        if fresh {
+            *self = Predict {
+                phi,
+                ..Predict::START
+            };
+            return;
         }
-        Some((k, z, zz))
+        let d = ((dk.min(1 << 40) as i64) << 16) - phi + self.phi;
+        *self = Predict {
+            d1: d,
+            d2: self.d1,
+            phi,
+            known: (self.known + 1).min(2),
+        };
+    }
+
+    /// Ticks from the last event's to the next one's, as predicted.
+    #[inline]
+    fn jump(&self) -> u64 {
+        let step = match self.known {
+            0 => return 0,
+            1 => self.d1,
+            _ => 2 * self.d1 - self.d2,
+        };
+        // The next s is s + step = tick − φ + step: its tick ⌊…⌋ + 1.
+        let off = step - self.phi;
+        if off < 0 {
+            0
+        } else {
+            ((off >> 16) as u64 + 1).min(1 << 30)
+        }
     }
 }
 
 #[cfg(test)]
 pub(crate) static DIRECT: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+#[cfg(test)]
+pub(crate) static STEPS: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
+/// The tick of the next accelerating event from the last one's (`k`, `z`,
+/// `zz`): the smallest `k' ≥ k` with `x < z_{k'}²`. From the predicted
+/// interval, corrected by Newton steps on `z² = x` (`z² − x` over `2z`
+/// ticks) and single ticks; `None` after [`MAX_STEPS`] corrections.
+#[inline]
+fn accel_walk(x: u128, k: u64, z: u128, zz: u128, jump: u64) -> Option<(u64, u128, u128)> {
+    if x < zz {
+        return Some((k, z, zz));
+    }
+    // Virtual times stay below 2³⁰ ticks (docs: limits) and jumps below
+    // 2³⁰: every product below fits, so plain wrapping arithmetic is exact.
+    if z >> 94 != 0 {
+        return None;
+    }
+    let floor = k;
+    // z_{k+j}² = z_k² + 2j·z_k + j².
+    let mut zz = square_step(zz, z, jump, true);
+    let mut z = z.wrapping_add(u128::from(jump) << 64);
+    let mut k = k.wrapping_add(jump);
+    let mut steps = 0;
+    loop {
+        steps += 1;
+        #[cfg(test)]
+        STEPS.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+        if steps > MAX_STEPS || z >> 94 != 0 {
+            return None;
+        }
+        if x < zz {
+            // Feasible; the answer unless k − 1 is too.
+            if k == floor + 1 || z <= ONE {
+                return Some((k, z, zz));
+            }
+            // z_{k−1}² = z_k² − 2z_k + 1.
+            let prev = zz.wrapping_sub(2 * z - ONE);
+            if x >= prev {
+                return Some((k, z, zz));
+            }
+            // Back by (z² − x)/2z ≤ z − √x (never past the answer): one
+            // tick at a time first, the estimate when that is not enough.
+            let d = if steps < 3 {
+                1
+            } else {
+                approx_div(zz - x, 2 * z)
+                    .max(1)
+                    .min(k - floor - 1)
+                    .min(1 << 30)
+            };
+            zz = square_step(zz, z, d, false);
+            z = z.wrapping_sub(u128::from(d) << 64);
+            k -= d;
+        } else {
+            // Forward by (x − z²)/2z rounded up, after a single tick.
+            let d = if steps < 3 {
+                1
+            } else {
+                approx_div(x - zz, 2 * z).saturating_add(1).min(1 << 30)
+            };
+            zz = square_step(zz, z, d, true);
+            z = z.wrapping_add(u128::from(d) << 64);
+            k = k.wrapping_add(d);
+        }
+    }
+}
 
 /// The smallest `k` with `x < z_k²`, `z_k = k + origin`, by one square root
 /// and exact checks.
@@ -401,59 +541,80 @@ fn accel_direct(x: u128, origin: i128) -> (u64, u128, u128) {
     (k, z, mul_shr(z, z, 64))
 }
 
-/// The deceleration's counterpart of [`accel_walk`]: `w_{k+1} = w_k − 1`,
-/// `w_{k+1}² = w_k² − 2w_k + 1`; satisfied when `w < 0` or `y > w²`.
+/// The deceleration's counterpart of [`accel_walk`]: the smallest `k' ≥ k`
+/// where `w < 0` or `y > w²`, `w_{k+1} = w_k − 1`.
 #[inline]
-fn decel_walk(y: u128, k: u64, w: i128, ww: u128, gap: u64) -> Option<(u64, i128, u128)> {
+fn decel_walk(y: u128, k: u64, w: i128, ww: u128, jump: u64) -> Option<(u64, i128, u128)> {
     let holds = |w: i128, ww: u128| w < 0 || y > ww;
     if holds(w, ww) {
         return Some((k, w, ww));
     }
-    // w ≥ 0 here. Jump by the last interval while w stays non-negative.
-    let j = gap.clamp(1, 1 << 30);
-    let j128 = i128::from(j);
-    let wj = w.checked_sub(j128 << 64)?;
-    if wj < 0 {
+    // As in `accel_walk`: w below 2⁹⁴ (w ≥ 0 here), exact wrapping steps.
+    if w >> 94 != 0 {
         return None;
     }
-    // (w − j)² = w² − 2j·w + j², all terms non-negative.
-    let two_jw = (2 * j as u128).checked_mul(w as u128)?;
-    let mut ww = ww
-        .checked_add((u128::from(j) * u128::from(j)) << 64)?
-        .checked_sub(two_jw)?;
-    let mut w = wj;
-    let mut k = k + j;
-    let mut walk = 0;
-    if holds(w, ww) {
-        // Back while the previous tick still holds: w_{k−1}² = w² + 2w + 1.
+    let floor = k;
+    let (mut k, mut w, mut ww) = (k, w, ww);
+    let mut d = jump;
+    let mut steps = 0;
+    loop {
+        // Forward by d (w ≥ 0 and not holding here): (w − d)² = w² − 2dw + d².
+        let wd = w.wrapping_sub((u128::from(d) << 64) as i128);
+        if wd < 0 {
+            // Past the virtual stop: the exact root decides.
+            return None;
+        }
+        ww = square_step(ww, w as u128, d, false);
+        w = wd;
+        k = k.wrapping_add(d);
+        steps += 1;
+        #[cfg(test)]
+        STEPS.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
+        if steps > MAX_STEPS {
+            return None;
+        }
+        if !holds(w, ww) {
+            // Forward again: a tick, then by (w² − y)/2w ≤ w − √y (never
+            // past the answer).
+            d = if steps < 3 {
+                1
+            } else {
+                approx_div(ww - y, 2 * w as u128).clamp(1, 1 << 30)
+            };
+            continue;
+        }
+        // Holds: the answer unless k − 1 holds too.
         loop {
+            if k == floor + 1 {
+                return Some((k, w, ww));
+            }
             let wp = w + ONE as i128;
-            let wwp = ww.checked_add(2 * w as u128 + ONE)?;
+            let wwp = ww.wrapping_add(2 * w as u128 + ONE);
             if !holds(wp, wwp) {
+                return Some((k, w, ww));
+            }
+            // Back: a tick, then by (y − w²)/2w, not past the floor.
+            let back = if steps < 3 {
+                1
+            } else {
+                approx_div(y - ww, 2 * (w as u128).max(ONE))
+                    .max(1)
+                    .min(k - floor - 1)
+                    .min(1 << 30)
+            };
+            ww = square_step(ww, w as u128, back, true);
+            w += (u128::from(back) << 64) as i128;
+            k -= back;
+            steps += 1;
+            if steps > MAX_STEPS {
+                return None;
+            }
+            if !holds(w, ww) {
+                // Went too far back: forward from here.
+                d = 1;
                 break;
             }
-            walk += 1;
-            if walk > MAX_WALK {
-                return None;
-            }
-            (k, w, ww) = (k - 1, wp, wwp);
         }
-        Some((k, w, ww))
-    } else {
-        while !holds(w, ww) {
-            walk += 1;
-            if walk > MAX_WALK {
-                return None;
-            }
-            k += 1;
-            if w < ONE as i128 {
-                // The next w is negative: that tick holds.
-                return Some((k, w - ONE as i128, 0));
-            }
-            ww = ww.checked_sub(2 * w as u128 - ONE)?;
-            w -= ONE as i128;
-        }
-        Some((k, w, ww))
     }
 }
 

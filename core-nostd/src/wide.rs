@@ -95,26 +95,135 @@ impl U256 {
     }
 
     /// `⌊self / d⌋`, saturating at `u128::MAX` (and for `d = 0`).
+    ///
+    /// Long division in 32-bit digits (Knuth's algorithm D): each quotient
+    /// digit is estimated from the top two digits of the remainder by one
+    /// 64-by-32-bit division and corrected at most twice, so a quotient
+    /// costs a handful of digit steps instead of 128 bit steps.
     pub(crate) const fn div(self, d: u128) -> u128 {
         if d == 0 || self.hi >= d {
             return u128::MAX;
         }
-        if self.hi == 0 {
-            return self.lo / d;
+        if self.hi == 0 && self.lo >> 64 == 0 && d >> 64 == 0 {
+            return ((self.lo as u64) / (d as u64)) as u128;
         }
-        // Restoring division, one quotient bit per step; the running
-        // remainder stays below 2d, its 129th bit kept in `carry`.
-        let mut r = self.hi;
+        // Digits, least significant first: u has one spare digit on top
+        // (indices are masked to the arrays' sizes, which they never exceed,
+        // so that no bounds check remains).
+        let mut u = [0u32; 16];
+        let mut i = 0;
+        while i < 4 {
+            u[i] = (self.lo >> (32 * i)) as u32;
+            u[i + 4] = (self.hi >> (32 * i)) as u32;
+            i += 1;
+        }
+        let mut v = [0u32; 4];
+        let mut n = 0;
+        i = 0;
+        while i < 4 {
+            v[i] = (d >> (32 * i)) as u32;
+            if v[i] != 0 {
+                n = i + 1;
+            }
+            i += 1;
+        }
+        let mut m = 8;
+        while m > 0 && u[(m - 1) & 15] == 0 {
+            m -= 1;
+        }
+        if m < n {
+            return 0;
+        }
+        if n == 1 {
+            // One-digit divisor: short division.
+            let dv = v[0] as u64;
+            let mut q: u128 = 0;
+            let mut r: u64 = 0;
+            let mut j = m;
+            while j > 0 {
+                j -= 1;
+                let num = (r << 32) | u[j & 15] as u64;
+                // dv ≠ 0 (n = 1 counts its digit); no division by zero.
+                let qd = match num.checked_div(dv) {
+                    Some(q) => q,
+                    None => return u128::MAX,
+                };
+                r = num - qd * dv;
+                // Digits above the fourth are 0: the quotient fits.
+                if j < 4 {
+                    q |= (qd as u128) << (32 * j);
+                }
+            }
+            return q;
+        }
+        // Normalise: the divisor's top digit gets its top bit set.
+        let sh = v[(n - 1) & 3].leading_zeros();
+        if sh > 0 {
+            let mut k = n - 1;
+            while k > 0 {
+                v[k & 3] = (v[k & 3] << sh) | (v[(k - 1) & 3] >> (32 - sh));
+                k -= 1;
+            }
+            v[0] <<= sh;
+            u[m & 15] = u[(m - 1) & 15] >> (32 - sh);
+            let mut k = m - 1;
+            while k > 0 {
+                u[k & 15] = (u[k & 15] << sh) | (u[(k - 1) & 15] >> (32 - sh));
+                k -= 1;
+            }
+            u[0] <<= sh;
+        } else {
+            u[m & 15] = 0;
+        }
+        let top = v[(n - 1) & 3] as u64;
+        let next = v[(n - 2) & 3] as u64;
         let mut q: u128 = 0;
-        let mut i = 128;
-        while i > 0 {
-            i -= 1;
-            let carry = r >> 127;
-            r = (r << 1) | ((self.lo >> i) & 1);
-            q <<= 1;
-            if carry != 0 || r >= d {
-                r = r.wrapping_sub(d);
-                q |= 1;
+        let mut j = m - n + 1;
+        while j > 0 {
+            j -= 1;
+            let num = ((u[(j + n) & 15] as u64) << 32) | u[(j + n - 1) & 15] as u64;
+            // top ≥ 2³¹ after normalising; no division by zero.
+            let mut qhat = match num.checked_div(top) {
+                Some(q) => q,
+                None => return u128::MAX,
+            };
+            let mut rhat = num - qhat * top;
+            while qhat >> 32 != 0 || qhat * next > ((rhat << 32) | u[(j + n - 2) & 15] as u64) {
+                qhat -= 1;
+                rhat += top;
+                if rhat >> 32 != 0 {
+                    break;
+                }
+            }
+            // u[j ..= j+n] −= qhat · v
+            let mut borrow: i64 = 0;
+            let mut carry: u64 = 0;
+            let mut k = 0;
+            while k < n {
+                let p = qhat * v[k & 3] as u64 + carry;
+                carry = p >> 32;
+                let t = u[(k + j) & 15] as i64 - borrow - (p & 0xFFFF_FFFF) as i64;
+                u[(k + j) & 15] = t as u32;
+                borrow = if t < 0 { 1 } else { 0 };
+                k += 1;
+            }
+            let t = u[(j + n) & 15] as i64 - borrow - carry as i64;
+            u[(j + n) & 15] = t as u32;
+            if t < 0 {
+                // One too many: add the divisor back.
+                qhat -= 1;
+                let mut c: u64 = 0;
+                let mut k = 0;
+                while k < n {
+                    let s = u[(k + j) & 15] as u64 + v[k & 3] as u64 + c;
+                    u[(k + j) & 15] = s as u32;
+                    c = s >> 32;
+                    k += 1;
+                }
+                u[(j + n) & 15] = u[(j + n) & 15].wrapping_add(c as u32);
+            }
+            if j < 4 {
+                q |= (qhat as u128) << (32 * j);
             }
         }
         q
@@ -184,6 +293,63 @@ mod tests {
         ]
     }
 
+    /// Restoring division, one bit per step: the reference for `div`.
+    fn div_by_bits(n: U256, d: u128) -> u128 {
+        if d == 0 || n.hi >= d {
+            return u128::MAX;
+        }
+        let mut r = n.hi;
+        let mut q: u128 = 0;
+        let mut i = 128;
+        while i > 0 {
+            i -= 1;
+            let carry = r >> 127;
+            r = (r << 1) | ((n.lo >> i) & 1);
+            q <<= 1;
+            if carry != 0 || r >= d {
+                r = r.wrapping_sub(d);
+                q |= 1;
+            }
+        }
+        q
+    }
+
+    #[test]
+    fn long_division_on_digit_patterns() {
+        // Digits that make the quotient estimate too large (and the rarer
+        // add-back step) in every position.
+        const D: [u32; 6] = [0, 1, 0x7FFF_FFFF, 0x8000_0000, 0xFFFF_FFFE, 0xFFFF_FFFF];
+        let mut seed = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let mut num = |digits: usize| {
+            let mut v = [0u128; 2];
+            for k in 0..digits {
+                let dg = D[(next() % 6) as usize] as u128;
+                v[k / 4] |= dg << (32 * (k % 4));
+            }
+            U256 { hi: v[1], lo: v[0] }
+        };
+        let mut full = 0;
+        for k in 0..200_000 {
+            let d = num(1 + k % 4).lo.max(1);
+            let q = num(4).lo;
+            let r = num(4).lo % d;
+            // n = q·d + r: the quotient q fits, so every digit step runs.
+            let Some(n) = U256::mul(q, d).add(r) else {
+                continue;
+            };
+            full += usize::from(n.hi != 0);
+            assert_eq!(n.div(d), q, "{n:?} / {d}");
+            assert_eq!(n.div(d), div_by_bits(n, d), "{n:?} / {d}");
+        }
+        assert!(full > 50_000, "{full}");
+    }
+
     #[test]
     fn products_and_extremes() {
         let m = U256::mul(u128::MAX, u128::MAX);
@@ -216,6 +382,16 @@ mod tests {
                 prop_assert!(qd <= n);
                 let next = qd.add(d);
                 prop_assert!(next.is_none_or(|v| v > n));
+            }
+        }
+
+        #[test]
+        fn long_division_equals_bit_division(a in any::<u128>(), b in any::<u128>(),
+                                             shift in 0u32..128, d in 1..=u128::MAX, dsh in 0u32..127) {
+            for n in [U256::mul(a, b), U256::mul(a >> shift, b >> (127 - shift.min(127)))] {
+                for d in [d, d >> dsh, (d >> dsh).max(1), d | 1 << 127] {
+                    prop_assert_eq!(n.div(d), div_by_bits(n, d), "{:?} / {}", n, d);
+                }
             }
         }
 

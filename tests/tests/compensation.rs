@@ -696,7 +696,7 @@ fn concave_arc_case(
     let mut lines = vec![
         format!("G00 {}", xz([centre[0] + 5_000, centre[1] + 5_000])),
         format!(
-            "N1 {} G01 {}",
+            "N1 {} G01 {} F200",
             if left { "G41" } else { "G42" },
             xz(lead_in)
         ),
@@ -711,6 +711,7 @@ fn concave_arc_case(
         rn: um(r),
         tip,
         lines,
+        feed: "200".into(),
     }
 }
 
@@ -820,7 +821,7 @@ fn near_tangent_inside_corners_between_lines_and_arcs() {
                             let mut lines = vec![
                                 format!("G00 {}", xz(add(first, [5_000_000, 5_000_000]))),
                                 format!(
-                                    "N1 {} G01 {}",
+                                    "N1 {} G01 {} F200",
                                     if left { "G41" } else { "G42" },
                                     xz(first)
                                 ),
@@ -836,6 +837,7 @@ fn near_tangent_inside_corners_between_lines_and_arcs() {
                                     rn: nm(rn),
                                     tip,
                                     lines: lines.clone(),
+                                    feed: "200".into(),
                                 };
                                 compare_contour(&mut LocalDevice::new(), &case, &mut tally)
                                     .unwrap();
