@@ -12,20 +12,23 @@
 //! | quantity | format |
 //! |---|---|
 //! | points, segment vectors | ångström · 2³² (`i128`) |
-//! | direction | the vector scaled to `max(|x|,|z|)` in `[2⁶¹, 2⁶²]` (`i64`), its length `ln` |
+//! | direction | the vector scaled to `max(|x|,|z|)` in `[2⁶¹, 2⁶²]` (`i64`), its length `lnq` in Q32 |
 //! | squared speed `v²` | (Å/tick)² · 2⁶⁴ |
-//! | speed `v` | Å/tick · 2⁶⁴ |
+//! | speed `v` | Å/tick · 2⁶⁴ (an axis's rapid rate: 2⁹⁶) |
 //! | acceleration `a` | Å/tick² · 2⁹⁶ |
 //! | time, `v/a` | ticks · 2⁶⁴ |
 //! | `u² = (v/a)²`, `2s/a` | ticks² · 2⁶⁴ |
 //!
-//! Every quotient is taken once from exact integers where the quantity is
-//! rational (`2aL`, the rapid and feed speeds, the cruise time per event,
-//! `2s/a`), with 256-bit intermediates, so its error is one unit of its
-//! format. Irrational quantities (`L`, junction speeds, `√v²`) are floors of
-//! exact roots, within one unit. The planner's squared speeds are therefore
-//! within a few 2⁻⁶⁴ (Å/tick)² of exact, and event times within about
-//! 2⁻⁵⁰ tick for any block the limits allow.
+//! Every quotient is taken once, from exact integers and the block's
+//! length, with 256-bit intermediates, so its error is one unit of its
+//! format; the cruise time at a programmed feed or a rapid rate is exact
+//! but for the length. Irrational quantities (`|d|`, junction speeds,
+//! `√v²`) are floors of exact roots, within one unit; the length carries
+//! some 94 significant bits, so the path along a block is within 2⁻⁶⁰ Å of
+//! exact. The
+//! planner's squared speeds are therefore within a few 2⁻⁶⁴ (Å/tick)² of
+//! exact, and event times within about 2⁻⁴⁰ tick even for the longest
+//! block the limits allow (10⁶ events at 0.001 mm/min, some 2⁴⁶ ticks).
 
 use crate::impulse::ImpulsePrice;
 use crate::interleave::LinearBlock;
@@ -205,8 +208,8 @@ impl Feed {
 pub struct Rates {
     limits: Limits,
     tick: TickRate,
-    /// `(VMAX/(60·TICK))²` per axis, Q64 (Å/tick)².
-    vmax2: [u128; 2],
+    /// `VMAX/(60·TICK)` per axis, Q96 Å/tick.
+    vmax: [u128; 2],
     /// `AMAX/TICK²` per axis, Q96 Å/tick².
     accel: [u128; 2],
 }
@@ -218,13 +221,13 @@ impl Rates {
     /// The limits on a clock of `tick`.
     pub const fn new(limits: Limits, tick: TickRate) -> Rates {
         let t2 = tick.hz() as u128 * tick.hz() as u128;
-        let (vx, vz) = (limits.vmax[0] as u128, limits.vmax[1] as u128);
+        let per_min = 60 * tick.hz() as u128;
         Rates {
             limits,
             tick,
-            vmax2: [
-                shl_div(vx * vx, 64, 3600 * t2),
-                shl_div(vz * vz, 64, 3600 * t2),
+            vmax: [
+                shl_div(limits.vmax[0] as u128, 96, per_min),
+                shl_div(limits.vmax[1] as u128, 96, per_min),
             ],
             accel: [
                 shl_div(limits.amax[0] as u128, 96, t2),
@@ -288,9 +291,9 @@ pub struct Block {
     d: [i128; 2],
     /// The direction, `max(|x|,|z|)` in `[2⁶¹, 2⁶²]`.
     dn: [i64; 2],
-    /// `⌊|dn|⌋`.
-    ln: u64,
-    /// `|d| = ln · 2^scale` (Å·2³²).
+    /// `⌊|dn|·2³²⌋`.
+    lnq: u128,
+    /// `|d| = |dn| · 2^scale` (Å·2³²).
     scale: i32,
     /// The lead axis: distance from the start to the first event's boundary
     /// and the whole move along it (Å·2⁶⁴), its price (Å), `|dn|` on it.
@@ -354,19 +357,22 @@ impl Block {
         };
         let dn = [norm(d[0]), norm(d[1])];
         let d2n = sq(dn[0]) + sq(dn[1]);
-        let ln = isqrt(d2n);
-        // a and v_max over the moving axes.
+        let lnq = sqrt_shl(d2n, 64);
+        // a and v_max over the moving axes: the axis's limit times
+        // |d|/|d_axis|.
         let mut accel = u128::MAX;
         let mut vmax2 = u128::MAX;
         let mut source = Source::Axis(0);
         for (axis, &c) in dn.iter().enumerate() {
-            let m = c.unsigned_abs();
+            let m = u128::from(c.unsigned_abs()) << 32;
             if m == 0 {
                 continue;
             }
-            let (acc, vmax) = (rates.accel[axis & 1], rates.vmax2[axis & 1]);
-            accel = accel.min(mul_div(acc, u128::from(ln), u128::from(m)));
-            let v2 = mul_div(vmax, d2n, sq(c));
+            let (acc, vmax) = (rates.accel[axis & 1], rates.vmax[axis & 1]);
+            accel = accel.min(mul_div(acc, lnq, m));
+            // v in Q96 Å/tick, squared to Q64.
+            let v = mul_div(vmax, lnq, m);
+            let v2 = mul_shr(v, v, 128);
             if v2 < vmax2 {
                 (vmax2, source) = (v2, Source::Axis(axis));
             }
@@ -377,8 +383,8 @@ impl Block {
                 (vmax2, source) = (f2, Source::Feed(f.angstrom_per_min));
             }
         }
-        // 2aL = 2·a·ln·2^scale, Q96·Q32 → Q64.
-        let two_al = mul_shr(accel, u128::from(ln), (63 - scale) as u32);
+        // 2aL = 2·a·|dn|·2^scale, Q96 · Q32·Q32 → Q64.
+        let two_al = mul_shr(accel, lnq, (95 - scale) as u32);
         // The lead axis by impulses, X when equal (SPEC §2); a block
         // without impulses is measured along the axis that moves most.
         let lead = if nx == 0 && nz == 0 {
@@ -404,7 +410,7 @@ impl Block {
             events,
             d,
             dn,
-            ln,
+            lnq,
             scale,
             lead_first: first,
             lead_len,
@@ -462,7 +468,7 @@ impl Block {
         let (p, q) = (self.dn, next.dn);
         let g = i128::from(p[0]) * i128::from(q[0]) + i128::from(p[1]) * i128::from(q[1]);
         let c = i128::from(p[0]) * i128::from(q[1]) - i128::from(p[1]) * i128::from(q[0]);
-        let pp = u128::from(self.ln) * u128::from(next.ln);
+        let pp = (self.lnq >> 32) * (next.lnq >> 32);
         // s² = cos²(ψ/2) = (P + g)/(2P), Q126 (ψ the angle between the
         // directions); s' = sin(ψ/2).
         let pg = (pp as i128).saturating_add(g).max(0) as u128;
@@ -661,24 +667,27 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
     let len = b.lead_len;
     let l_accel = mul_div(da, len, tal).min(len);
     let l_decel = (len - mul_div(dd, len, tal).min(len)).max(l_accel);
-    let ln = u128::from(b.ln);
     let dn_lead = u128::from(b.lead_dn);
+    // The path along the segment for a distance along the lead axis:
+    // times |d|/|d_lead|, Q64.
+    let ratio = mul_div(b.lnq, 1 << 32, dn_lead);
+    let path = |dl: u128| mul_shr(dl, ratio, 64);
     let per_min = rates.ticks_per_min();
-    // The time to cruise `dl` along the lead axis, Q64 ticks, exact where
-    // the cruise speed is a programmed or rapid rate.
+    // The time to cruise `dl` along the lead axis, Q64 ticks; exact but
+    // for |d| at a rapid rate.
     let cruise_source = (c2 >= b.vmax2).then_some(b.source);
     let cruise_time = |dl: u128| -> u128 {
         if dl == 0 {
             return 0;
         }
         match cruise_source {
-            Some(Source::Feed(f)) => mul_div(dl, per_min * ln, dn_lead * u128::from(f)),
+            Some(Source::Feed(f)) => mul_div(path(dl), per_min, u128::from(f)),
             Some(Source::Axis(axis)) => {
                 let vmax = u128::from(rates.limits.vmax[axis & 1]);
                 let m = u128::from(b.dn[axis & 1].unsigned_abs());
                 mul_div(dl, per_min * m, dn_lead * vmax)
             }
-            None => shl_div(mul_div(dl, ln, dn_lead), 64, vc),
+            None => shl_div(path(dl), 64, vc),
         }
     };
     let t_cruise = cruise_time(l_decel - l_accel);
@@ -707,7 +716,7 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
         (a, upto(l_decel, false).max(a))
     };
     // 2s/a for a lead-axis distance, Q64 ticks².
-    let two_s_over_a = |dl: u128| shl_div(mul_div(dl, ln, dn_lead), 97, b.accel);
+    let two_s_over_a = |dl: u128| shl_div(path(dl), 97, b.accel);
     let per_event = two_s_over_a(h);
     let at = |i: u32| o.saturating_add(u128::from(i) * h);
     let signed = |v: u128| i128::try_from(v).unwrap_or(i128::MAX);

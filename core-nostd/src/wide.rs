@@ -59,8 +59,14 @@ impl U256 {
         }
     }
 
-    /// `self >> s` for `s < 128`, floor; `None` if it does not fit a `u128`.
+    /// `self >> s`, floor; `None` if it does not fit a `u128`.
     pub(crate) const fn shr(self, s: u32) -> Option<u128> {
+        if s >= 256 {
+            return Some(0);
+        }
+        if s >= 128 {
+            return Some(self.hi >> (s - 128));
+        }
         if s == 0 {
             return if self.hi == 0 { Some(self.lo) } else { None };
         }
@@ -264,7 +270,7 @@ pub(crate) const fn shl_div(n: u128, s: u32, d: u128) -> u128 {
     U256::shl(n, s).div(d)
 }
 
-/// `⌊a · b / 2^s⌋` for `s < 128`, saturating at `u128::MAX`.
+/// `⌊a · b / 2^s⌋`, saturating at `u128::MAX`.
 pub(crate) const fn mul_shr(a: u128, b: u128, s: u32) -> u128 {
     match U256::mul(a, b).shr(s) {
         Some(v) => v,
@@ -361,6 +367,13 @@ mod tests {
         assert_eq!(U256::shl(1, 127).shr(127), Some(1));
         assert_eq!(U256::shl(u128::MAX, 1).shr(0), None);
         assert_eq!(U256::shl(u128::MAX, 1).shr(1), Some(u128::MAX));
+        // Shifts of the high half and beyond.
+        let n = U256::mul(u128::MAX, 3 << 100);
+        assert_eq!(n.shr(128), Some((3 << 100) - 1));
+        assert_eq!(n.shr(228), Some(2));
+        assert_eq!(n.shr(255), Some(0));
+        assert_eq!(n.shr(256), Some(0));
+        assert_eq!(mul_shr(1 << 127, 1 << 127, 156), 1 << 98);
         assert_eq!(m.div(u128::MAX), u128::MAX);
         assert_eq!(U256::shl(1, 100).div(0), u128::MAX);
         assert_eq!(U256::mul(u128::MAX, 7).div(7), u128::MAX);

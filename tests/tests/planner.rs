@@ -1223,18 +1223,14 @@ fn bad_limits_and_feeds_change_nothing() {
 // The planner's documented accuracy
 // ---------------------------------------------------------------------------
 
-/// `core_nostd::plan` documents its squared speeds as "within a few 2⁻⁶⁴
-/// (Å/tick)² of exact", the rapid speeds taken as one quotient from exact
-/// integers. A rapid block's `v_max² = (VMAX_a/(60·TICK))²·(L/d_a)²` is
-/// rational, but the core floors the axis's `(VMAX_a/(60·TICK))²` to Q64
-/// first and then scales it by `L²/d_a²`, so its error is up to `L²/d_a²`
-/// units: here VZ = 0.000001 mm/min on a block of 490 Å along X and 1 Å
-/// along Z is 133 881 units (a relative 1.1·10⁻⁶) below the exact value.
-/// Only very slow rapid rates show it (the relative error is one unit of
-/// the axis's rate², 2·10⁻¹² at 0.001 mm/min), and floors keep it below
-/// the limit; event times depend on it only to second order.
+/// `core_nostd::plan` documents its squared speeds as within a few
+/// 2⁻⁶⁴ (Å/tick)² of exact. A rapid block's
+/// `v_max² = (VMAX_a/(60·TICK))²·(L/d_a)²` is rational; scaling a floored
+/// axis rate² by `L²/d_a²` would multiply its one-unit error by that
+/// ratio (133 881 units here: VZ = 0.000001 mm/min on a block of 490 Å
+/// along X and 1 Å along Z), so the planner scales the rate itself, kept
+/// to 2⁻⁹⁶ Å/tick, and squares the product.
 #[test]
-#[ignore = "a rapid block's v_max² is L²/d_a² units off exact, not the few units plan.rs documents (VZ = 0.000001 mm/min, d = (490, 1) Å: 133 881 units)"]
 fn a_slow_rapid_block_keeps_its_documented_accuracy() {
     let lim = Lim {
         v: [10_000_000, 10], // 1 and 0.000001 mm/min
