@@ -1,10 +1,13 @@
-//! Speed of the motion path: step events, quantizing a block, a whole MOVE.
+//! Speed of the motion path: step events, quantizing a block, a whole MOVE,
+//! planning and timing.
 
 use core_nostd::crc32::Crc32;
 use core_nostd::impulse::{quantize, ImpulsePrice, Impulses};
 use core_nostd::interleave::{ImpulsePoint, LinearBlock};
 use core_nostd::length::Length;
+use core_nostd::plan::{q32, Block, Feed, Planner, Rates, WINDOW};
 use core_nostd::protocol::{Device, Io};
+use core_nostd::step::TimedBlock;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::hint::black_box;
 
@@ -234,12 +237,105 @@ fn compensation(c: &mut Criterion) {
     g.finish();
 }
 
+/// A rapid block along Z from `from_um` to `to_um` (µm), default prices.
+fn z_block(from_um: i64, to_um: i64, rates: &Rates) -> Block {
+    let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
+    let (a, b) = (
+        Length::from_um(from_um).unwrap(),
+        Length::from_um(to_um).unwrap(),
+    );
+    let at = |z| ImpulsePoint {
+        x: Impulses(0),
+        z: quantize(z, h[1]).unwrap(),
+    };
+    let events = LinearBlock::new(at(a), at(b)).unwrap();
+    Block::new([0, q32(a)], [0, q32(b)], events, None, h, rates).unwrap()
+}
+
+fn motion(c: &mut Criterion) {
+    let rates = Rates::DEFAULT;
+    let drain = |t: &TimedBlock| {
+        let mut acc = 0u64;
+        for (e, tick) in t.events() {
+            acc = acc.wrapping_add(u64::from(e.bits())).wrapping_add(tick);
+        }
+        acc
+    };
+    // The ramps of a long rapid along Z at the default limits (3000 mm/min,
+    // 150 mm/s²): 8 mm from rest and 8 mm to rest around 400 mm of cruise.
+    let mut p = Planner::<WINDOW>::new(WINDOW);
+    for (a, b) in [(0, -8_000), (-8_000, -408_000), (-408_000, -416_000)] {
+        p.push(z_block(a, b, &rates), &rates).unwrap();
+    }
+    let (ta, tb, tc) = (
+        p.start(&rates).unwrap(),
+        p.start(&rates).unwrap(),
+        p.start(&rates).unwrap(),
+    );
+    let mut g = c.benchmark_group("timed steps");
+    g.throughput(Throughput::Elements(tb.events().len() as u64));
+    g.bench_function("cruise event (400 mm at 3000 mm/min)", |b| {
+        b.iter(|| drain(black_box(&tb)))
+    });
+    g.throughput(Throughput::Elements(
+        (ta.events().len() + tc.events().len()) as u64,
+    ));
+    g.bench_function("ramp event (8 mm from rest, 8 mm to rest)", |b| {
+        b.iter(|| drain(black_box(&ta)).wrapping_add(drain(black_box(&tc))))
+    });
+    g.finish();
+
+    // Short feed blocks along a zigzag, the window full: making a block,
+    // its junction, queueing it and starting the one 63 blocks ahead.
+    let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
+    let feed = Feed::new(Length::from_mm_str("600").unwrap());
+    let mut blocks = Vec::new();
+    let (mut x, mut z) = (0i64, 0i64);
+    for k in 0..1000i64 {
+        let (dx, dz) = (((k * 37) % 11 - 5) * 100, -500);
+        let um = |v| Length::from_um(v).unwrap();
+        let (from, to) = ([um(x), um(z)], [um(x + dx), um(z + dz)]);
+        let pt = |p: [Length; 2]| ImpulsePoint {
+            x: quantize(p[0], h[0]).unwrap(),
+            z: quantize(p[1], h[1]).unwrap(),
+        };
+        let events = LinearBlock::new(pt(from), pt(to)).unwrap();
+        blocks.push((
+            [q32(from[0]), q32(from[1])],
+            [q32(to[0]), q32(to[1])],
+            events,
+        ));
+        (x, z) = (x + dx, z + dz);
+    }
+    let mut g = c.benchmark_group("planner");
+    g.throughput(Throughput::Elements(blocks.len() as u64));
+    g.bench_function(
+        "block made, queued, planned over its window, started",
+        |b| {
+            b.iter(|| {
+                let mut p = Planner::<WINDOW>::new(WINDOW);
+                let mut acc = 0u64;
+                for &(from, to, events) in black_box(&blocks) {
+                    let block = Block::new(from, to, events, feed, h, &rates).unwrap();
+                    p.push(block, &rates).unwrap();
+                    if p.window_full() {
+                        acc = acc.wrapping_add(p.start(&rates).unwrap().end_tick());
+                    }
+                }
+                acc
+            })
+        },
+    );
+    g.finish();
+}
+
 criterion_group!(
     benches,
     interleaver,
     quantizer,
     protocol,
     arcs,
-    compensation
+    compensation,
+    motion
 );
 criterion_main!(benches);

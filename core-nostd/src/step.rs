@@ -14,20 +14,24 @@
 //!
 //! # Arithmetic
 //! Times are Q64.64 ticks in a `u128`. In the cruise an event costs one
-//! 128-bit addition: `T_i = T_1 + (i − 1)·B`. In the ramps the time is a
-//! square root, which the generator never takes per event: with `u = v/a`
-//! the virtual time since the ramp's speed would have been zero,
+//! 128-bit addition: `T_i = T_1 + (i − 1)·B`, the rest of a cruise after
+//! its first event without any other state. In the ramps the time is a
+//! square root, which the generator does not take per event: with
+//! `u = v/a` the virtual time since the ramp's speed would have been zero,
 //! `X = u² = u_entry² + 2s/a` grows by a constant per event, and event `i`
 //! is before the half tick `k + ½` exactly when `X_i < z_k²`,
-//! `z_k = k + ½ − T_ramp + u_entry`. Moving `k` by one changes `z_k²` by
-//! `2z_k + 1`: additions again. The generator predicts the next tick from
-//! the last interval and corrects it by single ticks; when that would take
-//! more than [`MAX_WALK`] steps (the first events of a ramp from rest) it
-//! takes the square root once, so no event costs more than one root.
+//! `z_k = k + ½ − T_ramp + u_entry`. Moving `k` by `d` changes `z_k²` by
+//! `2d·z_k + d²`: a few 32-bit multiplies. The generator predicts the next
+//! tick from the last two intervals (second order, in Q16 ticks), then
+//! checks it exactly against `X_i` and corrects it, by single ticks and
+//! Newton steps `(z² − X)/2z` taken from the leading bits; after
+//! 24 corrections (the first events of a ramp from rest) it
+//! takes the square root once, so no event costs more than one root and
+//! every tick is decided by the exact comparison, never by the estimate.
 //! The deceleration is the same with `w_k = T_stop − k − ½` counting down.
 //!
-//! Errors: every time is within 2⁻⁶⁰ tick of the exact value the profile
-//! defines, apart from the profile's own rounding (see [`crate::plan`]).
+//! Errors: every tick is exact for the profile's times, which carry the
+//! profile's own rounding (see [`crate::plan`]).
 
 use crate::crc32::Crc32;
 use crate::interleave::{LinearBlock, StepEvent, StepEvents};
@@ -39,13 +43,9 @@ pub(crate) const ONE: u128 = 1 << 64;
 pub(crate) const HALF: u128 = 1 << 63;
 /// A time this close below a half tick is taken as the tie and rounds up:
 /// 2⁻³⁶ tick. Exact ties occur (a cruise at a round feed along an axis), the
-/// formats carry far less error than this (about 2⁻⁵⁰ tick), and the
+/// formats carry far less error than this (about 2⁻⁴⁰ tick), and the
 /// reference decides ties by the same rule (`docs/motion.md`).
 pub(crate) const TIE: u128 = 1 << 28;
-
-/// Single-tick corrections after a prediction before the generator takes a
-/// square root instead.
-pub const MAX_WALK: u32 = 4;
 
 /// The frequency of the clock events are timed on, 1 Hz … 2 MHz.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -41,11 +41,11 @@ fn preludes() -> &'static [(Device, bool)] {
                 false,
             ),
             (
-                device_after(&["CFG DIAM=0 HX=0.001 HZ=0.001", "G91 G01 X10 Z-3"]),
+                device_after(&["CFG DIAM=0 HX=0.001 HZ=0.001", "G91 G01 X10 Z-3 F100"]),
                 true,
             ),
             (
-                device_after(&["G00 X10 Z10", "G01 X7.2 Z0", "G03 X12 Z-2.4 R2.4"]),
+                device_after(&["G00 X10 Z10", "G01 X7.2 Z0 F200", "G03 X12 Z-2.4 R2.4"]),
                 false,
             ),
         ]
@@ -72,6 +72,7 @@ fn as_reference(b: &Block) -> RefBlock {
             Corner::Intersection => 451,
         }),
         xzikr: [a(b.x), a(b.z), a(b.i), a(b.k), a(b.r)],
+        f: a(b.f),
     }
 }
 
@@ -102,9 +103,12 @@ fn canonical(b: &RefBlock) -> String {
     if let Some(g) = b.corner {
         words.push(format!("G{g}"));
     }
-    for (letter, v) in ['X', 'Z', 'I', 'K', 'R'].iter().zip(b.xzikr) {
+    for (letter, v) in ['X', 'Z', 'I', 'K', 'R', 'F']
+        .iter()
+        .zip(b.xzikr.iter().chain([&b.f]))
+    {
         if let Some(v) = v {
-            words.push(format!("{letter}{}", exact_mm(v)));
+            words.push(format!("{letter}{}", exact_mm(*v)));
         }
     }
     words.join(" ")

@@ -217,6 +217,7 @@ enum Req {
         i: Option<Num>,
         k: Option<Num>,
         r: Option<Num>,
+        f: Option<Num>,
         compact: bool,
     },
 }
@@ -252,6 +253,8 @@ struct Model {
     cmd: [i64; 2],
     motion: u8,
     incremental: bool,
+    /// A feed has been programmed (modal `F`).
+    feed: bool,
     token: u32,
     /// The last request id the device took, and its final line.
     last: Option<(u32, String)>,
@@ -266,12 +269,13 @@ impl Model {
         tip: 3,
         tol: 100_000,
         rough: false,
-        rate: 10_000,
+        rate: 50_000,
         pulse: 5,
         setup: 5,
         cmd: [0, 0],
         motion: 0,
         incremental: false,
+        feed: false,
         token: 0,
         last: None,
     };
@@ -371,12 +375,13 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
             // The checks in the order the command makes them.
             let tol_ok = tol
                 .is_none_or(|t| parse_mm(&t.text()).is_ok_and(|a| (1..=10_000_000).contains(&a)));
-            let feed_ok = feed.is_none_or(|f| parse_mm(&f.text()).is_ok_and(|a| a > 0));
+            // A feed of 0.001 … 99 999.999999 mm/min, in either mode.
+            let feed_ok = feed.is_none_or(|f| {
+                parse_mm(&f.text()).is_ok_and(|a| (10_000..=999_999_999_990).contains(&a))
+            });
             let words_ok = [x, z, i, k].iter().all(|n| parse_mm(&n.text()).is_ok());
             let expect = if !tol_ok {
                 Expect::Err("VALUE")
-            } else if feed.is_some() && !matches!(mode, ArcMode::Direct) {
-                Expect::Err("SYNTAX")
             } else if !feed_ok || !words_ok {
                 Expect::Err("VALUE")
             } else {
@@ -458,6 +463,7 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                         || p > 1000
                         || s > 1000
                         || u64::from(p) * u64::from(r) >= 1_000_000
+                        || too_fast(m.hx, m.hz, r)
                     {
                         Expect::Err("VALUE")
                     } else {
@@ -540,6 +546,7 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
             i,
             k,
             r,
+            f,
             compact,
         } => {
             let mut w = Vec::new();
@@ -562,6 +569,7 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                 ('I', t(i)),
                 ('K', t(k)),
                 ('R', t(r)),
+                ('F', t(f)),
             ];
             for (letter, v) in &words {
                 if let Some(v) = v {
@@ -581,11 +589,19 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
             let expect = match read {
                 None => Expect::AnyErr,
                 Some(b) if b.compensation.is_some_and(|c| c != 40) => Expect::AnyErr,
+                // A feed of 0.001 … 99 999.999999 mm/min, checked first.
+                Some(b)
+                    if b.f
+                        .is_some_and(|f| !(10_000..=999_999_999_990).contains(&f)) =>
+                {
+                    Expect::Err("VALUE")
+                }
                 Some(b) => {
                     let v = b.xzikr;
                     let mut next = m.clone();
                     next.motion = b.motion.unwrap_or(m.motion);
                     next.incremental = b.distance.map_or(m.incremental, |d| d == 91);
+                    next.feed |= b.f.is_some();
                     let has_end = v[0].is_some() || v[1].is_some();
                     let arc_words = v[2].is_some() || v[3].is_some() || v[4].is_some();
                     let end = |word: Option<i64>, now: i64| {
@@ -597,6 +613,9 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                         Expect::Err("RANGE")
                     } else if next.motion < 2 && arc_words {
                         Expect::Err("SYNTAX")
+                    } else if next.motion == 1 && has_end && !next.feed {
+                        // A feed move before any F.
+                        Expect::Err("VALUE")
                     } else {
                         if has_end || arc_words {
                             next.cmd = target;
@@ -669,6 +688,16 @@ fn expect_move(m: &Model, x: Option<String>, z: Option<String>, inc: bool) -> Ex
     )
 }
 
+/// Whether a rapid rate at its default (X 1500, Z 3000 mm/min) asks more
+/// step events per second than `rate` at prices `hx`, `hz` (Å).
+fn too_fast(hx: i64, hz: i64, rate: u32) -> bool {
+    const VMAX: [i64; 2] = [1500 * 10_000_000, 3000 * 10_000_000]; // Å/min
+    [hx, hz]
+        .iter()
+        .zip(VMAX)
+        .any(|(&h, v)| v > 60 * h * i64::from(rate))
+}
+
 #[allow(clippy::too_many_arguments)]
 fn expect_cfg(
     m: &Model,
@@ -721,6 +750,9 @@ fn expect_cfg(
     let p = next.pos(next.cmd, next.hx, next.hz);
     if p.iter().any(|p| p.abs() > MAXP) {
         return Expect::Err("RANGE");
+    }
+    if too_fast(next.hx, next.hz, next.rate) {
+        return Expect::Err("VALUE");
     }
     let line = next.cfg_line();
     Expect::Ok(line, Box::new(next))

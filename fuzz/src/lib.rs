@@ -6,7 +6,6 @@
 //! re-derived from `PROTOCOL.md` and the module docs, with exact integer
 //! arithmetic.
 
-
 use core_nostd::interleave::{LinearBlock, StepEvent};
 use core_nostd::protocol::{Device, Io, Session};
 use core_nostd::stepdir::DriveTiming;
@@ -456,7 +455,11 @@ pub fn check_linear_events(block: &LinearBlock, bytes: &[u8]) {
     // loop runs for every step and is not what the fuzzer should steer by.
     let l = u64::from(lead.unsigned_abs());
     let d = u64::from(other.unsigned_abs());
-    assert_eq!(bytes.len() as u64, l, "number of events of the block {dx},{dz}");
+    assert_eq!(
+        bytes.len() as u64,
+        l,
+        "number of events of the block {dx},{dz}"
+    );
     let mut prev = 0u64;
     let mut i = 0u64;
     let mut bad = 0u64;
@@ -588,10 +591,9 @@ impl Collect {
             self.moves.push(check_direct_events(&direct));
         }
         if !self.over_budget {
-            let total = self
-                .moves
-                .iter()
-                .fold((0i64, 0i64), |a, m| (a.0 + i64::from(m.0), a.1 + i64::from(m.1)));
+            let total = self.moves.iter().fold((0i64, 0i64), |a, m| {
+                (a.0 + i64::from(m.0), a.1 + i64::from(m.1))
+            });
             assert_eq!(total, self.sum, "steps issued vs the blocks' increments");
         }
     }
@@ -995,16 +997,22 @@ impl Checker {
             }
             if let Some(n) = int(&last, "N") {
                 if value(&last, "DPHI").is_some() {
-                    // Arc by chords: one DATA line per chord, numbered from 1.
-                    assert_eq!(n as usize, io.moves.len(), "{last:?}");
-                    assert_eq!(lines.len(), io.moves.len() + 1);
-                    for (k, (l, m)) in lines.iter().zip(&io.moves).enumerate() {
-                        assert_eq!(
-                            *l,
-                            format!("DATA I={} NX={} NZ={}", k + 1, m.0, m.1),
-                            "chord line"
-                        );
+                    // Arc by chords: one DATA line per chord, numbered from
+                    // 1; every chord with impulses is a block of motion (a
+                    // chord without any is one only if it has a length).
+                    assert_eq!(lines.len(), n as usize + 1, "{last:?}");
+                    assert!(io.moves.len() <= n as usize, "{last:?}");
+                    let mut moves = io.moves.iter().filter(|m| **m != (0, 0));
+                    for (k, l) in lines.iter().take(n as usize).enumerate() {
+                        let chord = l
+                            .strip_prefix(&format!("DATA I={} ", k + 1))
+                            .unwrap_or_else(|| panic!("chord line {l:?}"));
+                        if chord != "NX=0 NZ=0" {
+                            let m = moves.next().unwrap_or_else(|| panic!("{l:?} did not move"));
+                            assert_eq!(chord, format!("NX={} NZ={}", m.0, m.1), "chord line");
+                        }
                     }
+                    assert!(moves.next().is_none(), "moves beyond the chord lines");
                 }
             }
         }
@@ -1046,6 +1054,8 @@ pub struct RefBlock {
     pub corner: Option<u16>,
     /// X, Z, I, K, R words.
     pub xzikr: [Option<i64>; 5],
+    /// The F word (mm/min as a length, Å).
+    pub f: Option<i64>,
 }
 
 /// Why the reference reading refuses a block.
@@ -1135,12 +1145,15 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     b'I' => Some(2),
                     b'K' => Some(3),
                     b'R' => Some(4),
-                    b'N' | b'F' | b'S' | b'T' | b'M' => None,
+                    b'F' => Some(5),
+                    b'N' | b'S' | b'T' | b'M' => None,
                     _ => return Err(RefBlockError::UnknownAddress(letter)),
                 };
                 let v = parse_mm(number).map_err(|e| RefBlockError::Value(letter, e))?;
-                if let Some(s) = slot {
-                    b.xzikr[s] = Some(v);
+                match slot {
+                    Some(5) => b.f = Some(v),
+                    Some(s) => b.xzikr[s] = Some(v),
+                    None => {}
                 }
             }
             _ => return Err(RefBlockError::NotAWord),
