@@ -380,9 +380,7 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                 parse_mm(&f.text()).is_ok_and(|a| (10_000..=999_999_999_990).contains(&a))
             });
             let words_ok = [x, z, i, k].iter().all(|n| parse_mm(&n.text()).is_ok());
-            let expect = if !tol_ok {
-                Expect::Err("VALUE")
-            } else if !feed_ok || !words_ok {
+            let expect = if !tol_ok || !feed_ok || !words_ok {
                 Expect::Err("VALUE")
             } else {
                 let mut next = m.clone();
