@@ -2,14 +2,19 @@
 #![no_std]
 #![no_main]
 
+use core::mem::MaybeUninit;
 use core_nostd::protocol::Device;
 use cortex_m_rt::entry;
 use firmware::{board, Controller};
 
 #[entry]
 fn main() -> ! {
+    // The device (its look-ahead queue the largest part) in static memory,
+    // where `size` counts it and the linker checks that it fits; the entry
+    // hands it out as a `&'static mut` once.
+    static mut DEVICE: MaybeUninit<Device> = MaybeUninit::uninit();
+    let device: &'static mut Device = DEVICE.write(Device::new());
     let mut io = Controller::new(firmware::boot());
-    let mut device = Device::new();
     defmt::info!(
         "{=str} {=str} ready, {=u32} Hz",
         core_nostd::protocol::NAME,
