@@ -20,6 +20,13 @@
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
 //! - [`trig`]: fixed-point sine, cosine, atan2 and square root, with error
 //!   bounds.
+//! - [`plan`]: the velocity planner: limits, junctions, the look-ahead
+//!   window, each block's trapezoid.
+//! - [`step`]: the timed step generator: each event's tick, integer-only.
+//! - [`stepper`]: started motion in order, pulled one event at a time (the
+//!   stage a step interrupt runs), with what has been issued.
+//! - [`machine`]: the planner and the stepper behind one front, as the
+//!   virtual-clock device of `docs/motion.md`.
 //! - [`stepdir`]: step/dir outputs on `embedded-hal` pins, paced by a timer.
 //!
 //! # Numeric conventions
@@ -52,5 +59,6 @@ pub mod plan;
 pub mod protocol;
 pub mod step;
 pub mod stepdir;
+pub mod stepper;
 pub mod trig;
 mod wide;

@@ -3,14 +3,17 @@
 //! timed step events go to the outputs, recorded for `SYNC`.
 //!
 //! This is the virtual-clock device of `docs/motion.md`: block `k` starts
-//! when `W − 1` blocks are queued behind it, or at a flush, and its events
-//! are issued at once to a [`StepSink`] with their ticks; a sink on a board
-//! waits for each tick, one in a simulator records it.
+//! when `W − 1` blocks are queued behind it, or at a flush; it goes to the
+//! [`Stepper`], which is drained at once into a [`StepSink`] with the
+//! events' ticks: a sink on a board waits for each tick, one in a simulator
+//! records it.
 
+use crate::arc::DirectSteps;
 use crate::impulse::ImpulsePrice;
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::plan::{Block, Feed, Limits, Planner, Point, Rates, WINDOW};
-use crate::step::{FixedRate, Record, TickRate, TimedBlock};
+use crate::step::{FixedRate, Record, TickRate};
+use crate::stepper::{FixedRun, Item, Pulled, Stepper, AHEAD};
 use crate::wide::{mul_div, sqrt_shl};
 
 /// Blocks the queue holds.
@@ -59,9 +62,8 @@ impl Status {
 pub struct Machine {
     rates: Rates,
     planner: Planner<QUEUE>,
-    record: Record,
-    /// Registers of the steps issued.
-    issued: ImpulsePoint,
+    /// Started motion, the record and the registers of the steps issued.
+    stepper: Stepper<AHEAD>,
     /// Where the next queued block starts, Å·2³².
     point: Point,
 }
@@ -83,11 +85,7 @@ impl Machine {
         Machine {
             rates: Rates::DEFAULT,
             planner: Planner::new(window),
-            record: Record::new(),
-            issued: ImpulsePoint {
-                x: crate::impulse::Impulses(0),
-                z: crate::impulse::Impulses(0),
-            },
+            stepper: Stepper::new(),
             point: [0, 0],
         }
     }
@@ -111,7 +109,7 @@ impl Machine {
     /// change); the caller has flushed.
     pub fn set_position(&mut self, point: Point, registers: ImpulsePoint) {
         self.point = point;
-        self.issued = registers;
+        self.stepper.set_issued(registers);
     }
 
     /// Queues the block from the current point to `to`, issuing `events` at
@@ -145,39 +143,22 @@ impl Machine {
     pub fn flush<S: StepSink>(&mut self, sink: &mut S) {
         while self.start_one(sink) {}
         if let Some(ticks) = self.planner.end_run() {
-            self.record.run_end(ticks);
-            sink.run_end(ticks);
+            self.start_item(Item::RunEnd(ticks), sink);
         }
     }
 
     /// A flush, then `events` at a fixed rate as a run of their own (the
-    /// ЭМ-907's direct arc), ending at registers `to` and point `end`.
-    pub fn fixed_rate<S: StepSink, E: Iterator<Item = StepEvent>>(
+    /// ЭМ-907's direct arc), ending at point `end`.
+    pub fn fixed_rate<S: StepSink>(
         &mut self,
-        events: E,
+        events: DirectSteps,
         rate_hz: u32,
-        to: ImpulsePoint,
         end: Point,
         sink: &mut S,
     ) {
         self.flush(sink);
         let rate = FixedRate::new(self.rates.tick(), rate_hz);
-        let mut n = 0u32;
-        for e in events {
-            if n == 0 {
-                sink.run_start();
-            }
-            n += 1;
-            let tick = rate.tick(n);
-            self.record.event(e, tick);
-            sink.step(e, tick);
-        }
-        if n > 0 {
-            let ticks = rate.tick(n);
-            self.record.run_end(ticks);
-            sink.run_end(ticks);
-        }
-        self.issued = to;
+        self.start_item(Item::Fixed(FixedRun::new(rate, events)), sink);
         self.point = end;
     }
 
@@ -185,19 +166,19 @@ impl Machine {
     /// the record starts again.
     pub fn sync<S: StepSink>(&mut self, sink: &mut S) -> Record {
         self.flush(sink);
-        core::mem::take(&mut self.record)
+        self.stepper.take_record()
     }
 
     /// Forgets what was recorded (`ZERO`); the caller has flushed.
     pub fn clear_record(&mut self) {
-        self.record = Record::new();
+        self.stepper.clear_record();
     }
 
     /// What the axes are doing.
     pub fn status(&self) -> Status {
         Status {
             queued: self.planner.queued(),
-            issued: self.issued,
+            issued: self.stepper.issued(),
             speed2: self.planner.exit2(),
         }
     }
@@ -210,18 +191,23 @@ impl Machine {
             return false;
         };
         if fresh {
-            sink.run_start();
+            self.start_item(Item::RunStart, sink);
         }
-        self.issue(&timed, sink);
+        self.start_item(Item::Block(timed), sink);
         true
     }
 
-    fn issue<S: StepSink>(&mut self, timed: &TimedBlock, sink: &mut S) {
-        sink.block_start(timed.block());
-        for (e, tick) in timed.events() {
-            self.record.event(e, tick);
-            sink.step(e, tick);
+    /// Hands started motion to the stepper and issues it to `sink`.
+    fn start_item<S: StepSink>(&mut self, item: Item, sink: &mut S) {
+        // Drained after every item: there is always room.
+        let _ = self.stepper.push(item);
+        while let Some(p) = self.stepper.pull() {
+            match p {
+                Pulled::RunStart => sink.run_start(),
+                Pulled::BlockStart(b) => sink.block_start(&b),
+                Pulled::Step(e, tick) => sink.step(e, tick),
+                Pulled::RunEnd(ticks) => sink.run_end(ticks),
+            }
         }
-        self.issued = timed.block().to();
     }
 }

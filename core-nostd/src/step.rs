@@ -722,8 +722,7 @@ impl Record {
         let delta = tick.wrapping_sub(self.last) as u32;
         self.last = tick;
         self.events += 1;
-        self.crc.push(event.bits());
-        self.crc.update(&delta.to_le_bytes());
+        self.crc.push_u8_u32_le(event.bits(), delta);
     }
 
     /// A run ended after `ticks`; the next event starts a new run.

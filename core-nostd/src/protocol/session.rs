@@ -654,7 +654,6 @@ impl Session {
         self.machine.fixed_rate(
             arc.events(),
             rate,
-            arc.to(),
             point_q32(points.end),
             &mut Sink::new(io, self.drive),
         );
