@@ -29,7 +29,7 @@
 use crate::impulse::{ImpulsePrice, Impulses, RangeError, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, StepEvent};
 use crate::length::Length;
-use crate::trig::{atan2, isqrt, sin_cos_raw, Turn};
+use crate::trig::{atan2, isqrt, sin_cos_arcsec};
 
 /// The most chords one arc may be cut into.
 pub const MAX_CHORDS: u32 = 10_000;
@@ -289,8 +289,7 @@ impl ChordPlan {
             ));
         }
         // i·Δφ < n·Δφ ≤ 10⁴ · 1 296 000″: fits.
-        let angle = Turn::from_arcsec(i64::from(i) * i64::from(self.dphi_arcsec));
-        let (s, c) = sin_cos_raw(angle);
+        let (s, c) = sin_cos_arcsec(i64::from(i) * i64::from(self.dphi_arcsec));
         let s = match self.dir {
             ArcDir::Ccw => i128::from(s),
             ArcDir::Cw => -i128::from(s),

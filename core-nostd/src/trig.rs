@@ -155,6 +155,37 @@ pub const fn sin_cos_raw(a: Turn) -> (i64, i64) {
     }
 }
 
+/// Sine and cosine of a whole number of arc-seconds, in Q62 (raw `i64`):
+/// exact where they are rational (0, ±½, ±1 at multiples of 30°), so a
+/// point that lies exactly on a rounding boundary is found on it; elsewhere
+/// as [`sin_cos_raw`].
+///
+/// ```
+/// use core_nostd::trig::{sin_cos_arcsec, ONE_Q62};
+/// assert_eq!(sin_cos_arcsec(120 * 3600).1, -ONE_Q62 / 2); // cos 120° = −½
+/// assert_eq!(sin_cos_arcsec(-30 * 3600).0, -ONE_Q62 / 2);
+/// ```
+pub const fn sin_cos_arcsec(arcsec: i64) -> (i64, i64) {
+    const STEP: i64 = 30 * 3600;
+    let a = arcsec.rem_euclid(1_296_000);
+    let (s, c) = sin_cos_raw(Turn::from_arcsec(a));
+    if a % STEP != 0 {
+        return (s, c);
+    }
+    let k = a / STEP;
+    (exact_at_30(k, s), exact_at_30(k + 3, c))
+}
+
+/// sin k·30°, exact where it is rational, else `computed`.
+const fn exact_at_30(k: i64, computed: i64) -> i64 {
+    // In halves; 3 marks √3/2.
+    const HALVES: [i64; 12] = [0, 1, 3, 2, 3, 1, 0, -1, -3, -2, -3, -1];
+    match HALVES[k.rem_euclid(12) as usize] {
+        3 | -3 => computed,
+        h => h * (ONE_Q62 / 2),
+    }
+}
+
 /// Sine and cosine of an angle as [`Q62`] values.
 pub fn sin_cos(a: Turn) -> (Q62, Q62) {
     let (s, c) = sin_cos_raw(a);
@@ -286,6 +317,33 @@ pub const fn isqrt(n: u128) -> u64 {
 mod tests {
     extern crate std;
     use super::*;
+
+    #[test]
+    fn whole_arc_seconds_are_exact_where_sine_and_cosine_are_rational() {
+        let half = ONE_Q62 / 2;
+        for k in -24i64..=24 {
+            let (s, c) = sin_cos_arcsec(k * 30 * 3600);
+            let (rs, rc) = sin_cos_raw(Turn::from_arcsec(k * 30 * 3600));
+            // Within the series' error of the computed values everywhere.
+            assert!((s - rs).abs() <= 16 && (c - rc).abs() <= 16, "{k}");
+            let want = |m: i64| match m.rem_euclid(12) {
+                0 | 6 => Some(0),
+                1 | 5 => Some(half),
+                7 | 11 => Some(-half),
+                3 => Some(ONE_Q62),
+                9 => Some(-ONE_Q62),
+                _ => None,
+            };
+            if let Some(w) = want(k) {
+                assert_eq!(s, w, "sin {}°", k * 30);
+            }
+            if let Some(w) = want(k + 3) {
+                assert_eq!(c, w, "cos {}°", k * 30);
+            }
+        }
+        // Off the 30° grid: the series.
+        assert_eq!(sin_cos_arcsec(7), sin_cos_raw(Turn::from_arcsec(7)));
+    }
     use proptest::prelude::*;
 
     proptest! {

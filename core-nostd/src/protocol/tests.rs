@@ -785,3 +785,19 @@ fn reset_abandons_a_contour_whose_corner_cannot_be_cut() {
     assert_eq!(r[0], std::format!("DATA G01 X50.0000 Z{z}"), "{r:?}");
     assert!(ask1(&mut dev, "MOVE X=50").starts_with("OK"));
 }
+
+/// A chord end exactly on a rounding boundary rounds away from zero: with
+/// R = 0.02 mm and TOL = 0.01 mm, Δφ = 2·arccos(½) = 120° exactly, and the
+/// first chord of a full circle from the top ends at Z − R/2, on the
+/// boundary −875.5 of 0.01 mm impulses (cos 120° = −½ exactly).
+#[test]
+fn a_chord_end_on_a_rounding_boundary_rounds_away_from_zero() {
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "CFG HX=0.005 HZ=0.01 DIAM=0 TOL=0.01 PASS=FIN").starts_with("OK"));
+    assert!(ask1(&mut dev, "MOVE X=21.255 Z=-8.725").starts_with("OK NX=4251 NZ=-873"));
+    let r = ask(&mut dev, b"ARC X=21.255 Z=-8.725 I=0 K=-0.02 DIR=CCW\n");
+    assert_eq!(r.len(), 4, "{r:?}");
+    assert!(r[3].contains("DPHI=120.000000"), "{r:?}");
+    // Z: −873 → −876 (−8.755 mm is −875.5 impulses); X: 21.27232 mm.
+    assert_eq!(r[0], "DATA I=1 NX=3 NZ=-3");
+}
