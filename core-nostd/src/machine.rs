@@ -19,8 +19,33 @@ use crate::wide::{mul_div, sqrt_shl};
 /// Blocks the queue holds.
 pub const QUEUE: usize = WINDOW;
 
-/// Where timed step events go.
+/// Where started motion goes: issued at once through [`StepSink::step`]
+/// (the virtual clock, the default), or taken by a stepper of the sink's
+/// own that issues it later (a board's step interrupt).
 pub trait StepSink {
+    /// Takes started motion for the sink's own stepper, waiting for room
+    /// if it must; hands it back to be issued now through `step` (the
+    /// default).
+    #[allow(clippy::result_large_err)] // the item itself
+    fn start(&mut self, item: Item) -> Result<(), Item> {
+        Err(item)
+    }
+    /// Waits until the sink's own stepper has issued everything it took.
+    fn drain(&mut self) {}
+    /// The registers of the steps the sink's own stepper issued, if it has
+    /// one.
+    fn issued(&mut self) -> Option<ImpulsePoint> {
+        None
+    }
+    /// Sets them, at rest.
+    fn set_issued(&mut self, registers: ImpulsePoint) {
+        let _ = registers;
+    }
+    /// What the sink's own stepper recorded since this was last called
+    /// (`SYNC`), if it has one; the record starts again.
+    fn take_record(&mut self) -> Option<Record> {
+        None
+    }
     /// A run begins: its tick 0 is now.
     fn run_start(&mut self) {}
     /// A linear block starts; its events follow.
@@ -107,9 +132,15 @@ impl Machine {
 
     /// Where the axes are now and will be, at rest (after `ZERO` or a price
     /// change); the caller has flushed.
-    pub fn set_position(&mut self, point: Point, registers: ImpulsePoint) {
+    pub fn set_position<S: StepSink>(
+        &mut self,
+        point: Point,
+        registers: ImpulsePoint,
+        sink: &mut S,
+    ) {
         self.point = point;
         self.stepper.set_issued(registers);
+        sink.set_issued(registers);
     }
 
     /// Queues the block from the current point to `to`, issuing `events` at
@@ -139,12 +170,13 @@ impl Machine {
     }
 
     /// A flush: every queued block starts in turn, the last one ends at
-    /// rest, and the run ends.
+    /// rest, the run ends, and everything started has been issued.
     pub fn flush<S: StepSink>(&mut self, sink: &mut S) {
         while self.start_one(sink) {}
         if let Some(ticks) = self.planner.end_run() {
             self.start_item(Item::RunEnd(ticks), sink);
         }
+        sink.drain();
     }
 
     /// A flush, then `events` at a fixed rate as a run of their own (the
@@ -166,19 +198,21 @@ impl Machine {
     /// the record starts again.
     pub fn sync<S: StepSink>(&mut self, sink: &mut S) -> Record {
         self.flush(sink);
-        self.stepper.take_record()
+        let own = self.stepper.take_record();
+        sink.take_record().unwrap_or(own)
     }
 
     /// Forgets what was recorded (`ZERO`); the caller has flushed.
-    pub fn clear_record(&mut self) {
+    pub fn clear_record<S: StepSink>(&mut self, sink: &mut S) {
         self.stepper.clear_record();
+        let _ = sink.take_record();
     }
 
     /// What the axes are doing.
-    pub fn status(&self) -> Status {
+    pub fn status<S: StepSink>(&self, sink: &mut S) -> Status {
         Status {
             queued: self.planner.queued(),
-            issued: self.stepper.issued(),
+            issued: sink.issued().unwrap_or(self.stepper.issued()),
             speed2: self.planner.exit2(),
         }
     }
@@ -197,8 +231,12 @@ impl Machine {
         true
     }
 
-    /// Hands started motion to the stepper and issues it to `sink`.
+    /// Hands started motion to the sink's stepper, or to this one's and
+    /// issues it to `sink` at once.
     fn start_item<S: StepSink>(&mut self, item: Item, sink: &mut S) {
+        let Err(item) = sink.start(item) else {
+            return;
+        };
         // Drained after every item: there is always room.
         let _ = self.stepper.push(item);
         while let Some(p) = self.stepper.pull() {

@@ -12,8 +12,10 @@ mod words;
 
 pub use session::{Config, Pass, Session, NAME, VERSION};
 
-use crate::interleave::{LinearBlock, StepEvent};
+use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
+use crate::step::Record;
 use crate::stepdir::DriveTiming;
+use crate::stepper::Item;
 use core::fmt;
 use framing::{Framed, LineAssembler};
 
@@ -90,6 +92,35 @@ pub trait Io {
     /// The run ended `ticks` after it began; the axes are at rest.
     fn run_end(&mut self, ticks: u64) {
         let _ = ticks;
+    }
+
+    /// Takes started motion for a stepper of the transport's own (a
+    /// board's step interrupt), waiting for room if it must: the request
+    /// is answered once its motion is taken. The default hands it back,
+    /// to be issued at once through [`Io::step`] (the virtual clock).
+    #[allow(clippy::result_large_err)] // the item itself
+    fn start(&mut self, item: Item) -> Result<(), Item> {
+        Err(item)
+    }
+
+    /// Waits until the transport's stepper has issued all it took.
+    fn drain(&mut self) {}
+
+    /// The registers of the steps the transport's stepper issued, if it
+    /// has one.
+    fn issued(&mut self) -> Option<ImpulsePoint> {
+        None
+    }
+
+    /// Sets them, at rest (`ZERO`, a price change).
+    fn set_issued(&mut self, registers: ImpulsePoint) {
+        let _ = registers;
+    }
+
+    /// What the transport's stepper recorded since this was last called,
+    /// if it has one; its record starts again.
+    fn take_record(&mut self) -> Option<Record> {
+        None
     }
 }
 

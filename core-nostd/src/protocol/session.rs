@@ -19,7 +19,9 @@ use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
 use crate::machine::{Machine, StepSink};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
+use crate::step::Record;
 use crate::stepdir::{DriveTiming, TimingError};
+use crate::stepper::Item;
 use core::fmt::{self, Write};
 
 /// The device name reported by `VER`.
@@ -419,8 +421,9 @@ impl Session {
             z: quantize(cmd[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
         };
         self.machine.flush(&mut Sink::new(io, self.drive));
-        self.machine.clear_record();
-        self.machine.set_position(point_q32(cmd), pos);
+        let mut sink = Sink::new(io, self.drive);
+        self.machine.clear_record(&mut sink);
+        self.machine.set_position(point_q32(cmd), pos, &mut sink);
         self.cmd = cmd;
         self.prog = cmd;
         self.pos = pos;
@@ -479,7 +482,8 @@ impl Session {
         if (cfg.hx, cfg.hz) != (self.cfg.hx, self.cfg.hz) {
             // New prices re-express the registers: at rest.
             self.machine.flush(&mut Sink::new(io, self.drive));
-            self.machine.set_position(point_q32(self.cmd), pos);
+            self.machine
+                .set_position(point_q32(self.cmd), pos, &mut Sink::new(io, self.drive));
         }
         self.cfg = cfg;
         self.pos = pos;
@@ -1152,7 +1156,7 @@ impl Session {
     /// `STATUS`: where the axes are now (the steps issued), their speed and
     /// the blocks waiting.
     fn status_reply<I: Io>(&self, io: &mut I) {
-        let st = self.machine.status();
+        let st = self.machine.status(&mut Sink::new(io, self.drive));
         let state = if st.queued > 0 { "RUN" } else { "IDLE" };
         let factor = if self.cfg.diam { 2 } else { 1 };
         // |registers| ≤ 999 999 999 and prices ≤ 10⁷ Å: within i64.
@@ -1412,6 +1416,26 @@ impl<I: Io> Io for Suffixed<'_, I> {
     fn run_end(&mut self, ticks: u64) {
         self.inner.run_end(ticks);
     }
+
+    fn start(&mut self, item: Item) -> Result<(), Item> {
+        self.inner.start(item)
+    }
+
+    fn drain(&mut self) {
+        self.inner.drain();
+    }
+
+    fn issued(&mut self) -> Option<ImpulsePoint> {
+        self.inner.issued()
+    }
+
+    fn set_issued(&mut self, registers: ImpulsePoint) {
+        self.inner.set_issued(registers);
+    }
+
+    fn take_record(&mut self) -> Option<Record> {
+        self.inner.take_record()
+    }
 }
 
 /// Splits off and checks a trailing `*HH`; returns the bytes before it.
@@ -1527,6 +1551,26 @@ impl<'a, I: Io> Sink<'a, I> {
 }
 
 impl<I: Io> StepSink for Sink<'_, I> {
+    fn start(&mut self, item: Item) -> Result<(), Item> {
+        self.io.start(item)
+    }
+
+    fn drain(&mut self) {
+        self.io.drain();
+    }
+
+    fn issued(&mut self) -> Option<ImpulsePoint> {
+        self.io.issued()
+    }
+
+    fn set_issued(&mut self, registers: ImpulsePoint) {
+        self.io.set_issued(registers);
+    }
+
+    fn take_record(&mut self) -> Option<Record> {
+        self.io.take_record()
+    }
+
     fn run_start(&mut self) {
         self.io.run_start();
     }
