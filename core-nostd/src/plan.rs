@@ -403,8 +403,15 @@ impl Block {
         let boundary = ((2 * i128::from(a0) + sigma) * i128::from(price)) << 31;
         let first = ((sigma * (boundary - from[lead])).max(0) as u128) << 32;
         // A chord of a fraction of a grid unit that does not move its lead
-        // axis the way its impulses go: every event at its end.
+        // axis the way its impulses go: every event at its end, and the
+        // block measured along the axis that moves most (it still takes
+        // the time of its length).
         let backwards = n != 0 && sigma * d[lead] <= 0;
+        let lead = if backwards {
+            usize::from(d[1].unsigned_abs() > d[0].unsigned_abs())
+        } else {
+            lead
+        };
         let lead_len = d[lead].unsigned_abs() << 32;
         Some(Block {
             events,

@@ -857,3 +857,50 @@ fn near_tangent_inside_corners_between_lines_and_arcs() {
     assert_eq!(tally.refused_alike, 0, "{tally:?}");
     assert!(tally.programs > 3_000, "{tally:?}");
 }
+
+/// Regressions the property tests found, kept as plain tests.
+#[test]
+fn arcs_whose_chords_end_on_rounding_boundaries_run_in_time() {
+    let cases = [
+        // The last chord of the G02 runs along X only (0.0000431 mm) but
+        // issues the Z impulse its end's rounding tie gives: its event
+        // comes at its end, and the chord takes the time of its length.
+        ContourCase {
+            rn: "0.040".into(),
+            tip: 0,
+            lines: [
+                "G00 X50.000 Z-5.000",
+                "N1 G42 G01 X39.342 Z-10.047 F200",
+                "N2 G01 X39.718 Z-10.188",
+                "N3 G02 X40.000 Z-10.235 I0.141 K0.188",
+                "N4 G01 X40.470 Z-10.235",
+                "N5 G40 G00 X40.000 Z-10.000",
+            ]
+            .map(String::from)
+            .to_vec(),
+            feed: "200".into(),
+        },
+        // A corner arc of 0.02 mm at TOL 0.01 mm: Δφ = 120° exactly, and
+        // the first chord ends on a Z rounding boundary (cos 120° = −½).
+        ContourCase {
+            rn: "1.255".into(),
+            tip: 1,
+            lines: [
+                "G00 X50.000 Z-5.000",
+                "N1 G41 G01 X37.450 Z-8.725 F200",
+                "N2 G01 X40.000 Z-8.725",
+                "N3 G03 X37.690 Z-9.460 I0.000 K-1.275",
+                "N5 G40 G00 X40.000 Z-10.000",
+            ]
+            .map(String::from)
+            .to_vec(),
+            feed: "200".into(),
+        },
+    ];
+    for case in &cases {
+        let mut tally = ContourTally::default();
+        compare_contour(&mut LocalDevice::new(), case, &mut tally).unwrap();
+        assert!(tally.mismatches.is_empty(), "{:?}", tally.mismatches);
+        assert_eq!(tally.blocks, case.lines.len());
+    }
+}
