@@ -55,7 +55,8 @@ pub fn init(dp: pac::Peripherals) -> Board {
     rcc.ahb1enr()
         .modify(|_, w| w.gpioaen().set_bit().gpiocen().set_bit());
     rcc.apb2enr().modify(|_, w| w.usart1en().set_bit());
-    rcc.apb1enr().modify(|_, w| w.tim2en().set_bit());
+    rcc.apb1enr()
+        .modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
 
     // PA9, PA10: alternate function 7, PA10 pulled up.
     let gpioa = &dp.GPIOA;
@@ -119,7 +120,11 @@ pub fn init(dp: pac::Peripherals) -> Board {
         high: 0,
     };
     tim2.count_ticks();
-    Board { usart, tim2 }
+    Board {
+        serial: Serial { usart },
+        tim2,
+        tim5: dp.TIM5,
+    }
 }
 
 #[cfg(not(feature = "qemu"))]
@@ -172,14 +177,22 @@ fn clocks(_: &pac::Peripherals) {
     // HSI 16 MHz from reset; QEMU 7.2 would hang on any ready-bit wait.
 }
 
-/// USART1 and the step timer.
+/// USART1 and the timers of the step outputs.
 pub struct Board {
-    usart: pac::USART1,
-    /// Paces the step events.
+    /// USART1.
+    pub serial: Serial,
+    /// The run clock of the step events.
     pub tim2: StepTimer,
+    /// The step interrupt's alarm (enabled, not configured).
+    pub tim5: pac::TIM5,
 }
 
-impl Board {
+/// USART1: replies out, request bytes in through its interrupt.
+pub struct Serial {
+    usart: pac::USART1,
+}
+
+impl Serial {
     /// Sends bytes, waiting for the transmitter each time.
     pub fn send(&mut self, bytes: &[u8]) {
         for &b in bytes {
@@ -286,8 +299,7 @@ impl StepTimer {
 
     /// Ticks since the run began; read at least once every 2³² ticks (71
     /// minutes) while a run waits, which every wait does.
-    #[cfg(any(not(feature = "qemu"), feature = "qemu-paced"))]
-    fn now(&mut self) -> u64 {
+    pub(crate) fn now(&mut self) -> u64 {
         let c = self.count().wrapping_sub(self.origin);
         if c < self.low {
             self.high += 1 << 32;

@@ -2,10 +2,10 @@
 //!
 //! USART1 (115200 8N1) serves the pendant line protocol through the core's
 //! handler, byte for byte as the host simulator's in-process device does.
-//! Blocks start as the planner's window fills (or at a flush); each started
-//! block's events are issued on the STEP/DIR outputs at their ticks of TIM2
-//! (1 MHz) before the request that started it is answered. Received bytes
-//! are queued by the USART1 interrupt while the axes move.
+//! Blocks start as the planner's window fills (or at a flush) and go to the
+//! step interrupt ([`motion`]), which issues their events on the STEP/DIR
+//! outputs at their ticks of TIM2 (1 MHz) while the protocol goes on;
+//! received bytes are queued by the USART1 interrupt meanwhile.
 //!
 //! Release builds contain no panic path: their panic handler calls a symbol
 //! that does not exist, so the link fails if any panic survives optimisation.
@@ -15,49 +15,56 @@
 
 pub mod board;
 pub mod log;
+pub mod motion;
 
-use board::{Board, CycleDelay, PortCPin};
-use core_nostd::interleave::StepEvent;
+use board::{Board, Serial};
+use core_nostd::interleave::ImpulsePoint;
 use core_nostd::protocol::Io;
-use core_nostd::stepdir::{DriveTiming, StepDir, TickClock};
+use core_nostd::step::Record;
+use core_nostd::stepdir::DriveTiming;
+use core_nostd::stepper::Item;
 
-/// The transport side of the device: UART out, step/dir outputs.
+/// The transport side of the device: the serial line, and the step
+/// interrupt that takes its motion.
 pub struct Controller {
-    /// USART1 and the step timer.
-    pub board: Board,
-    axes: StepDir<PortCPin, PortCPin, PortCPin, PortCPin>,
+    /// USART1.
+    pub serial: Serial,
 }
 
 impl Controller {
-    /// Takes the board; STEP outputs start low.
+    /// Takes the board: the timers and the step outputs go to the step
+    /// interrupt (STEP outputs low).
     pub fn new(board: Board) -> Self {
-        let axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
-        Controller { board, axes }
+        motion::install(board.tim2, board.tim5);
+        Controller {
+            serial: board.serial,
+        }
     }
 }
 
 impl Io for Controller {
     fn send(&mut self, line: &[u8]) {
-        self.board.send(line);
+        self.serial.send(line);
     }
 
-    fn run_start(&mut self) {
-        self.board.tim2.start_run();
+    fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
+        motion::start(item, drive)
     }
 
-    #[inline]
-    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
-        if self
-            .axes
-            .issue(event, tick, drive, &mut self.board.tim2, &mut CycleDelay)
-            .is_err()
-        {
-            defmt::error!("step outputs failed");
-        }
+    fn drain(&mut self) {
+        motion::drain();
     }
 
-    fn run_end(&mut self, _ticks: u64) {
-        self.axes.stop_outputs();
+    fn issued(&mut self) -> Option<ImpulsePoint> {
+        motion::issued()
+    }
+
+    fn set_issued(&mut self, registers: ImpulsePoint) {
+        motion::set_issued(registers);
+    }
+
+    fn take_record(&mut self) -> Option<Record> {
+        motion::take_record()
     }
 }
 

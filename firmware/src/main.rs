@@ -22,7 +22,7 @@ fn main() -> ! {
         board::SYSCLK_HZ
     );
     loop {
-        match io.board.receive() {
+        match io.serial.receive() {
             Some(byte) => device.receive(byte, &mut io),
             None => board::sleep_unless(board::rx_pending),
         }

@@ -65,7 +65,7 @@ impl Io for Later {
     fn send(&mut self, line: &[u8]) {
         self.lines.push(String::from_utf8_lossy(line).into_owned());
     }
-    fn start(&mut self, item: Item) -> Result<(), Item> {
+    fn start(&mut self, item: Item, _: &DriveTiming) -> Result<(), Item> {
         while !self.stepper.has_room() {
             self.waits += 1;
             self.run(1);

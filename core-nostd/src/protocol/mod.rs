@@ -95,11 +95,13 @@ pub trait Io {
     }
 
     /// Takes started motion for a stepper of the transport's own (a
-    /// board's step interrupt), waiting for room if it must: the request
-    /// is answered once its motion is taken. The default hands it back,
-    /// to be issued at once through [`Io::step`] (the virtual clock).
+    /// board's step interrupt), to issue with the drive's timing, waiting
+    /// for room if it must: the request is answered once its motion is
+    /// taken. The default hands it back, to be issued at once through
+    /// [`Io::step`] (the virtual clock).
     #[allow(clippy::result_large_err)] // the item itself
-    fn start(&mut self, item: Item) -> Result<(), Item> {
+    fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
+        let _ = drive;
         Err(item)
     }
 

@@ -1417,8 +1417,8 @@ impl<I: Io> Io for Suffixed<'_, I> {
         self.inner.run_end(ticks);
     }
 
-    fn start(&mut self, item: Item) -> Result<(), Item> {
-        self.inner.start(item)
+    fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
+        self.inner.start(item, drive)
     }
 
     fn drain(&mut self) {
@@ -1552,7 +1552,7 @@ impl<'a, I: Io> Sink<'a, I> {
 
 impl<I: Io> StepSink for Sink<'_, I> {
     fn start(&mut self, item: Item) -> Result<(), Item> {
-        self.io.start(item)
+        self.io.start(item, &self.drive)
     }
 
     fn drain(&mut self) {
