@@ -59,7 +59,29 @@ impl StepEvent {
     pub const fn z_negative(self) -> bool {
         self.0 & Self::Z_NEG != 0
     }
+
+    /// How the event moves the registers: −1, 0 or 1 impulse per axis.
+    #[inline(always)]
+    pub const fn moves(self) -> (i8, i8) {
+        MOVES[(self.0 & 0x0F) as usize]
+    }
 }
+
+/// [`StepEvent::moves`] by the event's four bits.
+const MOVES: [(i8, i8); 16] = {
+    let mut t = [(0i8, 0i8); 16];
+    let mut b = 0;
+    while b < 16 {
+        let sx = if b & 4 != 0 { -1 } else { 1 };
+        let sz = if b & 8 != 0 { -1 } else { 1 };
+        t[b] = (
+            if b & 1 != 0 { sx } else { 0 },
+            if b & 2 != 0 { sz } else { 0 },
+        );
+        b += 1;
+    }
+    t
+};
 
 /// An impulse position of the two axes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -202,6 +224,27 @@ mod tests {
             x: Impulses(x),
             z: Impulses(z),
         }
+    }
+
+    #[test]
+    fn an_event_moves_the_registers_by_its_bits() {
+        for b in 0u8..16 {
+            let e = StepEvent(b);
+            let d = |steps: bool, negative: bool| match (steps, negative) {
+                (false, _) => 0,
+                (true, false) => 1,
+                (true, true) => -1,
+            };
+            assert_eq!(
+                e.moves(),
+                (
+                    d(e.x_steps(), e.x_negative()),
+                    d(e.z_steps(), e.z_negative())
+                ),
+                "{b:#06b}"
+            );
+        }
+        assert_eq!(StepEvent(0b1011).moves(), (1, -1));
     }
 
     fn bits(from: ImpulsePoint, to: ImpulsePoint) -> Vec<u8> {

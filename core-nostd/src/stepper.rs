@@ -61,23 +61,6 @@ pub enum Pulled {
     RunEnd(u64),
 }
 
-/// The register moves of an event, by its bits (bit0 X steps, bit1 Z
-/// steps, bit2 X negative, bit3 Z negative).
-const MOVES: [(i8, i8); 16] = {
-    let mut t = [(0i8, 0i8); 16];
-    let mut b = 0;
-    while b < 16 {
-        let sx = if b & 4 != 0 { -1 } else { 1 };
-        let sz = if b & 8 != 0 { -1 } else { 1 };
-        t[b] = (
-            if b & 1 != 0 { sx } else { 0 },
-            if b & 2 != 0 { sz } else { 0 },
-        );
-        b += 1;
-    }
-    t
-};
-
 /// What is being issued.
 #[derive(Clone, Debug)]
 #[allow(clippy::large_enum_variant)]
@@ -192,7 +175,7 @@ impl<const R: usize> Stepper<R> {
     #[inline(always)]
     fn issue(&mut self, e: StepEvent, tick: u64) -> Pulled {
         self.record.event(e, tick);
-        let (dx, dz) = MOVES[usize::from(e.bits() & 0x0F)];
+        let (dx, dz) = e.moves();
         self.issued.x.0 += i32::from(dx);
         self.issued.z.0 += i32::from(dz);
         Pulled::Step(e, tick)

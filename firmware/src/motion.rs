@@ -193,9 +193,18 @@ pub fn drain() {
     }
 }
 
-/// The registers of the steps issued.
+/// The registers of the steps issued (the stepper counts an event when
+/// it hands it out; the one waiting for its tick is not issued yet).
 pub fn issued() -> Option<ImpulsePoint> {
-    with(|m| m.stepper.issued())
+    with(|m| {
+        let mut p = m.stepper.issued();
+        if let Some((e, _)) = m.next {
+            let (dx, dz) = e.moves();
+            p.x.0 -= i32::from(dx);
+            p.z.0 -= i32::from(dz);
+        }
+        p
+    })
 }
 
 /// Sets them, at rest.
