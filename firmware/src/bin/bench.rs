@@ -154,6 +154,7 @@ fn timed(tim: &StepTimer) {
     use core_nostd::impulse::{quantize, ImpulsePrice};
     use core_nostd::length::Length;
     use core_nostd::plan::{q32, Block, Feed, Planner, Rates, WINDOW};
+    use core_nostd::stepper::{Item, Pulled, Stepper, AHEAD};
     let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
     let rates = Rates::DEFAULT;
     let mm = |um: i64| Length::from_um(um).unwrap_or(Length::ZERO);
@@ -207,6 +208,38 @@ fn timed(tim: &StepTimer) {
         "timed step events, cruise (400 mm at 3000 mm/min, 99.8 % cruise): {nb} events, {}.{:02} instructions per event ({sink})",
         cb / nb,
         (cb % nb) * 100 / nb
+    ));
+    // The step interrupt's own work per event, without its waits: pull from
+    // the stepper (tick, TSEQ, registers) and write STEP/DIR.
+    let work = |items: &[Item]| {
+        let mut s = Stepper::<AHEAD>::new();
+        let mut axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
+        let timing = DriveTiming::DEFAULT;
+        let mut n = 0u32;
+        let c = measure(tim, || {
+            for item in items {
+                let _ = s.push(item.clone());
+                while let Some(p) = s.pull() {
+                    if let Pulled::Step(e, tick) = p {
+                        let _ = axes.issue(e, tick, &timing, &mut Free, &mut Free);
+                        n += 1;
+                    }
+                }
+            }
+        });
+        (c, n.max(1))
+    };
+    let (c, n) = work(&[Item::RunStart, Item::Block(tb)]);
+    Line::print(format_args!(
+        "step interrupt's work per event (pull, TSEQ, registers, STEP/DIR), cruise: {}.{:02} instructions",
+        c / n,
+        (c % n) * 100 / n
+    ));
+    let (c, n) = work(&[Item::RunStart, Item::Block(ta), Item::Block(tc)]);
+    Line::print(format_args!(
+        "step interrupt's work per event, ramps: {}.{:02} instructions",
+        c / n,
+        (c % n) * 100 / n
     ));
     // Planning: short blocks along a polygon (chords of a circle at F600),
     // the window full: making the block, its junction, queueing it and
