@@ -186,6 +186,22 @@ pub struct StepEvents {
     rem: u32,
 }
 
+impl StepEvents {
+    /// The events after the first `done`, at most `count` of them: the
+    /// rest of a block from where a hold stopped it (closed form, no
+    /// iteration).
+    pub fn part(mut self, done: u32, count: u32) -> StepEvents {
+        let done = done.min(self.remaining);
+        if done > 0 && self.twice_lead > 0 {
+            let r = u64::from(self.rem) + u64::from(done) * u64::from(self.twice_other);
+            // Below twice_lead: fits the u32.
+            self.rem = (r % u64::from(self.twice_lead)) as u32;
+        }
+        self.remaining = (self.remaining - done).min(count);
+        self
+    }
+}
+
 impl Iterator for StepEvents {
     type Item = StepEvent;
 

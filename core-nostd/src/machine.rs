@@ -13,7 +13,7 @@ use crate::impulse::ImpulsePrice;
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::plan::{Block, Feed, Limits, Planner, Point, Rates, WINDOW};
 use crate::step::{FixedRate, Record, TickRate};
-use crate::stepper::{FixedRun, Item, Pulled, Stepper, AHEAD};
+use crate::stepper::{Aborted, FixedRun, Item, Motion, Pulled, Stepper, AHEAD};
 use crate::wide::{mul_div, sqrt_shl};
 
 /// Blocks the queue holds.
@@ -46,6 +46,30 @@ pub trait StepSink {
     fn take_record(&mut self) -> Option<Record> {
         None
     }
+    /// Feed hold on the sink's own stepper; false when it has none (the
+    /// virtual clock issues each block as it starts: nothing is moving
+    /// when a hold arrives).
+    fn hold(&mut self) -> bool {
+        false
+    }
+    /// Resume after a hold, on the sink's own stepper.
+    fn resume(&mut self) -> bool {
+        false
+    }
+    /// Reset: the sink's own stepper drops everything at once; what it
+    /// found running, if it has one.
+    fn abort(&mut self) -> Option<Aborted> {
+        None
+    }
+    /// What the sink's own stepper is doing, if it has one.
+    fn motion(&mut self) -> Option<Motion> {
+        None
+    }
+    /// Blocks queued and not started, as the planner hands over the next
+    /// one (a board reports it while it waits for room).
+    fn queued(&mut self, blocks: usize) {
+        let _ = blocks;
+    }
     /// A run begins: its tick 0 is now.
     fn run_start(&mut self) {}
     /// A linear block starts; its events follow.
@@ -70,6 +94,8 @@ pub struct Status {
     pub issued: ImpulsePoint,
     /// The speed now, Q64 (Å/tick)² (squared).
     pub speed2: u128,
+    /// Running, holding or idle.
+    pub motion: Motion,
 }
 
 impl Status {
@@ -210,18 +236,52 @@ impl Machine {
 
     /// What the axes are doing.
     pub fn status<S: StepSink>(&self, sink: &mut S) -> Status {
+        let queued = self.planner.queued();
+        let motion = sink.motion().unwrap_or(Motion::Idle);
+        let motion = match motion {
+            Motion::Idle if queued > 0 => Motion::Run,
+            m => m,
+        };
         Status {
-            queued: self.planner.queued(),
+            queued,
             issued: sink.issued().unwrap_or(self.stepper.issued()),
             speed2: self.planner.exit2(),
+            motion,
         }
+    }
+
+    /// Feed hold (on a sink with a stepper of its own).
+    pub fn hold<S: StepSink>(&mut self, sink: &mut S) {
+        sink.hold();
+    }
+
+    /// Resume after a hold.
+    pub fn resume<S: StepSink>(&mut self, sink: &mut S) {
+        sink.resume();
+    }
+
+    /// Reset: everything queued and started is dropped at once; the
+    /// registers keep the steps issued. Returns the block that was running
+    /// and the registers.
+    pub fn abort<S: StepSink>(&mut self, sink: &mut S) -> (Aborted, ImpulsePoint) {
+        self.planner.clear();
+        let found = sink.abort().unwrap_or(self.stepper.abort());
+        let issued = sink.issued().unwrap_or(self.stepper.issued());
+        self.stepper.set_issued(issued);
+        (found, issued)
+    }
+
+    /// Where the next queued block starts from now on (after a reset: the
+    /// registers' point).
+    pub fn set_point(&mut self, point: Point) {
+        self.point = point;
     }
 
     /// Starts the first queued block and issues its events; false when none
     /// is queued.
     fn start_one<S: StepSink>(&mut self, sink: &mut S) -> bool {
         let fresh = !self.planner.in_run();
-        let Some(timed) = self.planner.start(&self.rates) else {
+        let Some(timed) = self.planner.start_block(&self.rates) else {
             return false;
         };
         if fresh {
@@ -234,6 +294,7 @@ impl Machine {
     /// Hands started motion to the sink's stepper, or to this one's and
     /// issues it to `sink` at once.
     fn start_item<S: StepSink>(&mut self, item: Item, sink: &mut S) {
+        sink.queued(self.planner.queued());
         let Err(item) = sink.start(item) else {
             return;
         };

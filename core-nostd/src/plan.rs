@@ -313,6 +313,14 @@ pub struct Block {
     two_al: u128,
     /// The highest entry `v²` the junction with the block before allows.
     junction2: u128,
+    /// A part of a block (a hold stopped it): the events before it, and
+    /// its own.
+    skip: u32,
+    count: u32,
+    /// Ticks per minute, and the rapid rate (Å/min) of the axis that
+    /// limits a rapid cruise: what timing a cruise needs besides the block.
+    per_min: u64,
+    axis_vmax: u64,
 }
 
 impl Block {
@@ -429,7 +437,83 @@ impl Block {
             accel,
             two_al,
             junction2: 0,
+            skip: 0,
+            count: nx.unsigned_abs().max(nz.unsigned_abs()),
+            per_min: rates.ticks_per_min() as u64,
+            axis_vmax: match source {
+                Source::Axis(axis) => rates.limits.vmax[axis & 1],
+                Source::Feed(_) => 0,
+            },
         })
+    }
+
+    /// The part of the block between lead-axis distances `from` and `to`
+    /// (Å·2⁶⁴ from its start, `from ≤ to ≤` its length) holding its
+    /// events `done + 1 ..= done + count`: what remains of it after a hold,
+    /// or up to where a hold stops it. It enters from whatever speed it
+    /// is given (no junction).
+    pub(crate) fn part(&self, from: u128, to: u128, done: u32, count: u32) -> Block {
+        let to = to.min(self.lead_len).max(from);
+        let h = u128::from(self.lead_price) << 64;
+        // The boundary of event `done + 1` (of this part's first), from
+        // the part's start.
+        let first = self
+            .lead_first
+            .saturating_add(u128::from(done.saturating_sub(self.skip)) * h)
+            .saturating_sub(from);
+        Block {
+            lead_first: if self.backwards { 0 } else { first },
+            lead_len: to - from,
+            two_al: mul_div(self.two_al, to - from, self.lead_len.max(1)),
+            junction2: 0,
+            skip: done,
+            count,
+            ..*self
+        }
+    }
+
+    /// The lead-axis distance from the block's start to the boundary of
+    /// its event `i` (1-based, of this part), Å·2⁶⁴; its end when the
+    /// block runs backwards.
+    pub(crate) fn boundary(&self, i: u32) -> u128 {
+        if self.backwards {
+            return self.lead_len;
+        }
+        let h = u128::from(self.lead_price) << 64;
+        self.lead_first
+            .saturating_add(u128::from(i.saturating_sub(1)) * h)
+            .min(self.lead_len)
+    }
+
+    /// How many of this part's events have their boundaries at or before
+    /// lead-axis distance `at`.
+    pub(crate) fn events_upto(&self, at: u128) -> u32 {
+        if self.backwards {
+            return if at >= self.lead_len { self.count } else { 0 };
+        }
+        if at < self.lead_first {
+            return 0;
+        }
+        let h = u128::from(self.lead_price) << 64;
+        ((at - self.lead_first) / h.max(1))
+            .saturating_add(1)
+            .min(u128::from(self.count)) as u32
+    }
+
+    /// The events before this part, and its own.
+    pub(crate) const fn span(&self) -> (u32, u32) {
+        (self.skip, self.count)
+    }
+
+    /// The part up to where a hold brings the axes to rest from `v2`: its
+    /// `2aL` is that `v²` exactly (the stop was placed by it).
+    pub(crate) const fn braking_to_rest(self, v2: u128) -> Block {
+        Block { two_al: v2, ..self }
+    }
+
+    /// The lead axis's length of the block, Å·2⁶⁴.
+    pub(crate) const fn lead_len(&self) -> u128 {
+        self.lead_len
     }
 
     /// The block's impulses.
@@ -444,8 +528,7 @@ impl Block {
 
     /// Step events along the lead axis.
     fn lead_events(&self) -> u32 {
-        let (nx, nz) = self.events.delta();
-        nx.unsigned_abs().max(nz.unsigned_abs())
+        self.count
     }
 
     /// `2aL`, Q64 (Å/tick)².
@@ -520,6 +603,58 @@ fn cross_is_zero(a: [i128; 2], b: [i128; 2]) -> bool {
     zero || ((a[0] < 0) != (b[1] < 0)) == ((a[1] < 0) != (b[0] < 0))
 }
 
+/// Where a started block is at the boundary of its event `i` (1-based, of
+/// its timing; 0 its start): the exact time in its run (Q64 ticks) and the
+/// speed squared (Q64 (Å/tick)²) of its trapezoid there.
+pub(crate) fn state_at(b: &Block, t: &TimedBlock, i: u32) -> (u128, u128) {
+    let [e2, c2, x2] = t.speeds2;
+    if i == 0 {
+        return (t.start, e2);
+    }
+    if b.backwards {
+        return (t.end, x2);
+    }
+    let (d, len, tal) = (b.boundary(i), b.lead_len.max(1), b.two_al);
+    let v2 = e2
+        .saturating_add(mul_div(tal, d, len))
+        .min(c2)
+        .min(x2.saturating_add(mul_div(tal, len - d.min(len), len)));
+    let u = |v2: u128| shl_div(sqrt_shl(v2, 64), 96, b.accel);
+    let time = if i <= t.accel_events {
+        // start + u(v) − u_entry: the ramp's origin is ½ − start + u_entry.
+        let t = (u(v2) as i128)
+            .saturating_add((HALF - TIE) as i128)
+            .saturating_sub(t.accel.origin);
+        t.max(0) as u128
+    } else if i <= t.cruise_end {
+        let n = u128::from(i.saturating_sub(t.accel_events + 1));
+        t.cruise
+            .first
+            .saturating_sub(HALF + TIE)
+            .saturating_add(n.saturating_mul(t.cruise.per_event))
+    } else {
+        // T_stop − u(v).
+        let stop = t.decel.origin.saturating_add((HALF - TIE) as i128).max(0) as u128;
+        stop.saturating_sub(u(v2))
+    };
+    (time.max(t.start).min(t.end), v2)
+}
+
+/// A block as it started: its timing, and its plan (a stepper times what
+/// remains of it again after a hold).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Started {
+    pub(crate) block: Block,
+    pub(crate) timed: TimedBlock,
+}
+
+impl Started {
+    /// Its timing.
+    pub const fn timed(&self) -> &TimedBlock {
+        &self.timed
+    }
+}
+
 /// Blocks waiting to start, the current run's clock, and the exit speed of
 /// the block that started last.
 #[derive(Clone, Debug)]
@@ -591,6 +726,11 @@ impl<const N: usize> Planner<N> {
         self.blocks.push_back(block)
     }
 
+    /// Drops every queued block and the run (a reset).
+    pub fn clear(&mut self) {
+        *self = Planner::new(self.window);
+    }
+
     /// Whether the first block may start without a flush: the window behind
     /// it is full.
     pub fn window_full(&self) -> bool {
@@ -600,6 +740,14 @@ impl<const N: usize> Planner<N> {
     /// Starts the first queued block: fixes its profile from the window
     /// behind it and returns it timed in its run.
     pub fn start(&mut self, rates: &Rates) -> Option<TimedBlock> {
+        self.start_block(rates).map(|s| s.timed)
+    }
+
+    /// As [`Planner::start`], keeping the block's plan with its timing (a
+    /// stepper times what remains of it again after a hold).
+    pub fn start_block(&mut self, rates: &Rates) -> Option<Started> {
+        // The rates are the blocks' own, fixed when they were queued.
+        let _ = rates;
         let n = self.blocks.len().min(self.window);
         // Backward: the highest entry v² of block 1 that still lets every
         // block up to the window's end stop in time.
@@ -621,11 +769,11 @@ impl<const N: usize> Planner<N> {
         let head = self.blocks.pop_front()?;
         let entry = if self.running { self.exit2 } else { 0 };
         let exit = next.min(entry.saturating_add(head.two_al));
-        let timed = profile(&head, entry, exit, self.clock, rates);
+        let timed = profile(&head, entry, exit, self.clock);
         self.clock = timed.end;
         self.exit2 = exit;
         self.running = true;
-        Some(timed)
+        Some(Started { block: head, timed })
     }
 
     /// Ends the open run once every block has started: returns its length
@@ -657,7 +805,7 @@ impl<const N: usize> Planner<N> {
 
 /// The profile of block `b` from entry `e2` to exit `x2` (squared speeds),
 /// starting at `start` (Q64 ticks) in its run: a trapezoid, timed.
-fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBlock {
+pub(crate) fn profile(b: &Block, e2: u128, x2: u128, start: u128) -> TimedBlock {
     let tal = b.two_al.max(1);
     let peak2 = tal.saturating_add(e2).saturating_add(x2) / 2;
     let c2 = b.vmax2.min(peak2);
@@ -679,7 +827,7 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
     // times |d|/|d_lead|, Q64.
     let ratio = mul_div(b.lnq, 1 << 32, dn_lead);
     let path = |dl: u128| mul_shr(dl, ratio, 64);
-    let per_min = rates.ticks_per_min();
+    let per_min = u128::from(b.per_min);
     // The time to cruise `dl` along the lead axis, Q64 ticks; exact but
     // for |d| at a rapid rate.
     let cruise_source = (c2 >= b.vmax2).then_some(b.source);
@@ -690,7 +838,7 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
         match cruise_source {
             Some(Source::Feed(f)) => mul_div(path(dl), per_min, u128::from(f)),
             Some(Source::Axis(axis)) => {
-                let vmax = u128::from(rates.limits.vmax[axis & 1]);
+                let vmax = u128::from(b.axis_vmax);
                 let m = u128::from(b.dn[axis & 1].unsigned_abs());
                 mul_div(dl, per_min * m, dn_lead * vmax)
             }
@@ -730,6 +878,7 @@ fn profile(b: &Block, e2: u128, x2: u128, start: u128, rates: &Rates) -> TimedBl
     let decel_start = start.saturating_add(t_accel).saturating_add(t_cruise);
     TimedBlock {
         events: b.events,
+        part: b.span(),
         accel_events,
         cruise_end,
         accel: Ramp {

@@ -115,6 +115,9 @@ pub(crate) struct Cruise {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TimedBlock {
     pub(crate) events: LinearBlock,
+    /// The events of the block before this timing, and its own (all of
+    /// them, but for what a hold re-timed).
+    pub(crate) part: (u32, u32),
     /// Events `1 ..= accel_events` accelerate, up to `cruise_end` cruise,
     /// the rest decelerate.
     pub(crate) accel_events: u32,
@@ -153,7 +156,7 @@ impl TimedBlock {
 
     /// The events with their ticks, one at a time.
     pub fn events(&self) -> TimedEvents {
-        let steps = self.events.events();
+        let steps = self.events.events().part(self.part.0, self.part.1);
         TimedEvents {
             total: steps.size_hint().0 as u32,
             steps,
@@ -208,6 +211,18 @@ pub struct TimedEvents {
     predict: Predict,
     /// The block's end, whole ticks.
     end: u64,
+}
+
+impl TimedEvents {
+    /// The timing these events come from.
+    pub const fn timed(&self) -> &TimedBlock {
+        &self.block
+    }
+
+    /// Events of the timing handed out so far.
+    pub fn done(&self) -> u32 {
+        self.total - self.steps.size_hint().0 as u32
+    }
 }
 
 impl Iterator for TimedEvents {

@@ -11,7 +11,8 @@
 use crate::arc::DirectSteps;
 use crate::impulse::Impulses;
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
-use crate::step::{FixedRate, Record, TimedBlock, TimedEvents};
+use crate::plan::{profile, state_at, Block, Started};
+use crate::step::{round_ticks, FixedRate, Record, TimedEvents};
 use heapless::Deque;
 
 /// Started items a stepper holds ahead of the one it is issuing.
@@ -41,7 +42,7 @@ pub enum Item {
     /// A run begins: its tick 0 is when its first event is due to be timed.
     RunStart,
     /// A planned block, timed in its run.
-    Block(TimedBlock),
+    Block(Started),
     /// A run at a fixed event rate, from rest to rest.
     Fixed(FixedRun),
     /// The run ends, this many ticks after it began.
@@ -61,13 +62,63 @@ pub enum Pulled {
     RunEnd(u64),
 }
 
+/// What the axes are doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Motion {
+    /// Nothing started waits or runs.
+    Idle,
+    /// Started motion runs or waits.
+    Run,
+    /// A feed hold decelerates the axes along the path.
+    Braking,
+    /// A feed hold has brought them to rest; motion waits for a resume.
+    Held,
+}
+
+/// What a reset found running.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Aborted {
+    /// Events of the block that was running that had been issued.
+    pub done: u32,
+    /// All its events.
+    pub of: u32,
+}
+
 /// What is being issued.
 #[derive(Clone, Debug)]
 #[allow(clippy::large_enum_variant)]
 enum Now {
     Idle,
-    Timed(TimedEvents),
+    /// A block's events, with the block (or the part of it this timing
+    /// covers) to time again after a hold.
+    Timed(TimedEvents, Block),
     Fixed(FixedRun),
+}
+
+/// What waits for a resume where a hold stopped.
+#[derive(Clone, Debug)]
+#[allow(clippy::large_enum_variant)]
+enum Rest {
+    /// Nothing: the hold stopped at the end of a block or at rest.
+    Nothing,
+    /// The rest of a block, and the exit speed² its plan gave it.
+    Part(Block, u128),
+    /// The rest of a fixed-rate run.
+    Fixed(DirectSteps, FixedRate),
+}
+
+/// A feed hold's progress.
+#[derive(Clone, Debug)]
+#[allow(clippy::large_enum_variant)]
+enum Hold {
+    Off,
+    /// Decelerating: the speed² the current timing ends with, and what
+    /// remains once it has ended at rest, if it does.
+    Braking(u128, Option<Rest>),
+    /// At rest.
+    Held(Rest),
 }
 
 /// Started motion waiting and being issued, and what has been issued.
@@ -77,6 +128,16 @@ pub struct Stepper<const R: usize> {
     now: Now,
     record: Record,
     issued: ImpulsePoint,
+    hold: Hold,
+    /// A hold happened in this run: later blocks are timed again from the
+    /// speed and time the run actually reached.
+    retime: bool,
+    /// A run is open.
+    in_run: bool,
+    /// When the timing issued last ends in its run (Q64 ticks), and its
+    /// exit speed² (as it actually runs).
+    end: u128,
+    exit2: u128,
 }
 
 impl<const R: usize> Default for Stepper<R> {
@@ -96,6 +157,11 @@ impl<const R: usize> Stepper<R> {
                 x: Impulses(0),
                 z: Impulses(0),
             },
+            hold: Hold::Off,
+            retime: false,
+            in_run: false,
+            end: 0,
+            exit2: 0,
         }
     }
 
@@ -114,6 +180,16 @@ impl<const R: usize> Stepper<R> {
         self.ring.is_empty() && matches!(self.now, Now::Idle)
     }
 
+    /// What the axes are doing.
+    pub fn motion(&self) -> Motion {
+        match self.hold {
+            Hold::Braking(..) => Motion::Braking,
+            Hold::Held(_) => Motion::Held,
+            Hold::Off if self.is_idle() => Motion::Idle,
+            Hold::Off => Motion::Run,
+        }
+    }
+
     /// Adds an item behind the others; a full stepper hands it back.
     #[allow(clippy::result_large_err)] // the item itself, as heapless does
     pub fn push(&mut self, item: Item) -> Result<(), Item> {
@@ -122,14 +198,19 @@ impl<const R: usize> Stepper<R> {
 
     /// The next thing to do: a run boundary, a block's start, or a step
     /// event with its tick (recorded and counted in the registers as it is
-    /// handed out). `None` when nothing is started.
+    /// handed out). `None` when nothing is started, or a hold holds it.
     #[inline]
     pub fn pull(&mut self) -> Option<Pulled> {
         loop {
             match &mut self.now {
-                Now::Timed(events) => match events.next() {
+                Now::Timed(events, _) => match events.next() {
                     Some((e, tick)) => return Some(self.issue(e, tick)),
-                    None => self.now = Now::Idle,
+                    None => {
+                        self.now = Now::Idle;
+                        if let Hold::Braking(_, Some(_)) = self.hold {
+                            return Some(self.stopped());
+                        }
+                    }
                 },
                 Now::Fixed(run) => match run.events.next() {
                     Some(e) => {
@@ -142,33 +223,236 @@ impl<const R: usize> Stepper<R> {
                         let ended = run.n > 0;
                         self.now = Now::Idle;
                         if ended {
-                            self.record.run_end(ticks);
-                            return Some(Pulled::RunEnd(ticks));
+                            return Some(self.run_end(ticks));
                         }
                     }
                 },
-                Now::Idle => match self.ring.pop_front()? {
-                    Item::RunStart => return Some(Pulled::RunStart),
-                    Item::Block(b) => {
-                        self.now = Now::Timed(b.events());
-                        return Some(Pulled::BlockStart(*b.block()));
+                Now::Idle => {
+                    if matches!(self.hold, Hold::Held(_)) {
+                        return None;
                     }
-                    Item::Fixed(run) => {
-                        // A run of its own; one without events is nothing.
-                        let mut peek = run.events.clone();
-                        let empty = peek.next().is_none();
-                        self.now = Now::Fixed(run);
-                        if !empty {
+                    match self.ring.pop_front()? {
+                        Item::RunStart => {
+                            (self.in_run, self.end, self.exit2) = (true, 0, 0);
                             return Some(Pulled::RunStart);
                         }
+                        Item::Block(s) => return Some(self.block(s)),
+                        Item::Fixed(run) => {
+                            if matches!(self.hold, Hold::Braking(..)) {
+                                // A run of its own starts from rest: held
+                                // before it.
+                                self.hold = Hold::Held(Rest::Fixed(run.events, run.rate));
+                                return None;
+                            }
+                            // A run of its own; one without events is nothing.
+                            let mut peek = run.events.clone();
+                            let empty = peek.next().is_none();
+                            self.now = Now::Fixed(run);
+                            if !empty {
+                                self.in_run = true;
+                                return Some(Pulled::RunStart);
+                            }
+                        }
+                        Item::RunEnd(ticks) => {
+                            // After a hold the run's own clock says when.
+                            let ticks = if self.retime || !matches!(self.hold, Hold::Off) {
+                                round_ticks(self.end)
+                            } else {
+                                ticks
+                            };
+                            self.retime = false;
+                            if matches!(self.hold, Hold::Braking(..)) {
+                                self.hold = Hold::Held(Rest::Nothing);
+                            }
+                            return Some(self.run_end(ticks));
+                        }
                     }
-                    Item::RunEnd(ticks) => {
-                        self.record.run_end(ticks);
-                        return Some(Pulled::RunEnd(ticks));
-                    }
-                },
+                }
             }
         }
+    }
+
+    /// A started block begins: as planned, timed again after a hold, or
+    /// as a hold's deceleration.
+    fn block(&mut self, s: Started) -> Pulled {
+        let planned_exit = s.timed.speeds2()[2];
+        if let Hold::Braking(carry, _) = self.hold {
+            self.brake(&s.block, 0, 0, carry, self.end, planned_exit);
+        } else if self.retime {
+            let e2 = self.exit2;
+            let x2 = planned_exit.min(e2.saturating_add(s.block.two_al()));
+            let timed = profile(&s.block, e2, x2, self.end);
+            (self.end, self.exit2) = (timed.span_q64().1, x2);
+            self.now = Now::Timed(timed.events(), s.block);
+        } else {
+            (self.end, self.exit2) = (s.timed.span_q64().1, planned_exit);
+            self.now = Now::Timed(s.timed.events(), s.block);
+        }
+        Pulled::BlockStart(*s.block.events())
+    }
+
+    /// Times `block` from lead-axis distance `from` (the boundary of its
+    /// `issued`-th event, or its start) as a hold's deceleration from
+    /// speed² `v2` at `t`, at the block's own acceleration: through to its
+    /// end, or to rest within it, the rest kept for a resume.
+    fn brake(
+        &mut self,
+        block: &Block,
+        from: u128,
+        issued: u32,
+        v2: u128,
+        t: u128,
+        planned_exit: u128,
+    ) {
+        let (skip, count) = block.span();
+        let done = skip + issued;
+        let len = block.lead_len();
+        let left = skip + count - done;
+        let through = block.part(from, len, done, left);
+        let tal = through.two_al();
+        let (timed, part, after) = if v2 > tal {
+            let x2 = v2 - tal;
+            (
+                profile(&through, v2, x2, t),
+                through,
+                Hold::Braking(x2, None),
+            )
+        } else {
+            // Rest where 2a·s = v², s from `from`.
+            let stop = from.saturating_add(crate::wide::mul_div(len - from, v2, tal.max(1)));
+            let k = through.events_upto(stop - from);
+            let upto = block.part(from, stop, done, k).braking_to_rest(v2);
+            let rest = block.part(stop, len, done + k, left - k);
+            (
+                profile(&upto, v2, 0, t),
+                upto,
+                Hold::Braking(0, Some(Rest::Part(rest, planned_exit))),
+            )
+        };
+        (self.end, self.exit2) = (timed.span_q64().1, timed.speeds2()[2]);
+        self.hold = after;
+        self.now = Now::Timed(timed.events(), part);
+    }
+
+    /// A hold's deceleration has ended at rest: the run ends there.
+    fn stopped(&mut self) -> Pulled {
+        let rest = match core::mem::replace(&mut self.hold, Hold::Off) {
+            Hold::Braking(_, Some(rest)) => rest,
+            _ => Rest::Nothing,
+        };
+        self.hold = Hold::Held(rest);
+        self.exit2 = 0;
+        self.run_end(round_ticks(self.end))
+    }
+
+    fn run_end(&mut self, ticks: u64) -> Pulled {
+        self.in_run = false;
+        self.record.run_end(ticks);
+        Pulled::RunEnd(ticks)
+    }
+
+    /// Feed hold: from the last event issued, the axes decelerate along
+    /// the path at each block's own acceleration until they rest, and wait
+    /// there for [`Stepper::resume`]. A fixed-rate run (which has no ramps)
+    /// stops after its current event.
+    pub fn hold(&mut self) {
+        if !matches!(self.hold, Hold::Off) {
+            return;
+        }
+        match &self.now {
+            Now::Timed(events, block) => {
+                let (timed, block, issued) = (*events.timed(), *block, events.done());
+                // From the boundary of the last event issued (where the
+                // axes stand at that event), at its time and speed.
+                let (t, v2) = state_at(&block, &timed, issued);
+                let from = if issued == 0 {
+                    0
+                } else {
+                    block.boundary(issued)
+                };
+                self.brake(&block, from, issued, v2, t, timed.speeds2()[2]);
+            }
+            Now::Fixed(run) => {
+                let rest = Rest::Fixed(run.events.clone(), run.rate);
+                let ticks = run.rate.tick(run.n);
+                self.now = Now::Idle;
+                self.hold = Hold::Held(rest);
+                if self.in_run {
+                    let _ = self.run_end(ticks);
+                }
+            }
+            Now::Idle => {
+                if self.in_run && self.exit2 > 0 {
+                    // Between blocks at speed: the next one decelerates.
+                    self.hold = Hold::Braking(self.exit2, None);
+                } else {
+                    self.hold = Hold::Held(Rest::Nothing);
+                    if self.in_run {
+                        let _ = self.run_end(round_ticks(self.end));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Resume after a hold: a new run from rest along the same path, the
+    /// rest of the block where the hold stopped first. Later blocks are
+    /// timed again from the speeds the run reaches (never above their
+    /// plan). While the hold is still decelerating nothing changes.
+    pub fn resume(&mut self) -> Option<Pulled> {
+        let Hold::Held(rest) = core::mem::replace(&mut self.hold, Hold::Off) else {
+            return None;
+        };
+        (self.end, self.exit2) = (0, 0);
+        match rest {
+            Rest::Nothing => {
+                // Rest at a block's end: what follows starts a new run.
+                if self.ring.is_empty() || matches!(self.ring.front(), Some(Item::RunStart)) {
+                    return None;
+                }
+            }
+            Rest::Part(block, planned_exit) => {
+                if block.span().1 == 0 && block.lead_len() == 0 {
+                    // Nothing left of it.
+                } else {
+                    let x2 = planned_exit.min(block.two_al());
+                    let timed = profile(&block, 0, x2, 0);
+                    (self.end, self.exit2) = (timed.span_q64().1, x2);
+                    self.now = Now::Timed(timed.events(), block);
+                }
+            }
+            Rest::Fixed(events, rate) => {
+                self.now = Now::Fixed(FixedRun::new(rate, events));
+            }
+        }
+        self.retime = true;
+        self.in_run = true;
+        Some(Pulled::RunStart)
+    }
+
+    /// Reset: drops everything started at once, the hold with it; the
+    /// registers keep the steps issued. Reports the block that was running.
+    pub fn abort(&mut self) -> Aborted {
+        let aborted = match &self.now {
+            Now::Timed(events, block) => {
+                let (skip, _) = block.span();
+                let (nx, nz) = block.events().delta();
+                Aborted {
+                    done: skip + events.done(),
+                    of: nx.unsigned_abs().max(nz.unsigned_abs()),
+                }
+            }
+            Now::Fixed(run) => Aborted {
+                done: run.n,
+                of: run.n + run.events.clone().count() as u32,
+            },
+            Now::Idle => Aborted { done: 0, of: 0 },
+        };
+        self.ring.clear();
+        self.now = Now::Idle;
+        self.hold = Hold::Off;
+        (self.retime, self.in_run, self.end, self.exit2) = (false, false, 0, 0);
+        aborted
     }
 
     /// Records an event and moves the registers by its steps.
@@ -209,9 +493,10 @@ mod tests {
     use crate::impulse::{quantize, ImpulsePrice};
     use crate::length::Length;
     use crate::plan::{q32, Block, Planner, Rates, WINDOW};
+    use crate::stepper::Motion;
     use std::vec::Vec;
 
-    fn timed(from_um: i64, to_um: i64) -> TimedBlock {
+    fn timed(from_um: i64, to_um: i64) -> Started {
         let rates = Rates::DEFAULT;
         let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
         let (a, b) = (
@@ -226,15 +511,20 @@ mod tests {
         let block = Block::new([0, q32(a)], [0, q32(b)], events, None, h, &rates).unwrap();
         let mut p = Planner::<WINDOW>::new(WINDOW);
         p.push(block, &rates).unwrap();
-        p.start(&rates).unwrap()
+        p.start_block(&rates).unwrap()
     }
 
     #[test]
     fn a_block_comes_out_as_its_events_with_the_run_around_it() {
-        let t = timed(0, -2_000);
+        let started = timed(0, -2_000);
+        let t = *started.timed();
         let mut s = Stepper::<AHEAD>::new();
         assert!(s.is_idle());
-        for item in [Item::RunStart, Item::Block(t), Item::RunEnd(t.end_tick())] {
+        for item in [
+            Item::RunStart,
+            Item::Block(started),
+            Item::RunEnd(t.end_tick()),
+        ] {
             s.push(item).unwrap();
         }
         assert!(!s.is_idle());
@@ -311,5 +601,129 @@ mod tests {
         assert_eq!(s.pull(), Some(Pulled::RunStart));
         assert!(s.has_room());
         assert_eq!(s.waiting(), 1);
+    }
+
+    fn feed_block(to_um: i64, f_mm_min: &str) -> Started {
+        let rates = Rates::DEFAULT;
+        let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
+        let b = Length::from_um(to_um).unwrap();
+        let at = |z| ImpulsePoint {
+            x: Impulses(0),
+            z: quantize(z, h[1]).unwrap(),
+        };
+        let events = LinearBlock::new(at(Length::ZERO), at(b)).unwrap();
+        let f = crate::plan::Feed::new(Length::from_mm_str(f_mm_min).unwrap());
+        let block = Block::new([0, 0], [0, q32(b)], events, f, h, &rates).unwrap();
+        let mut p = Planner::<WINDOW>::new(WINDOW);
+        p.push(block, &rates).unwrap();
+        p.start_block(&rates).unwrap()
+    }
+
+    /// Pulls everything, splitting at `hold_after` issued events.
+    fn steps(s: &mut Stepper<AHEAD>) -> Vec<(u8, u64)> {
+        core::iter::from_fn(|| s.pull())
+            .filter_map(|p| match p {
+                Pulled::Step(e, t) => Some((e.bits(), t)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_hold_decelerates_along_the_path_and_a_resume_ends_where_the_block_ends() {
+        let started = feed_block(-20_000, "1200");
+        let planned: Vec<(u8, u64)> = started
+            .timed()
+            .events()
+            .map(|(e, t)| (e.bits(), t))
+            .collect();
+        assert_eq!(planned.len(), 2000);
+        let mut s = Stepper::<AHEAD>::new();
+        for item in [
+            Item::RunStart,
+            Item::Block(started),
+            Item::RunEnd(started.timed().end_tick()),
+        ] {
+            s.push(item).unwrap();
+        }
+        let mut before = Vec::new();
+        while before.len() < 1000 {
+            if let Some(Pulled::Step(e, t)) = s.pull() {
+                before.push((e.bits(), t));
+            }
+        }
+        assert_eq!(before[..], planned[..1000]);
+        s.hold();
+        assert_eq!(s.motion(), Motion::Braking);
+        let braking = steps(&mut s);
+        assert_eq!(s.motion(), Motion::Held);
+        // 20 mm/s at 150 mm/s² stops in 4/3 mm: 133 events of 0.01 mm.
+        assert_eq!(braking.len(), 133);
+        assert_eq!(s.issued().z, Impulses(-1133));
+        // Each event is later than planned, and at the f64 time of the
+        // deceleration from the last event before the hold.
+        let (v, a) = (20.0f64, 150.0f64);
+        let t_j = v / (2.0 * a) + (999.5 * 0.01) / v;
+        for (m, &(bits, tick)) in braking.iter().enumerate() {
+            assert_eq!(bits, planned[1000 + m].0);
+            assert!(tick > planned[1000 + m].1);
+            let ds = (m + 1) as f64 * 0.01;
+            let t = t_j + (v - libm::sqrt(v * v - 2.0 * a * ds)) / a;
+            let want = libm::round(t * 1e6) as i64;
+            assert!(
+                (tick as i64 - want).abs() <= 1,
+                "event {m}: {tick} vs {want}"
+            );
+        }
+        assert!(braking
+            .windows(3)
+            .all(|w| w[2].1 - w[1].1 >= w[1].1 - w[0].1));
+        let r = s.take_record();
+        assert_eq!(r.events(), 1133);
+        // Resume: a new run from rest to the block's end.
+        assert_eq!(s.resume(), Some(Pulled::RunStart));
+        let after = steps(&mut s);
+        assert_eq!(after.len(), 2000 - 1133);
+        assert_eq!(s.issued().z, Impulses(-2000));
+        let all: Vec<u8> = before
+            .iter()
+            .chain(&braking)
+            .chain(&after)
+            .map(|e| e.0)
+            .collect();
+        let want: Vec<u8> = planned.iter().map(|e| e.0).collect();
+        assert_eq!(all, want);
+        assert!(after.windows(2).all(|w| w[0].1 < w[1].1));
+        assert_eq!(s.motion(), Motion::Idle);
+        // From rest where the hold stopped (4/3 mm after event 1000's
+        // boundary): the next boundary after √(2s/a).
+        let ds = 1133.5 * 0.01 - (999.5 * 0.01 + v * v / (2.0 * a));
+        let t1 = libm::sqrt(2.0 * ds / a);
+        assert!((after[0].1 as i64 - libm::round(t1 * 1e6) as i64).abs() <= 1);
+    }
+
+    #[test]
+    fn a_reset_drops_everything_and_keeps_the_registers_of_the_steps_issued() {
+        let started = feed_block(-20_000, "1200");
+        let mut s = Stepper::<AHEAD>::new();
+        for item in [Item::RunStart, Item::Block(started), Item::RunEnd(0)] {
+            s.push(item).unwrap();
+        }
+        let mut n = 0;
+        while n < 700 {
+            if let Some(Pulled::Step(..)) = s.pull() {
+                n += 1;
+            }
+        }
+        assert_eq!(
+            s.abort(),
+            Aborted {
+                done: 700,
+                of: 2000
+            }
+        );
+        assert!(s.is_idle());
+        assert_eq!(s.pull(), None);
+        assert_eq!(s.issued().z, Impulses(-700));
     }
 }

@@ -251,6 +251,11 @@ fn USART1() {
             RX_PAUSED.store(true, Ordering::Release);
         } else {
             let byte = usart.dr().read().bits() as u8;
+            // Real-time bytes act here, ahead of every queued byte.
+            if let Some(rt) = core_nostd::protocol::Realtime::from_byte(byte) {
+                crate::motion::realtime(rt);
+                return;
+            }
             critical_section::with(|cs| {
                 if let Ok(mut q) = RX.borrow(cs).try_borrow_mut() {
                     let _ = q.push_back(byte);

@@ -19,16 +19,19 @@ pub mod motion;
 
 use board::{Board, Serial};
 use core_nostd::interleave::ImpulsePoint;
-use core_nostd::protocol::Io;
+use core_nostd::protocol::{status_line, Io, Realtime, StatusView};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
-use core_nostd::stepper::Item;
+use core_nostd::stepper::{Aborted, Item, Motion};
 
 /// The transport side of the device: the serial line, and the step
 /// interrupt that takes its motion.
 pub struct Controller {
     /// USART1.
     pub serial: Serial,
+    /// What a status line needs of the session, and the blocks queued.
+    view: StatusView,
+    queued: usize,
 }
 
 impl Controller {
@@ -38,7 +41,29 @@ impl Controller {
         motion::install(board.tim2, board.tim5);
         Controller {
             serial: board.serial,
+            view: StatusView {
+                hx: 0,
+                hz: 0,
+                diam: true,
+                speed: 0,
+            },
+            queued: 0,
         }
+    }
+
+    /// While the protocol waits for the step interrupt: answers a status
+    /// byte (or the line a hold or a resume asks for) from what it knows.
+    fn answer_while_waiting(&mut self) {
+        answer_status(&mut self.serial, &self.view, self.queued);
+    }
+}
+
+/// Sends the `!STATUS` line a real-time byte asked for, if one did.
+fn answer_status(serial: &mut Serial, view: &StatusView, queued: usize) {
+    if motion::take_status() {
+        let issued = motion::issued().unwrap_or_default();
+        let mut line = status_line("!STATUS", motion::motion(), issued, queued, view);
+        serial.send(line.finish());
     }
 }
 
@@ -48,11 +73,41 @@ impl Io for Controller {
     }
 
     fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
-        motion::start(item, drive)
+        let (serial, view, queued) = (&mut self.serial, self.view, self.queued);
+        motion::start(item, drive, || answer_status(serial, &view, queued))
     }
 
     fn drain(&mut self) {
-        motion::drain();
+        while !motion::drained() {
+            self.answer_while_waiting();
+            board::sleep_unless(|| motion::wanted() || motion::drained());
+        }
+    }
+
+    fn hold(&mut self) -> bool {
+        motion::act(Realtime::Hold);
+        true
+    }
+
+    fn resume(&mut self) -> bool {
+        motion::act(Realtime::Resume);
+        true
+    }
+
+    fn abort(&mut self) -> Option<Aborted> {
+        motion::abort()
+    }
+
+    fn motion(&mut self) -> Option<Motion> {
+        Some(motion::motion())
+    }
+
+    fn view(&mut self, view: &StatusView) {
+        self.view = *view;
+    }
+
+    fn queued(&mut self, blocks: usize) {
+        self.queued = blocks;
     }
 
     fn issued(&mut self) -> Option<ImpulsePoint> {

@@ -22,9 +22,15 @@ fn main() -> ! {
         board::SYSCLK_HZ
     );
     loop {
+        // Real-time requests the serial interrupt acted on: the protocol's
+        // part (the reset's report and session, a status line) first.
+        if let Some(rt) = firmware::motion::take_wanted() {
+            device.realtime(rt, &mut io);
+            continue;
+        }
         match io.serial.receive() {
             Some(byte) => device.receive(byte, &mut io),
-            None => board::sleep_unless(board::rx_pending),
+            None => board::sleep_unless(|| board::rx_pending() || firmware::motion::wanted()),
         }
     }
 }

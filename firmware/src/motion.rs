@@ -15,10 +15,12 @@
 
 use crate::board::{sleep_unless, CycleDelay, PortCPin, StepTimer, TIM2_CLK_HZ};
 use core::cell::RefCell;
+use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use core_nostd::interleave::{ImpulsePoint, StepEvent};
+use core_nostd::protocol::Realtime;
 use core_nostd::step::{Record, TickRate};
 use core_nostd::stepdir::{DriveTiming, StepDir, TickClock};
-use core_nostd::stepper::{Item, Pulled, Stepper, AHEAD};
+use core_nostd::stepper::{Aborted, Item, Motion as State, Pulled, Stepper, AHEAD};
 use critical_section::Mutex;
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
@@ -73,7 +75,19 @@ struct Motion {
     next: Option<(StepEvent, u64)>,
     /// The interrupt has work: an event waiting or items to pull.
     busy: bool,
+    /// What a reset found, until the protocol reports it.
+    aborted: Option<Aborted>,
 }
+
+/// A reset dropped the motion; what the protocol still hands over is
+/// dropped too until it has handled the reset.
+static ABORTING: AtomicBool = AtomicBool::new(false);
+
+/// Real-time requests for thread mode: a status line (also after a hold or
+/// a resume), and the protocol's part of a reset.
+static WANTED: AtomicU8 = AtomicU8::new(0);
+const WANT_STATUS: u8 = 1;
+const WANT_RESET: u8 = 2;
 
 static MOTION: Mutex<RefCell<Option<Motion>>> = Mutex::new(RefCell::new(None));
 
@@ -128,6 +142,7 @@ pub fn install(clock: StepTimer, alarm: pac::TIM5) {
         drive: DriveTiming::default(),
         next: None,
         busy: false,
+        aborted: None,
     };
     critical_section::with(|cs| {
         if let Ok(mut m) = MOTION.borrow(cs).try_borrow_mut() {
@@ -156,12 +171,16 @@ fn with<R>(f: impl FnOnce(&mut Motion) -> R) -> Option<R> {
     })
 }
 
-/// Hands started motion to the step interrupt, waiting while it is full;
-/// hands it back only before [`install`].
+/// Hands started motion to the step interrupt, waiting while it is full
+/// (`wait` runs before each sleep); hands it back only before [`install`].
+/// After a reset, until the protocol has handled it, the motion is dropped.
 #[allow(clippy::result_large_err)] // the item itself
-pub fn start(item: Item, drive: &DriveTiming) -> Result<(), Item> {
+pub fn start(item: Item, drive: &DriveTiming, mut wait: impl FnMut()) -> Result<(), Item> {
     let mut item = Some(item);
     loop {
+        if ABORTING.load(Ordering::Acquire) {
+            return Ok(());
+        }
         let taken = with(|m| {
             if !m.stepper.has_room() {
                 return false;
@@ -182,15 +201,121 @@ pub fn start(item: Item, drive: &DriveTiming) -> Result<(), Item> {
             (None, Some(i)) => return Err(i),
             (_, i) => item = i,
         }
-        sleep_unless(|| with(|m| m.stepper.has_room()).unwrap_or(true));
+        wait();
+        sleep_unless(|| wanted() || with(|m| m.stepper.has_room()).unwrap_or(true));
     }
 }
 
-/// Waits until the step interrupt has issued everything.
-pub fn drain() {
-    while with(|m| m.busy).unwrap_or(false) {
-        sleep_unless(|| !with(|m| m.busy).unwrap_or(false));
+/// Whether everything handed over has been issued (a hold keeps what it
+/// stopped until a resume or a reset).
+pub fn drained() -> bool {
+    with(|m| !m.busy && m.stepper.is_idle() && m.next.is_none()).unwrap_or(true)
+}
+
+/// What the axes are doing.
+pub fn motion() -> State {
+    with(|m| match m.stepper.motion() {
+        State::Idle if m.next.is_some() => State::Run,
+        a => a,
+    })
+    .unwrap_or(State::Idle)
+}
+
+/// A real-time byte, from the serial interrupt: hold, resume and reset act
+/// on the step interrupt's state at once; every one asks thread mode for
+/// its line.
+pub fn realtime(rt: Realtime) {
+    act(rt);
+    let want = if rt == Realtime::Reset {
+        WANT_RESET
+    } else {
+        WANT_STATUS
+    };
+    WANTED.fetch_or(want, Ordering::AcqRel);
+}
+
+/// Acts on a real-time command: hold, resume, or reset (the outputs low, the
+/// motion dropped, what was running kept for the protocol's report).
+pub fn act(rt: Realtime) {
+    match rt {
+        Realtime::Status => {}
+        Realtime::Hold => {
+            with(|m| m.stepper.hold());
+        }
+        Realtime::Resume => {
+            with(|m| {
+                if let Some(Pulled::RunStart) = m.stepper.resume() {
+                    m.clock.start_run();
+                }
+                if !m.stepper.is_idle() && !m.busy {
+                    m.busy = true;
+                    pac::NVIC::pend(Interrupt::TIM5);
+                }
+            });
+        }
+        Realtime::Reset => {
+            with(|m| {
+                let found = m.stepper.abort();
+                // The event waiting for its tick was counted, never issued.
+                if let Some((e, _)) = m.next.take() {
+                    let (dx, dz) = e.moves();
+                    let mut p = m.stepper.issued();
+                    p.x.0 -= i32::from(dx);
+                    p.z.0 -= i32::from(dz);
+                    m.stepper.set_issued(p);
+                }
+                m.alarm.stop();
+                m.axes.stop_outputs();
+                m.busy = false;
+                m.aborted = Some(found);
+            });
+            ABORTING.store(true, Ordering::Release);
+        }
     }
+}
+
+/// Takes a wanted status line, if one is wanted.
+pub fn take_status() -> bool {
+    WANTED.fetch_and(!WANT_STATUS, Ordering::AcqRel) & WANT_STATUS != 0
+}
+
+/// The real-time request thread mode has to answer next, if any: a reset
+/// before a status line.
+pub fn take_wanted() -> Option<Realtime> {
+    let w = WANTED.load(Ordering::Acquire);
+    if w & WANT_RESET != 0 {
+        WANTED.fetch_and(!WANT_RESET, Ordering::AcqRel);
+        Some(Realtime::Reset)
+    } else if w & WANT_STATUS != 0 {
+        WANTED.fetch_and(!WANT_STATUS, Ordering::AcqRel);
+        Some(Realtime::Status)
+    } else {
+        None
+    }
+}
+
+/// Whether a real-time request waits for thread mode.
+pub fn wanted() -> bool {
+    WANTED.load(Ordering::Acquire) != 0
+}
+
+/// The protocol's side of a reset: what the step interrupt found running
+/// (the reset itself happened when the byte arrived; a reset that did not
+/// come through the serial interrupt happens now).
+pub fn abort() -> Option<Aborted> {
+    let found = with(|m| match m.aborted.take() {
+        Some(found) => found,
+        None => {
+            let found = m.stepper.abort();
+            m.next = None;
+            m.alarm.stop();
+            m.axes.stop_outputs();
+            m.busy = false;
+            found
+        }
+    });
+    ABORTING.store(false, Ordering::Release);
+    found
 }
 
 /// The registers of the steps issued (the stepper counts an event when

@@ -1112,6 +1112,7 @@ fn status_reports_the_steps_issued_and_the_queue() {
         queued: planner.queued(),
         issued,
         speed2: planner.exit2(),
+        motion: core_nostd::stepper::Motion::Run,
     }
     .speed(TickRate::TIMER);
     assert!(speed > 0, "moving at a corner taken with δ = 0.01 mm");

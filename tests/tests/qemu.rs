@@ -108,3 +108,64 @@ fn a_debug_panic_stops_and_exits_with_failure() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("release_build_has_a_reachable_panic"));
 }
+
+/// One exchange at a time (a real-time byte is answered the moment it
+/// arrives, ahead of bytes still queued): the firmware's lines equal the
+/// in-process device's, but for the hold, which only the board can make.
+#[test]
+fn firmware_answers_real_time_bytes_like_the_in_process_device() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let elf = build_firmware("qemu").unwrap();
+    let mut qemu = Qemu::boot(&elf, true).unwrap();
+    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let mut local = LocalDevice::new();
+    let mut exchange = |bytes: &[u8]| -> (Vec<String>, Vec<String>) {
+        let want = String::from_utf8_lossy(&local.feed(bytes)).into_owned();
+        let want: Vec<String> = want.split_terminator("\r\n").map(String::from).collect();
+        client.write_raw(bytes).unwrap();
+        let got = (0..want.len())
+            .map(|_| client.read_line().unwrap().trim_end().to_string())
+            .collect();
+        (got, want)
+    };
+    for step in [
+        &b"SESSION TOKEN=9\n"[..],
+        b"MOVE X=10 Z=-5 F=200\n",
+        b"\x80",
+        b"SYNC\n",
+        b"G1 X20 Z-10 F300\n",
+        b"\x80",
+        b"\x18",
+        b"POS\n",
+        b"SESSION\n",
+        b"MOVE X=1 Z=-1\n",
+        b"SYNC\n",
+    ] {
+        let (got, want) = exchange(step);
+        assert_eq!(got, want, "after {:?}", String::from_utf8_lossy(step));
+    }
+    // A hold at rest holds on the board (the virtual clock has nothing in
+    // motion): a block queued meanwhile waits for the cycle start.
+    let (got, _) = exchange(b"\x82");
+    assert!(
+        got[0].starts_with("!STATUS STATE=HOLD PX=100 PZ=-100 "),
+        "{got:?}"
+    );
+    client.write_raw(b"MOVE X=2 Z=-2\nSTATUS\n").unwrap();
+    assert!(client
+        .read_line()
+        .unwrap()
+        .starts_with("OK NX=100 NZ=-100 PX=200 PZ=-200"));
+    let status = client.read_line().unwrap();
+    assert!(
+        status.starts_with("OK STATE=HOLD PX=100 PZ=-100"),
+        "{status}"
+    );
+    client.write_raw(b"\x81").unwrap();
+    assert!(client.read_line().unwrap().starts_with("!STATUS STATE="));
+    client.write_raw(b"SYNC\nPOS\n").unwrap();
+    assert!(client.read_line().unwrap().starts_with("OK EV=100 "));
+    assert!(client.read_line().unwrap().starts_with("OK PX=200 PZ=-200"));
+}

@@ -10,12 +10,12 @@ pub mod reply;
 mod session;
 mod words;
 
-pub use session::{Config, Pass, Session, NAME, VERSION};
+pub use session::{status_line, Config, Pass, Session, NAME, VERSION};
 
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::step::Record;
 use crate::stepdir::DriveTiming;
-use crate::stepper::Item;
+use crate::stepper::{Aborted, Item, Motion};
 use core::fmt;
 use framing::{Framed, LineAssembler};
 
@@ -67,6 +67,52 @@ impl fmt::Display for ErrorCode {
     }
 }
 
+/// The real-time bytes (`docs/protocol.md`): acted on the moment they
+/// arrive, wherever they fall, and never part of a request. They are
+/// grblHAL's non-printing codes (and grbl's reset): bytes a request can
+/// never hold, where grbl's printable `?`, `!`, `~` would collide with the
+/// CRC word ` ~CCCCCCCC` and with text in comments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Realtime {
+    /// 0x80: one `!STATUS` line at once.
+    Status,
+    /// 0x81: cycle start, resume after a hold.
+    Resume,
+    /// 0x82: feed hold.
+    Hold,
+    /// 0x18 (Ctrl-X): stop at once and drop everything queued.
+    Reset,
+}
+
+impl Realtime {
+    /// The real-time command a byte is, if it is one.
+    pub const fn from_byte(byte: u8) -> Option<Realtime> {
+        match byte {
+            0x80 => Some(Realtime::Status),
+            0x81 => Some(Realtime::Resume),
+            0x82 => Some(Realtime::Hold),
+            0x18 => Some(Realtime::Reset),
+            _ => None,
+        }
+    }
+}
+
+/// What a `!STATUS` line needs that only the session knows, handed to the
+/// transport so that it can answer a status request while it waits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StatusView {
+    /// X's impulse price, Å (on the radius).
+    pub hx: i64,
+    /// Z's impulse price, Å.
+    pub hz: i64,
+    /// X printed as a diameter.
+    pub diam: bool,
+    /// The speed, 10⁻⁴ mm/min.
+    pub speed: i64,
+}
+
 /// Where replies and motion go: the transport side of a [`Device`].
 pub trait Io {
     /// Sends one complete reply line (it ends with `*HH` and CRLF).
@@ -92,6 +138,39 @@ pub trait Io {
     /// The run ended `ticks` after it began; the axes are at rest.
     fn run_end(&mut self, ticks: u64) {
         let _ = ticks;
+    }
+
+    /// Feed hold on the transport's own stepper; false when it has none.
+    fn hold(&mut self) -> bool {
+        false
+    }
+
+    /// Resume after a hold on the transport's own stepper.
+    fn resume(&mut self) -> bool {
+        false
+    }
+
+    /// Reset: the transport's own stepper drops everything at once (its
+    /// outputs low); what it found running, if it has one.
+    fn abort(&mut self) -> Option<Aborted> {
+        None
+    }
+
+    /// What the transport's own stepper is doing, if it has one.
+    fn motion(&mut self) -> Option<Motion> {
+        None
+    }
+
+    /// What a status line needs besides the stepper, kept current by the
+    /// session.
+    fn view(&mut self, view: &StatusView) {
+        let _ = view;
+    }
+
+    /// Blocks queued and not started, as the planner hands over the next
+    /// one.
+    fn queued(&mut self, blocks: usize) {
+        let _ = blocks;
     }
 
     /// Takes started motion for a stepper of the transport's own (a
@@ -152,8 +231,14 @@ impl Device {
         }
     }
 
-    /// Takes one received byte; answers through `io` when it completes a line.
+    /// Takes one received byte; answers through `io` when it completes a
+    /// line, or at once for a real-time byte (which leaves the line being
+    /// received as it was).
     pub fn receive<I: Io>(&mut self, byte: u8, io: &mut I) {
+        if let Some(rt) = Realtime::from_byte(byte) {
+            self.session.realtime(rt, io);
+            return;
+        }
         match self.rx.push(byte) {
             Some(Framed::Line) => self.session.handle_line(self.rx.line(), io),
             Some(Framed::TooLong) => session::send_error(
@@ -163,6 +248,12 @@ impl Device {
             ),
             None => {}
         }
+    }
+
+    /// Acts on a real-time command and answers it (a transport that picks
+    /// real-time bytes out as they arrive hands them over here).
+    pub fn realtime<I: Io>(&mut self, rt: Realtime, io: &mut I) {
+        self.session.realtime(rt, io);
     }
 
     /// Takes received bytes in order.

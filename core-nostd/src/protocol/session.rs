@@ -6,7 +6,7 @@
 
 use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
-use super::{ErrorCode, Io};
+use super::{ErrorCode, Io, Realtime, StatusView};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
 use crate::comp::{
     CompError, Contour, Element, Move, MoveKind, Moves, Origin, Shape, TipCode, Tool, MAX_MOVES,
@@ -21,7 +21,7 @@ use crate::machine::{Machine, StepSink};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
 use crate::step::Record;
 use crate::stepdir::{DriveTiming, TimingError};
-use crate::stepper::Item;
+use crate::stepper::{Aborted, Item, Motion as Axes};
 use core::fmt::{self, Write};
 
 /// The device name reported by `VER`.
@@ -266,6 +266,8 @@ impl Session {
     /// trusted). A request whose `@id` equals the last one's is not run
     /// again: its remembered final line is sent instead.
     pub fn handle_line<I: Io>(&mut self, line: &[u8], io: &mut I) {
+        let view = self.view(io);
+        io.view(&view);
         let (body, crc) = match check_integrity(line) {
             Ok(v) => v,
             Err(refusal) => return send_refusal(io, refusal),
@@ -374,7 +376,7 @@ impl Session {
             Ok(())
         } else if command.eq_ignore_ascii_case("STATUS") {
             no_args(words, "STATUS")?;
-            self.status_reply(io);
+            self.status_reply(io, "OK");
             Ok(())
         } else if command.eq_ignore_ascii_case("RESET") {
             no_args(words, "RESET")?;
@@ -1155,29 +1157,74 @@ impl Session {
 
     /// `STATUS`: where the axes are now (the steps issued), their speed and
     /// the blocks waiting.
-    fn status_reply<I: Io>(&self, io: &mut I) {
+    fn status_reply<I: Io>(&self, io: &mut I, prefix: &str) {
         let st = self.machine.status(&mut Sink::new(io, self.drive));
-        let state = if st.queued > 0 { "RUN" } else { "IDLE" };
-        let factor = if self.cfg.diam { 2 } else { 1 };
-        // |registers| ≤ 999 999 999 and prices ≤ 10⁷ Å: within i64.
-        let x = i64::from(st.issued.x.get()) * self.cfg.hx.as_angstrom() * factor;
-        let z = i64::from(st.issued.z.get()) * self.cfg.hz.as_angstrom();
-        // Speed: √v² Å/tick · TICK · 60 / 1000 in 10⁻⁴ mm/min.
-        let v = st.speed(self.machine.tick());
+        let mut line = status_line(prefix, st.motion, st.issued, st.queued, &self.view(io));
+        io.send(line.finish());
+    }
+
+    /// What a status line needs of the session.
+    fn view<I: Io>(&self, io: &mut I) -> StatusView {
+        let st = self.machine.status(&mut Sink::new(io, self.drive));
+        StatusView {
+            hx: self.cfg.hx.as_angstrom(),
+            hz: self.cfg.hz.as_angstrom(),
+            diam: self.cfg.diam,
+            speed: st.speed(self.machine.tick()),
+        }
+    }
+
+    /// A real-time byte: acted on at once, answered by one line that
+    /// starts with `!` (a request's reply never does).
+    pub fn realtime<I: Io>(&mut self, rt: Realtime, io: &mut I) {
+        match rt {
+            Realtime::Status => {}
+            Realtime::Hold => self.machine.hold(&mut Sink::new(io, self.drive)),
+            Realtime::Resume => self.machine.resume(&mut Sink::new(io, self.drive)),
+            Realtime::Reset => return self.reset(io),
+        }
+        self.status_reply(io, "!STATUS");
+    }
+
+    /// Ctrl-X: everything queued and started is dropped at once, the
+    /// registers keep the steps issued and the commanded point becomes
+    /// theirs; the session restarts as after a power cycle (modal state,
+    /// feed, compensation, session token), the configuration, drive and
+    /// limits kept. Answered `!RESET DONE= OF= PX= PZ=`: the events of the
+    /// block that was running that were issued, of how many.
+    fn reset<I: Io>(&mut self, io: &mut I) {
+        let (found, issued): (Aborted, ImpulsePoint) =
+            self.machine.abort(&mut Sink::new(io, self.drive));
+        let cmd = [
+            // A register times its price is a position the machine holds.
+            Length::from_angstrom(i64::from(issued.x.get()) * self.cfg.hx.as_angstrom())
+                .unwrap_or(Length::ZERO),
+            Length::from_angstrom(i64::from(issued.z.get()) * self.cfg.hz.as_angstrom())
+                .unwrap_or(Length::ZERO),
+        ];
+        self.machine.set_point(point_q32(cmd));
+        self.cmd = cmd;
+        self.prog = cmd;
+        self.pos = issued;
+        self.modal = Modal::POWER_ON;
+        self.contour = Contour::new();
+        self.last_moves = Moves::new();
+        self.element_feed = None;
+        self.token = 0;
+        self.last_id = None;
+        self.last_final.clear();
         let mut line = ReplyLine::new();
         let _ = write!(
             line,
-            "OK STATE={state} PX={} PZ={} X=",
-            st.issued.x.get(),
-            st.issued.z.get()
+            "!RESET DONE={} OF={} PX={} PZ={}",
+            found.done,
+            found.of,
+            issued.x.get(),
+            issued.z.get()
         );
-        let _ = write_mm4(&mut line, div_round_half_away(x, 1_000));
-        let _ = line.write_str(" Z=");
-        let _ = write_mm4(&mut line, div_round_half_away(z, 1_000));
-        let _ = line.write_str(" V=");
-        let _ = write_mm4(&mut line, v);
-        let _ = write!(line, " Q={}", st.queued);
         io.send(line.finish());
+        let view = self.view(io);
+        io.view(&view);
     }
 
     /// The commanded coordinate of `axis` after a word: absolute, or added
@@ -1358,6 +1405,42 @@ fn split_id(body: &[u8]) -> Result<(Option<u32>, &[u8]), Refusal<'static>> {
     }
 }
 
+/// A status line: `<prefix> STATE= PX= PZ= X= Z= V= Q=` (`docs/protocol.md`),
+/// for `STATUS` and for the real-time status byte, which a transport may
+/// answer itself while it waits for room.
+pub fn status_line(
+    prefix: &str,
+    motion: Axes,
+    issued: ImpulsePoint,
+    queued: usize,
+    view: &StatusView,
+) -> ReplyLine {
+    let state = match motion {
+        Axes::Idle => "IDLE",
+        Axes::Run => "RUN",
+        Axes::Braking | Axes::Held => "HOLD",
+    };
+    let factor = if view.diam { 2 } else { 1 };
+    // |registers| ≤ 999 999 999 and prices ≤ 10⁷ Å: within i64.
+    let x = i64::from(issued.x.get()) * view.hx * factor;
+    let z = i64::from(issued.z.get()) * view.hz;
+    let mut line = ReplyLine::new();
+    let _ = write!(
+        line,
+        "{prefix} STATE={state} PX={} PZ={} X=",
+        issued.x.get(),
+        issued.z.get()
+    );
+    let _ = write_mm4(&mut line, div_round_half_away(x, 1_000));
+    let _ = line.write_str(" Z=");
+    let _ = write_mm4(&mut line, div_round_half_away(z, 1_000));
+    let _ = line.write_str(" V=");
+    let speed = if motion == Axes::Held { 0 } else { view.speed };
+    let _ = write_mm4(&mut line, speed);
+    let _ = write!(line, " Q={queued}");
+    line
+}
+
 /// Adds the request's id (` @n`) and CRC (` ~CCCCCCCC`) words to every reply
 /// line, and remembers the final line for a repeated id.
 struct Suffixed<'a, I: Io> {
@@ -1419,6 +1502,30 @@ impl<I: Io> Io for Suffixed<'_, I> {
 
     fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
         self.inner.start(item, drive)
+    }
+
+    fn hold(&mut self) -> bool {
+        self.inner.hold()
+    }
+
+    fn resume(&mut self) -> bool {
+        self.inner.resume()
+    }
+
+    fn abort(&mut self) -> Option<Aborted> {
+        self.inner.abort()
+    }
+
+    fn motion(&mut self) -> Option<Axes> {
+        self.inner.motion()
+    }
+
+    fn view(&mut self, view: &StatusView) {
+        self.inner.view(view);
+    }
+
+    fn queued(&mut self, blocks: usize) {
+        self.inner.queued(blocks);
     }
 
     fn drain(&mut self) {
@@ -1553,6 +1660,26 @@ impl<'a, I: Io> Sink<'a, I> {
 impl<I: Io> StepSink for Sink<'_, I> {
     fn start(&mut self, item: Item) -> Result<(), Item> {
         self.io.start(item, &self.drive)
+    }
+
+    fn hold(&mut self) -> bool {
+        self.io.hold()
+    }
+
+    fn resume(&mut self) -> bool {
+        self.io.resume()
+    }
+
+    fn abort(&mut self) -> Option<Aborted> {
+        self.io.abort()
+    }
+
+    fn motion(&mut self) -> Option<Axes> {
+        self.io.motion()
+    }
+
+    fn queued(&mut self, blocks: usize) {
+        self.io.queued(blocks);
     }
 
     fn drain(&mut self) {

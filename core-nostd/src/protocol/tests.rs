@@ -512,7 +512,14 @@ proptest! {
         let mut run = 0usize;
         let mut over = false;
         let mut prev_cr = false;
+        // Real-time bytes are picked out wherever they fall, one `!` line
+        // each.
+        let mut realtime = 0;
         for &b in &bytes {
+            if super::Realtime::from_byte(b).is_some() {
+                realtime += 1;
+                continue;
+            }
             let is_cr = b == b'\r';
             if b == b'\n' && prev_cr {
             } else if b == b'\r' || b == b'\n' {
@@ -527,8 +534,10 @@ proptest! {
         }
         let finals = io.out.iter().filter(|l| l.starts_with("OK") || l.starts_with("ERR ")).count();
         let data = io.out.iter().filter(|l| l.starts_with("DATA ")).count();
-        prop_assert_eq!(finals + data, io.out.len());
+        let bang = io.out.iter().filter(|l| l.starts_with('!')).count();
+        prop_assert_eq!(finals + data + bang, io.out.len());
         prop_assert_eq!(finals, expected);
+        prop_assert_eq!(bang, realtime);
     }
 
     /// Random printable requests built from protocol words never panic, and a
@@ -800,4 +809,54 @@ fn a_chord_end_on_a_rounding_boundary_rounds_away_from_zero() {
     assert!(r[3].contains("DPHI=120.000000"), "{r:?}");
     // Z: −873 → −876 (−8.755 mm is −875.5 impulses); X: 21.27232 mm.
     assert_eq!(r[0], "DATA I=1 NX=3 NZ=-3");
+}
+
+#[test]
+fn real_time_bytes_act_at_once_and_leave_the_line_around_them_whole() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "MOVE X=10 Z=-5 F=200");
+    // A status byte inside a request: its line first, the request after.
+    let r = ask(&mut dev, b"PO\x80S\n");
+    assert_eq!(r.len(), 2, "{r:?}");
+    assert!(r[0].starts_with("!STATUS STATE=RUN PX=0 PZ=0"), "{r:?}");
+    assert!(r[0].starts_with("!STATUS STATE=RUN PX=0 PZ=0 X=0.0000 Z=0.0000 V=0.0000 Q=1"));
+    assert!(r[1].starts_with("OK PX=1000 PZ=-500"));
+    // The same characters printable inside a comment or a CRC word are
+    // text: `?`, `!`, `~` are not real-time bytes here.
+    let r = ask(&mut dev, b"G1 X10 Z-5 (ok? yes! ~) F100\n");
+    assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
+    // Hold and resume on the virtual clock: nothing moves in time, the
+    // state stays as it was.
+    let r = ask(&mut dev, b"\x82\x81");
+    assert_eq!(r.len(), 2);
+    assert!(
+        r.iter().all(|l| l.starts_with("!STATUS STATE=RUN")),
+        "{r:?}"
+    );
+}
+
+#[test]
+fn a_reset_byte_drops_the_queue_keeps_the_registers_and_ends_the_session() {
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "SESSION TOKEN=7").starts_with("OK"));
+    ask1(&mut dev, "MOVE X=10 Z=-5 F=200");
+    assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=1000"));
+    ask(&mut dev, b"G1 X20 Z-10 F300\n");
+    let r = ask(&mut dev, b"\x18");
+    // The queued block never started: nothing was running.
+    assert_eq!(r.len(), 1);
+    assert!(
+        r[0].starts_with("!RESET DONE=0 OF=0 PX=1000 PZ=-500"),
+        "{r:?}"
+    );
+    // The commanded point is where the steps are; the queue is empty.
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=1000 PZ=-500 X=10.0000 Z=-5.0000"
+    );
+    assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0"));
+    // As after a power cycle: no feed, no session token.
+    assert!(ask1(&mut dev, "G1 X30").starts_with("ERR VALUE F"));
+    assert!(ask1(&mut dev, &with_crc("@5 POS")).starts_with("ERR SESSION"));
+    assert_eq!(ask1(&mut dev, "SESSION"), "OK TOKEN=0");
 }

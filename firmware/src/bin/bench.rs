@@ -192,12 +192,16 @@ fn timed(tim: &StepTimer) {
         let Some(b) = block(a, b) else { return };
         let _ = p.push(b, &rates);
     }
-    let (Some(ta), Some(tb), Some(tc)) = (p.start(&rates), p.start(&rates), p.start(&rates)) else {
+    let (Some(sa), Some(sb), Some(sc)) = (
+        p.start_block(&rates),
+        p.start_block(&rates),
+        p.start_block(&rates),
+    ) else {
         return;
     };
-    let (ca, na) = run(&ta);
-    let (cb, nb) = run(&tb);
-    let (cc, nc) = run(&tc);
+    let (ca, na) = run(sa.timed());
+    let (cb, nb) = run(sb.timed());
+    let (cc, nc) = run(sc.timed());
     let (c, n) = (ca.wrapping_add(cc), na.saturating_add(nc).max(1));
     Line::print(format_args!(
         "timed step events, ramps (8 mm from rest, 8 mm to rest): {n} events, {}.{:02} instructions per event",
@@ -229,13 +233,13 @@ fn timed(tim: &StepTimer) {
         });
         (c, n.max(1))
     };
-    let (c, n) = work(&[Item::RunStart, Item::Block(tb)]);
+    let (c, n) = work(&[Item::RunStart, Item::Block(sb)]);
     Line::print(format_args!(
         "step interrupt's work per event (pull, TSEQ, registers, STEP/DIR), cruise: {}.{:02} instructions",
         c / n,
         (c % n) * 100 / n
     ));
-    let (c, n) = work(&[Item::RunStart, Item::Block(ta), Item::Block(tc)]);
+    let (c, n) = work(&[Item::RunStart, Item::Block(sa), Item::Block(sc)]);
     Line::print(format_args!(
         "step interrupt's work per event, ramps: {}.{:02} instructions",
         c / n,
