@@ -65,6 +65,12 @@ pub trait StepSink {
     fn motion(&mut self) -> Option<Motion> {
         None
     }
+    /// Whether the sink's own stepper is running the last block started
+    /// in an open run (or braking into the next one): it needs the next
+    /// block now, window full or not.
+    fn hungry(&mut self) -> bool {
+        false
+    }
     /// Blocks queued and not started, as the planner hands over the next
     /// one (a board reports it while it waits for room).
     fn queued(&mut self, blocks: usize) {
@@ -117,6 +123,10 @@ pub struct Machine {
     stepper: Stepper<AHEAD>,
     /// Where the next queued block starts, Å·2³².
     point: Point,
+    /// Blocks started with a short window because the stepper needed
+    /// them (the host did not keep the queue filled), since the last
+    /// `SYNC` or `ZERO`.
+    starved: u32,
 }
 
 impl Default for Machine {
@@ -138,6 +148,7 @@ impl Machine {
             planner: Planner::new(window),
             stepper: Stepper::new(),
             point: [0, 0],
+            starved: 0,
         }
     }
 
@@ -192,7 +203,30 @@ impl Machine {
         let _ = self.planner.push(block, &self.rates);
         if self.planner.window_full() {
             self.start_one(sink);
+        } else {
+            self.poll(sink);
         }
+    }
+
+    /// A real device's rule besides the window: when the stepper runs the
+    /// last block started in an open run, the next queued block starts now
+    /// with the window it has (counted as starved). Its plan still ends at
+    /// rest by the end of what is queued.
+    pub fn poll<S: StepSink>(&mut self, sink: &mut S) {
+        if self.planner.in_run() && self.planner.queued() > 0 && sink.hungry() {
+            self.starved += u32::from(self.start_one(sink));
+        }
+    }
+
+    /// Whether [`Machine::poll`] could start a block, were the stepper
+    /// hungry.
+    pub fn can_feed(&self) -> bool {
+        self.planner.in_run() && self.planner.queued() > 0
+    }
+
+    /// Blocks started starved since the last `SYNC` or `ZERO`.
+    pub const fn starved(&self) -> u32 {
+        self.starved
     }
 
     /// A flush: every queued block starts in turn, the last one ends at
@@ -222,15 +256,17 @@ impl Machine {
 
     /// `SYNC`: a flush, then what ran since the previous `SYNC` or `ZERO`;
     /// the record starts again.
-    pub fn sync<S: StepSink>(&mut self, sink: &mut S) -> Record {
+    pub fn sync<S: StepSink>(&mut self, sink: &mut S) -> (Record, u32) {
         self.flush(sink);
         let own = self.stepper.take_record();
-        sink.take_record().unwrap_or(own)
+        let starved = core::mem::take(&mut self.starved);
+        (sink.take_record().unwrap_or(own), starved)
     }
 
     /// Forgets what was recorded (`ZERO`); the caller has flushed.
     pub fn clear_record<S: StepSink>(&mut self, sink: &mut S) {
         self.stepper.clear_record();
+        self.starved = 0;
         let _ = sink.take_record();
     }
 

@@ -190,6 +190,16 @@ impl<const R: usize> Stepper<R> {
         }
     }
 
+    /// Whether it has issued every block started in an open run (or
+    /// brakes towards the next one): block `k − 1` has ended, the planner
+    /// should start block `k` now, with the window it has.
+    pub fn hungry(&self) -> bool {
+        self.in_run
+            && self.ring.is_empty()
+            && matches!(self.now, Now::Idle)
+            && !matches!(self.hold, Hold::Held(_))
+    }
+
     /// Adds an item behind the others; a full stepper hands it back.
     #[allow(clippy::result_large_err)] // the item itself, as heapless does
     pub fn push(&mut self, item: Item) -> Result<(), Item> {

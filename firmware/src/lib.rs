@@ -46,6 +46,7 @@ impl Controller {
                 hz: 0,
                 diam: true,
                 speed: 0,
+                starved: 0,
             },
             queued: 0,
         }
@@ -100,6 +101,10 @@ impl Io for Controller {
 
     fn motion(&mut self) -> Option<Motion> {
         Some(motion::motion())
+    }
+
+    fn hungry(&mut self) -> bool {
+        motion::hungry()
     }
 
     fn view(&mut self, view: &StatusView) {

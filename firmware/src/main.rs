@@ -28,9 +28,20 @@ fn main() -> ! {
             device.realtime(rt, &mut io);
             continue;
         }
+        // The step interrupt runs the last block started: the next one
+        // starts now, window full or not.
+        let feed = device.can_feed() && firmware::motion::hungry();
+        if feed {
+            device.poll(&mut io);
+        }
         match io.serial.receive() {
             Some(byte) => device.receive(byte, &mut io),
-            None => board::sleep_unless(|| board::rx_pending() || firmware::motion::wanted()),
+            None if feed => {}
+            None => board::sleep_unless(|| {
+                board::rx_pending()
+                    || firmware::motion::wanted()
+                    || (device.can_feed() && firmware::motion::hungry())
+            }),
         }
     }
 }

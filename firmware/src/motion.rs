@@ -13,12 +13,16 @@
 //! ticks: QEMU's timers cost host time per wake-up, and the ticks are
 //! compared through `SYNC`, not measured.
 
-use crate::board::{sleep_unless, CycleDelay, PortCPin, StepTimer, TIM2_CLK_HZ};
+#[cfg(not(feature = "qemu-paced"))]
+use crate::board::TIM2_CLK_HZ;
+use crate::board::{sleep_unless, CycleDelay, PortCPin, StepTimer};
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use core_nostd::interleave::{ImpulsePoint, StepEvent};
 use core_nostd::protocol::Realtime;
-use core_nostd::step::{Record, TickRate};
+use core_nostd::step::Record;
+#[cfg(not(feature = "qemu-paced"))]
+use core_nostd::step::TickRate;
 use core_nostd::stepdir::{DriveTiming, StepDir, TickClock};
 use core_nostd::stepper::{Aborted, Item, Motion as State, Pulled, Stepper, AHEAD};
 use critical_section::Mutex;
@@ -34,12 +38,14 @@ const LEAD: u64 = 3;
 type Axes = StepDir<PortCPin, PortCPin, PortCPin, PortCPin>;
 
 /// TIM5 as a one-shot alarm in ticks.
+#[cfg(not(feature = "qemu-paced"))]
 struct Alarm {
     tim: pac::TIM5,
 }
 
+#[cfg(not(feature = "qemu-paced"))]
 impl Alarm {
-    fn new(tim: pac::TIM5) -> Alarm {
+    fn new(tim: pac::TIM5, _: &StepTimer) -> Alarm {
         let psc = TIM2_CLK_HZ / TickRate::TIMER.hz() - 1;
         tim.cr1().write(|w| w.urs().set_bit().opm().set_bit());
         tim.psc().write(|w| unsafe { w.bits(psc) });
@@ -62,6 +68,67 @@ impl Alarm {
         self.tim.cr1().modify(|_, w| w.cen().clear_bit());
         self.tim.sr().write(|w| unsafe { w.bits(0) });
     }
+}
+
+/// Under paced QEMU the alarm is SysTick, which pends the step interrupt:
+/// QEMU 7.2's STM32 timer schedules its update at the current time plus
+/// the absolute time of the hit, so a TIM5 alarm armed `t` after boot
+/// fires about `t` late. TIM2's counter reads are right and still time the
+/// events.
+#[cfg(feature = "qemu-paced")]
+struct Alarm {
+    syst: cortex_m::peripheral::SYST,
+    /// SysTick counts (core cycles) per tick, measured against TIM2.
+    per_tick: u32,
+}
+
+#[cfg(feature = "qemu-paced")]
+impl Alarm {
+    fn new(tim5: pac::TIM5, clock: &StepTimer) -> Alarm {
+        // TIM5 stays unused: its update is what QEMU schedules wrongly.
+        let _ = tim5;
+        // SAFETY: SysTick is used by nothing else in this firmware.
+        let mut syst = unsafe { cortex_m::Peripherals::steal() }.SYST;
+        syst.set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
+        syst.set_reload(0x00FF_FFFF);
+        syst.clear_current();
+        syst.enable_counter();
+        // Core cycles in 1000 ticks of TIM2.
+        let t0 = clock.count();
+        let v0 = cortex_m::peripheral::SYST::get_current();
+        while clock.count().wrapping_sub(t0) < 1000 {}
+        let v1 = cortex_m::peripheral::SYST::get_current();
+        let cycles = v0.wrapping_sub(v1) & 0x00FF_FFFF;
+        syst.disable_counter();
+        Alarm {
+            syst,
+            per_tick: (cycles / 1000).max(1),
+        }
+    }
+
+    fn arm(&mut self, ticks: u64) {
+        let cycles = ticks
+            .saturating_mul(u64::from(self.per_tick))
+            .clamp(1, 0x00FF_FFFF);
+        self.syst.set_reload(cycles as u32);
+        self.syst.clear_current();
+        self.syst.enable_interrupt();
+        self.syst.enable_counter();
+    }
+
+    fn stop(&mut self) {
+        self.syst.disable_interrupt();
+        self.syst.disable_counter();
+    }
+}
+
+#[cfg(feature = "qemu-paced")]
+#[cortex_m_rt::exception]
+fn SysTick() {
+    // SAFETY: the alarm's own registers; the step interrupt re-arms it.
+    let syst = unsafe { &*cortex_m::peripheral::SYST::PTR };
+    unsafe { syst.csr.modify(|c| c & !0b11) };
+    pac::NVIC::pend(Interrupt::TIM5);
 }
 
 /// What the interrupt owns.
@@ -134,11 +201,12 @@ impl Motion {
 /// step interrupt above the serial one.
 pub fn install(clock: StepTimer, alarm: pac::TIM5) {
     let axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
+    let alarm = Alarm::new(alarm, &clock);
     let motion = Motion {
         stepper: Stepper::new(),
         axes,
         clock,
-        alarm: Alarm::new(alarm),
+        alarm,
         drive: DriveTiming::default(),
         next: None,
         busy: false,
@@ -212,6 +280,15 @@ pub fn drained() -> bool {
     with(|m| !m.busy && m.stepper.is_idle() && m.next.is_none()).unwrap_or(true)
 }
 
+/// Whether the step interrupt runs the last block started in an open run
+/// and needs the next one now.
+///
+/// Unpaced under QEMU the interrupt issues everything at once: nothing is
+/// ever late, and blocks start by the window alone, as on the virtual clock.
+pub fn hungry() -> bool {
+    PACED && with(|m| m.stepper.hungry()).unwrap_or(false)
+}
+
 /// What the axes are doing.
 pub fn motion() -> State {
     with(|m| match m.stepper.motion() {
@@ -255,7 +332,7 @@ pub fn act(rt: Realtime) {
         }
         Realtime::Reset => {
             with(|m| {
-                let found = m.stepper.abort();
+                let mut found = m.stepper.abort();
                 // The event waiting for its tick was counted, never issued.
                 if let Some((e, _)) = m.next.take() {
                     let (dx, dz) = e.moves();
@@ -263,6 +340,7 @@ pub fn act(rt: Realtime) {
                     p.x.0 -= i32::from(dx);
                     p.z.0 -= i32::from(dz);
                     m.stepper.set_issued(p);
+                    found.done = found.done.saturating_sub(1);
                 }
                 m.alarm.stop();
                 m.axes.stop_outputs();

@@ -498,7 +498,7 @@ impl<T: Transport> Comparator<T> {
                 if self.keep_events {
                     self.last_events = events;
                 }
-                let expected = format!("OK EV={} T={} TSEQ={:08X}", r.ev, r.t, r.tseq);
+                let expected = format!("OK EV={} T={} TSEQ={:08X} STARVED=0", r.ev, r.t, r.tseq);
                 if reply.last != expected {
                     self.tally.mismatches.push(mismatch(expected, &reply));
                 }

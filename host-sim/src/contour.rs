@@ -277,7 +277,7 @@ pub fn compare_contour<T: Transport>(
     let t = motion.ties();
     tally.ticks.exact_ties += t.exact_ties;
     tally.ticks.min_distance = tally.ticks.min_distance.min(t.min_distance);
-    let want = format!("OK EV={} T={} TSEQ={:08X}", r.ev, r.t, r.tseq);
+    let want = format!("OK EV={} T={} TSEQ={:08X} STARVED=0", r.ev, r.t, r.tseq);
     if dev.last != want {
         tally.mismatches.push(format!(
             "SYNC after {}: device {}, reference {want}",

@@ -37,3 +37,4 @@ pub mod reference_motion;
 pub mod reliable;
 pub mod scenario;
 pub mod soak;
+pub mod stream;

@@ -134,6 +134,10 @@ fn collect_reply(mut next: impl FnMut() -> Result<String, LinkError>) -> Result<
     let mut data = Vec::new();
     loop {
         let line = next()?;
+        if line.starts_with('!') {
+            // The answer to a real-time byte, not part of a reply.
+            continue;
+        }
         let body = check_reply_line(&line)?;
         if body.starts_with("DATA") {
             data.push(body.to_owned());

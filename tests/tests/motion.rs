@@ -70,7 +70,10 @@ impl Pair {
         let want = self.time.sync();
         assert_eq!(
             r,
-            format!("OK EV={} T={} TSEQ={:08X}", want.ev, want.t, want.tseq)
+            format!(
+                "OK EV={} T={} TSEQ={:08X} STARVED=0",
+                want.ev, want.t, want.tseq
+            )
         );
         let got = self.dev.take_events();
         let expected = self.time.take_events();

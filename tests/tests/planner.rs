@@ -970,8 +970,8 @@ fn move_to(dev: &mut LocalDevice, s: &Seg) -> String {
 #[test]
 fn sync_with_nothing_queued_reports_nothing() {
     let mut dev = radius_device();
-    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000");
-    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000");
+    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000 STARVED=0");
+    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000 STARVED=0");
     assert_eq!(dev.issued(), 0);
 }
 
@@ -1018,11 +1018,11 @@ fn sync_reports_the_run_then_starts_again() {
     }
     assert_eq!(
         sync,
-        format!("OK EV={n} T={t} TSEQ={:08X}", crc32(&rec)),
+        format!("OK EV={n} T={t} TSEQ={:08X} STARVED=0", crc32(&rec)),
         "EV the move's events, T its run"
     );
     // Since that SYNC nothing ran: no events, and no run ended (T=0).
-    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000");
+    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000 STARVED=0");
 
     // ZERO flushes and forgets: the run it ends is not reported either.
     move_to(
@@ -1035,7 +1035,7 @@ fn sync_reports_the_run_then_starts_again() {
     );
     assert_eq!(one(&mut dev, "ZERO"), "OK");
     assert!(dev.issued() > n, "ZERO ran the queued move");
-    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000");
+    assert_eq!(one(&mut dev, "SYNC"), "OK EV=0 T=0 TSEQ=00000000 STARVED=0");
     // And counts afresh afterwards: the same move from the new origin.
     dev.take_events();
     move_to(&mut dev, &seg);

@@ -111,6 +111,8 @@ pub struct StatusView {
     pub diam: bool,
     /// The speed, 10⁻⁴ mm/min.
     pub speed: i64,
+    /// Starved block starts since the last `SYNC` or `ZERO`.
+    pub starved: u32,
 }
 
 /// Where replies and motion go: the transport side of a [`Device`].
@@ -159,6 +161,12 @@ pub trait Io {
     /// What the transport's own stepper is doing, if it has one.
     fn motion(&mut self) -> Option<Motion> {
         None
+    }
+
+    /// Whether the transport's own stepper runs the last block started in
+    /// an open run and needs the next one now.
+    fn hungry(&mut self) -> bool {
+        false
     }
 
     /// What a status line needs besides the stepper, kept current by the
@@ -248,6 +256,17 @@ impl Device {
             ),
             None => {}
         }
+    }
+
+    /// A board's stepper needs the next block: starts it if one is queued
+    /// (called between received bytes).
+    pub fn poll<I: Io>(&mut self, io: &mut I) {
+        self.session.poll(io);
+    }
+
+    /// Whether [`Device::poll`] could start a block.
+    pub fn can_feed(&self) -> bool {
+        self.session.can_feed()
     }
 
     /// Acts on a real-time command and answers it (a transport that picks

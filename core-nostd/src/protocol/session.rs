@@ -363,11 +363,11 @@ impl Session {
             self.limits_command(words, io)
         } else if command.eq_ignore_ascii_case("SYNC") {
             no_args(words, "SYNC")?;
-            let r = self.machine.sync(&mut Sink::new(io, self.drive));
+            let (r, starved) = self.machine.sync(&mut Sink::new(io, self.drive));
             send_ok(
                 io,
                 Some(format_args!(
-                    "EV={} T={} TSEQ={:08X}",
+                    "EV={} T={} TSEQ={:08X} STARVED={starved}",
                     r.events(),
                     r.run_ticks(),
                     r.tseq()
@@ -1171,7 +1171,19 @@ impl Session {
             hz: self.cfg.hz.as_angstrom(),
             diam: self.cfg.diam,
             speed: st.speed(self.machine.tick()),
+            starved: self.machine.starved(),
         }
+    }
+
+    /// A board's stepper needs the next block (`docs/motion.md`): starts
+    /// it now if one is queued in the open run.
+    pub fn poll<I: Io>(&mut self, io: &mut I) {
+        self.machine.poll(&mut Sink::new(io, self.drive));
+    }
+
+    /// Whether [`Session::poll`] could start a block.
+    pub fn can_feed(&self) -> bool {
+        self.machine.can_feed()
     }
 
     /// A real-time byte: acted on at once, answered by one line that
@@ -1405,7 +1417,7 @@ fn split_id(body: &[u8]) -> Result<(Option<u32>, &[u8]), Refusal<'static>> {
     }
 }
 
-/// A status line: `<prefix> STATE= PX= PZ= X= Z= V= Q=` (`docs/protocol.md`),
+/// A status line: `<prefix> STATE= PX= PZ= X= Z= V= Q= STARVED=` (`docs/protocol.md`),
 /// for `STATUS` and for the real-time status byte, which a transport may
 /// answer itself while it waits for room.
 pub fn status_line(
@@ -1437,7 +1449,7 @@ pub fn status_line(
     let _ = line.write_str(" V=");
     let speed = if motion == Axes::Held { 0 } else { view.speed };
     let _ = write_mm4(&mut line, speed);
-    let _ = write!(line, " Q={queued}");
+    let _ = write!(line, " Q={queued} STARVED={}", view.starved);
     line
 }
 
@@ -1518,6 +1530,10 @@ impl<I: Io> Io for Suffixed<'_, I> {
 
     fn motion(&mut self) -> Option<Axes> {
         self.inner.motion()
+    }
+
+    fn hungry(&mut self) -> bool {
+        self.inner.hungry()
     }
 
     fn view(&mut self, view: &StatusView) {
@@ -1676,6 +1692,10 @@ impl<I: Io> StepSink for Sink<'_, I> {
 
     fn motion(&mut self) -> Option<Axes> {
         self.io.motion()
+    }
+
+    fn hungry(&mut self) -> bool {
+        self.io.hungry()
     }
 
     fn queued(&mut self, blocks: usize) {
