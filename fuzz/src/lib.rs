@@ -236,10 +236,21 @@ impl Framer {
 /// fresh framer), with the request.
 pub fn requests(bytes: &[u8]) -> Vec<(usize, Framed)> {
     let mut f = Framer::default();
-    bytes
+    without_realtime(bytes)
         .iter()
         .enumerate()
         .filter_map(|(i, &b)| f.push(b).map(|r| (i, r)))
+        .collect()
+}
+
+/// The bytes without the real-time bytes (0x18, 0x80–0x82): the device acts
+/// on those outside every request (its own tests check them), so the
+/// request oracle takes the stream as the framing sees it.
+pub fn without_realtime(bytes: &[u8]) -> Vec<u8> {
+    bytes
+        .iter()
+        .copied()
+        .filter(|&b| core_nostd::protocol::Realtime::from_byte(b).is_none())
         .collect()
 }
 
@@ -799,6 +810,7 @@ impl Checker {
     /// checking each with [`Checker::request`]; bytes after the last request
     /// must produce nothing.
     pub fn feed(&mut self, bytes: &[u8]) -> Vec<Answer> {
+        let bytes = &without_realtime(bytes)[..];
         let mut out = Vec::new();
         let mut start = 0;
         for (i, &b) in bytes.iter().enumerate() {
