@@ -13,68 +13,63 @@ use crate::impulse::ImpulsePrice;
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::plan::{Block, Feed, Limits, Planner, Point, Rates, WINDOW};
 use crate::step::{FixedRate, Record, TickRate};
+use crate::stepdir::DriveTiming;
 use crate::stepper::{Aborted, FixedRun, Item, Motion, Pulled, Stepper, AHEAD};
 use crate::wide::{mul_div, sqrt_shl};
 
 /// Blocks the queue holds.
 pub const QUEUE: usize = WINDOW;
 
+/// A stepper that runs in time beside the protocol (a board's step
+/// interrupt): it takes started motion and issues it on its own clock,
+/// while the planner queues what follows.
+pub trait Background {
+    /// Takes started motion, to be issued with the drive's timing, waiting
+    /// while it is full: the request is answered once its motion is taken
+    /// (the flow control a streaming host sees).
+    fn start(&mut self, item: Item, drive: &DriveTiming);
+    /// Waits until everything taken has been issued (through a hold, until
+    /// the resume).
+    fn drain(&mut self);
+    /// The registers of the steps issued.
+    fn issued(&mut self) -> ImpulsePoint;
+    /// Sets them, at rest (`ZERO`, a price change).
+    fn set_issued(&mut self, registers: ImpulsePoint);
+    /// What was recorded since this was last called (`SYNC`); the record
+    /// starts again.
+    fn take_record(&mut self) -> Record;
+    /// Feed hold.
+    fn hold(&mut self);
+    /// Resume after a hold.
+    fn resume(&mut self);
+    /// Reset: drops everything at once, outputs low; what was running.
+    fn abort(&mut self) -> Aborted;
+    /// What the axes are doing.
+    fn motion(&mut self) -> Motion;
+    /// Whether it has issued every block started in an open run: block
+    /// `k − 1` has ended and block `k` should start now.
+    fn hungry(&mut self) -> bool;
+    /// Blocks queued and not started, as the planner hands over the next
+    /// one (for a status line while it waits for room).
+    fn queued(&mut self, blocks: usize) {
+        let _ = blocks;
+    }
+}
+
 /// Where started motion goes: issued at once through [`StepSink::step`]
-/// (the virtual clock, the default), or taken by a stepper of the sink's
-/// own that issues it later (a board's step interrupt).
+/// (the virtual clock, the default), or to a [`Background`] stepper of the
+/// sink's own that issues it in time (a board's step interrupt).
 pub trait StepSink {
-    /// Takes started motion for the sink's own stepper, waiting for room
-    /// if it must; hands it back to be issued now through `step` (the
+    /// Hands started motion to the sink's background stepper; hands it
+    /// back, to be issued now through `step`, when it has none (the
     /// default).
     #[allow(clippy::result_large_err)] // the item itself
     fn start(&mut self, item: Item) -> Result<(), Item> {
         Err(item)
     }
-    /// Waits until the sink's own stepper has issued everything it took.
-    fn drain(&mut self) {}
-    /// The registers of the steps the sink's own stepper issued, if it has
-    /// one.
-    fn issued(&mut self) -> Option<ImpulsePoint> {
+    /// The sink's background stepper, if it has one.
+    fn background(&mut self) -> Option<&mut dyn Background> {
         None
-    }
-    /// Sets them, at rest.
-    fn set_issued(&mut self, registers: ImpulsePoint) {
-        let _ = registers;
-    }
-    /// What the sink's own stepper recorded since this was last called
-    /// (`SYNC`), if it has one; the record starts again.
-    fn take_record(&mut self) -> Option<Record> {
-        None
-    }
-    /// Feed hold on the sink's own stepper; false when it has none (the
-    /// virtual clock issues each block as it starts: nothing is moving
-    /// when a hold arrives).
-    fn hold(&mut self) -> bool {
-        false
-    }
-    /// Resume after a hold, on the sink's own stepper.
-    fn resume(&mut self) -> bool {
-        false
-    }
-    /// Reset: the sink's own stepper drops everything at once; what it
-    /// found running, if it has one.
-    fn abort(&mut self) -> Option<Aborted> {
-        None
-    }
-    /// What the sink's own stepper is doing, if it has one.
-    fn motion(&mut self) -> Option<Motion> {
-        None
-    }
-    /// Whether the sink's own stepper is running the last block started
-    /// in an open run (or braking into the next one): it needs the next
-    /// block now, window full or not.
-    fn hungry(&mut self) -> bool {
-        false
-    }
-    /// Blocks queued and not started, as the planner hands over the next
-    /// one (a board reports it while it waits for room).
-    fn queued(&mut self, blocks: usize) {
-        let _ = blocks;
     }
     /// A run begins: its tick 0 is now.
     fn run_start(&mut self) {}
@@ -107,11 +102,17 @@ pub struct Status {
 impl Status {
     /// The speed now in 10⁻⁴ mm/min on a clock of `tick`, rounded half up.
     pub fn speed(&self, tick: TickRate) -> i64 {
-        // √v² Å/tick · TICK ticks/s · 60 s/min / 1000 Å per 10⁻⁴ mm.
-        let v = sqrt_shl(self.speed2, 64); // Q64 Å/tick
-        let scaled = mul_div(v, 60 * u128::from(tick.hz()), 1000);
-        i64::try_from(scaled.saturating_add(1 << 63) >> 64).unwrap_or(i64::MAX)
+        speed(self.speed2, tick)
     }
+}
+
+/// A squared speed (Q64 (Å/tick)²) in 10⁻⁴ mm/min on a clock of `tick`,
+/// rounded half up.
+fn speed(speed2: u128, tick: TickRate) -> i64 {
+    // √v² Å/tick · TICK ticks/s · 60 s/min / 1000 Å per 10⁻⁴ mm.
+    let v = sqrt_shl(speed2, 64); // Q64 Å/tick
+    let scaled = mul_div(v, 60 * u128::from(tick.hz()), 1000);
+    i64::try_from(scaled.saturating_add(1 << 63) >> 64).unwrap_or(i64::MAX)
 }
 
 /// The planner, the run in progress and what has been issued.
@@ -177,7 +178,9 @@ impl Machine {
     ) {
         self.point = point;
         self.stepper.set_issued(registers);
-        sink.set_issued(registers);
+        if let Some(b) = sink.background() {
+            b.set_issued(registers);
+        }
     }
 
     /// Queues the block from the current point to `to`, issuing `events` at
@@ -213,7 +216,7 @@ impl Machine {
     /// with the window it has (counted as starved). Its plan still ends at
     /// rest by the end of what is queued.
     pub fn poll<S: StepSink>(&mut self, sink: &mut S) {
-        if self.planner.in_run() && self.planner.queued() > 0 && sink.hungry() {
+        if self.can_feed() && sink.background().is_some_and(|b| b.hungry()) {
             self.starved += u32::from(self.start_one(sink));
         }
     }
@@ -222,6 +225,11 @@ impl Machine {
     /// hungry.
     pub fn can_feed(&self) -> bool {
         self.planner.in_run() && self.planner.queued() > 0
+    }
+
+    /// The speed at the end of the block started last, 10⁻⁴ mm/min.
+    pub fn speed(&self) -> i64 {
+        speed(self.planner.exit2(), self.rates.tick())
     }
 
     /// Blocks started starved since the last `SYNC` or `ZERO`.
@@ -236,7 +244,9 @@ impl Machine {
         if let Some(ticks) = self.planner.end_run() {
             self.start_item(Item::RunEnd(ticks), sink);
         }
-        sink.drain();
+        if let Some(b) = sink.background() {
+            b.drain();
+        }
     }
 
     /// A flush, then `events` at a fixed rate as a run of their own (the
@@ -260,27 +270,36 @@ impl Machine {
         self.flush(sink);
         let own = self.stepper.take_record();
         let starved = core::mem::take(&mut self.starved);
-        (sink.take_record().unwrap_or(own), starved)
+        let record = match sink.background() {
+            Some(b) => b.take_record(),
+            None => own,
+        };
+        (record, starved)
     }
 
     /// Forgets what was recorded (`ZERO`); the caller has flushed.
     pub fn clear_record<S: StepSink>(&mut self, sink: &mut S) {
         self.stepper.clear_record();
         self.starved = 0;
-        let _ = sink.take_record();
+        if let Some(b) = sink.background() {
+            let _ = b.take_record();
+        }
     }
 
     /// What the axes are doing.
     pub fn status<S: StepSink>(&self, sink: &mut S) -> Status {
         let queued = self.planner.queued();
-        let motion = sink.motion().unwrap_or(Motion::Idle);
+        let (motion, issued) = match sink.background() {
+            Some(b) => (b.motion(), b.issued()),
+            None => (Motion::Idle, self.stepper.issued()),
+        };
         let motion = match motion {
             Motion::Idle if queued > 0 => Motion::Run,
             m => m,
         };
         Status {
             queued,
-            issued: sink.issued().unwrap_or(self.stepper.issued()),
+            issued,
             speed2: self.planner.exit2(),
             motion,
         }
@@ -288,12 +307,16 @@ impl Machine {
 
     /// Feed hold (on a sink with a stepper of its own).
     pub fn hold<S: StepSink>(&mut self, sink: &mut S) {
-        sink.hold();
+        if let Some(b) = sink.background() {
+            b.hold();
+        }
     }
 
     /// Resume after a hold.
     pub fn resume<S: StepSink>(&mut self, sink: &mut S) {
-        sink.resume();
+        if let Some(b) = sink.background() {
+            b.resume();
+        }
     }
 
     /// Reset: everything queued and started is dropped at once; the
@@ -301,8 +324,10 @@ impl Machine {
     /// and the registers.
     pub fn abort<S: StepSink>(&mut self, sink: &mut S) -> (Aborted, ImpulsePoint) {
         self.planner.clear();
-        let found = sink.abort().unwrap_or(self.stepper.abort());
-        let issued = sink.issued().unwrap_or(self.stepper.issued());
+        let (found, issued) = match sink.background() {
+            Some(b) => (b.abort(), b.issued()),
+            None => (self.stepper.abort(), self.stepper.issued()),
+        };
         self.stepper.set_issued(issued);
         (found, issued)
     }
@@ -330,7 +355,10 @@ impl Machine {
     /// Hands started motion to the sink's stepper, or to this one's and
     /// issues it to `sink` at once.
     fn start_item<S: StepSink>(&mut self, item: Item, sink: &mut S) {
-        sink.queued(self.planner.queued());
+        let queued = self.planner.queued();
+        if let Some(b) = sink.background() {
+            b.queued(queued);
+        }
         let Err(item) = sink.start(item) else {
             return;
         };

@@ -19,6 +19,7 @@ pub mod motion;
 
 use board::{Board, Serial};
 use core_nostd::interleave::ImpulsePoint;
+use core_nostd::machine::Background;
 use core_nostd::protocol::{status_line, Io, Realtime, StatusView};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
@@ -51,12 +52,6 @@ impl Controller {
             queued: 0,
         }
     }
-
-    /// While the protocol waits for the step interrupt: answers a status
-    /// byte (or the line a hold or a resume asks for) from what it knows.
-    fn answer_while_waiting(&mut self) {
-        answer_status(&mut self.serial, &self.view, self.queued);
-    }
 }
 
 /// Sends the `!STATUS` line a real-time byte asked for, if one did.
@@ -73,58 +68,64 @@ impl Io for Controller {
         self.serial.send(line);
     }
 
-    fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
-        let (serial, view, queued) = (&mut self.serial, self.view, self.queued);
-        motion::start(item, drive, || answer_status(serial, &view, queued))
-    }
-
-    fn drain(&mut self) {
-        while !motion::drained() {
-            self.answer_while_waiting();
-            board::sleep_unless(|| motion::wanted() || motion::drained());
-        }
-    }
-
-    fn hold(&mut self) -> bool {
-        motion::act(Realtime::Hold);
-        true
-    }
-
-    fn resume(&mut self) -> bool {
-        motion::act(Realtime::Resume);
-        true
-    }
-
-    fn abort(&mut self) -> Option<Aborted> {
-        motion::abort()
-    }
-
-    fn motion(&mut self) -> Option<Motion> {
-        Some(motion::motion())
-    }
-
-    fn hungry(&mut self) -> bool {
-        motion::hungry()
+    fn background(&mut self) -> Option<&mut dyn Background> {
+        Some(self)
     }
 
     fn view(&mut self, view: &StatusView) {
         self.view = *view;
     }
+}
 
-    fn queued(&mut self, blocks: usize) {
-        self.queued = blocks;
+// The step interrupt's state exists from `Controller::new` on: its
+// functions hand back nothing only before `motion::install`.
+impl Background for Controller {
+    fn start(&mut self, item: Item, drive: &DriveTiming) {
+        let (serial, view, queued) = (&mut self.serial, self.view, self.queued);
+        let _ = motion::start(item, drive, || answer_status(serial, &view, queued));
     }
 
-    fn issued(&mut self) -> Option<ImpulsePoint> {
-        motion::issued()
+    fn drain(&mut self) {
+        while !motion::drained() {
+            answer_status(&mut self.serial, &self.view, self.queued);
+            board::sleep_unless(|| motion::wanted() || motion::drained());
+        }
+    }
+
+    fn issued(&mut self) -> ImpulsePoint {
+        motion::issued().unwrap_or_default()
     }
 
     fn set_issued(&mut self, registers: ImpulsePoint) {
         motion::set_issued(registers);
     }
 
-    fn take_record(&mut self) -> Option<Record> {
-        motion::take_record()
+    fn take_record(&mut self) -> Record {
+        motion::take_record().unwrap_or_default()
+    }
+
+    fn hold(&mut self) {
+        motion::act(Realtime::Hold);
+    }
+
+    fn resume(&mut self) {
+        motion::act(Realtime::Resume);
+    }
+
+    fn abort(&mut self) -> Aborted {
+        motion::abort().unwrap_or(Aborted { done: 0, of: 0 })
+    }
+
+    fn motion(&mut self) -> Motion {
+        motion::motion()
+    }
+
+    fn hungry(&mut self) -> bool {
+        motion::hungry()
+    }
+
+    fn queued(&mut self, blocks: usize) {
+        self.queued = blocks;
     }
 }
 

@@ -6,10 +6,11 @@
 //! that are those of the steps actually issued.
 
 use core_nostd::interleave::{ImpulsePoint, StepEvent};
+use core_nostd::machine::Background;
 use core_nostd::protocol::{Device, Io};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
-use core_nostd::stepper::{Item, Pulled, Stepper, AHEAD};
+use core_nostd::stepper::{Aborted, Item, Motion, Pulled, Stepper, AHEAD};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -65,24 +66,48 @@ impl Io for Later {
     fn send(&mut self, line: &[u8]) {
         self.lines.push(String::from_utf8_lossy(line).into_owned());
     }
-    fn start(&mut self, item: Item, _: &DriveTiming) -> Result<(), Item> {
+    fn background(&mut self) -> Option<&mut dyn Background> {
+        Some(self)
+    }
+}
+
+impl Background for Later {
+    fn start(&mut self, item: Item, _: &DriveTiming) {
         while !self.stepper.has_room() {
             self.waits += 1;
             self.run(1);
         }
-        self.stepper.push(item)
+        // Room was made.
+        self.stepper.push(item).unwrap();
     }
     fn drain(&mut self) {
         self.run(usize::MAX);
     }
-    fn issued(&mut self) -> Option<ImpulsePoint> {
-        Some(self.stepper.issued())
+    fn issued(&mut self) -> ImpulsePoint {
+        self.stepper.issued()
     }
     fn set_issued(&mut self, registers: ImpulsePoint) {
         self.stepper.set_issued(registers);
     }
-    fn take_record(&mut self) -> Option<Record> {
-        Some(self.stepper.take_record())
+    fn take_record(&mut self) -> Record {
+        self.stepper.take_record()
+    }
+    fn hold(&mut self) {
+        self.stepper.hold();
+    }
+    fn resume(&mut self) {
+        let _ = self.stepper.resume();
+    }
+    fn abort(&mut self) -> Aborted {
+        self.stepper.abort()
+    }
+    fn motion(&mut self) -> Motion {
+        self.stepper.motion()
+    }
+    fn hungry(&mut self) -> bool {
+        // Requests are not answered in time here: blocks start as on the
+        // virtual clock.
+        false
     }
 }
 

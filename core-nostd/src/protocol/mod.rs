@@ -12,10 +12,9 @@ mod words;
 
 pub use session::{status_line, Config, Pass, Session, NAME, VERSION};
 
-use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
-use crate::step::Record;
+use crate::interleave::{LinearBlock, StepEvent};
+use crate::machine::Background;
 use crate::stepdir::DriveTiming;
-use crate::stepper::{Aborted, Item, Motion};
 use core::fmt;
 use framing::{Framed, LineAssembler};
 
@@ -142,74 +141,17 @@ pub trait Io {
         let _ = ticks;
     }
 
-    /// Feed hold on the transport's own stepper; false when it has none.
-    fn hold(&mut self) -> bool {
-        false
-    }
-
-    /// Resume after a hold on the transport's own stepper.
-    fn resume(&mut self) -> bool {
-        false
-    }
-
-    /// Reset: the transport's own stepper drops everything at once (its
-    /// outputs low); what it found running, if it has one.
-    fn abort(&mut self) -> Option<Aborted> {
+    /// The transport's stepper that runs in time beside the protocol (a
+    /// board's step interrupt), if it has one. Without one, started motion
+    /// is issued at once through [`Io::step`] (the virtual clock).
+    fn background(&mut self) -> Option<&mut dyn Background> {
         None
-    }
-
-    /// What the transport's own stepper is doing, if it has one.
-    fn motion(&mut self) -> Option<Motion> {
-        None
-    }
-
-    /// Whether the transport's own stepper runs the last block started in
-    /// an open run and needs the next one now.
-    fn hungry(&mut self) -> bool {
-        false
     }
 
     /// What a status line needs besides the stepper, kept current by the
-    /// session.
+    /// session (a board answers a status byte itself while it waits).
     fn view(&mut self, view: &StatusView) {
         let _ = view;
-    }
-
-    /// Blocks queued and not started, as the planner hands over the next
-    /// one.
-    fn queued(&mut self, blocks: usize) {
-        let _ = blocks;
-    }
-
-    /// Takes started motion for a stepper of the transport's own (a
-    /// board's step interrupt), to issue with the drive's timing, waiting
-    /// for room if it must: the request is answered once its motion is
-    /// taken. The default hands it back, to be issued at once through
-    /// [`Io::step`] (the virtual clock).
-    #[allow(clippy::result_large_err)] // the item itself
-    fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
-        let _ = drive;
-        Err(item)
-    }
-
-    /// Waits until the transport's stepper has issued all it took.
-    fn drain(&mut self) {}
-
-    /// The registers of the steps the transport's stepper issued, if it
-    /// has one.
-    fn issued(&mut self) -> Option<ImpulsePoint> {
-        None
-    }
-
-    /// Sets them, at rest (`ZERO`, a price change).
-    fn set_issued(&mut self, registers: ImpulsePoint) {
-        let _ = registers;
-    }
-
-    /// What the transport's stepper recorded since this was last called,
-    /// if it has one; its record starts again.
-    fn take_record(&mut self) -> Option<Record> {
-        None
     }
 }
 

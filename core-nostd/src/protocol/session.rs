@@ -17,9 +17,8 @@ use crate::gcode::{is_block, parse_block, BlockError, Motion};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
-use crate::machine::{Machine, StepSink};
+use crate::machine::{Background, Machine, StepSink};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
-use crate::step::Record;
 use crate::stepdir::{DriveTiming, TimingError};
 use crate::stepper::{Aborted, Item, Motion as Axes};
 use core::fmt::{self, Write};
@@ -266,8 +265,7 @@ impl Session {
     /// trusted). A request whose `@id` equals the last one's is not run
     /// again: its remembered final line is sent instead.
     pub fn handle_line<I: Io>(&mut self, line: &[u8], io: &mut I) {
-        let view = self.view(io);
-        io.view(&view);
+        self.share_view(io);
         let (body, crc) = match check_integrity(line) {
             Ok(v) => v,
             Err(refusal) => return send_refusal(io, refusal),
@@ -1159,19 +1157,29 @@ impl Session {
     /// the blocks waiting.
     fn status_reply<I: Io>(&self, io: &mut I, prefix: &str) {
         let st = self.machine.status(&mut Sink::new(io, self.drive));
-        let mut line = status_line(prefix, st.motion, st.issued, st.queued, &self.view(io));
+        let view = self.view(st.speed(self.machine.tick()));
+        let mut line = status_line(prefix, st.motion, st.issued, st.queued, &view);
         io.send(line.finish());
     }
 
-    /// What a status line needs of the session.
-    fn view<I: Io>(&self, io: &mut I) -> StatusView {
-        let st = self.machine.status(&mut Sink::new(io, self.drive));
+    /// What a status line needs of the session, with the speed.
+    fn view(&self, speed: i64) -> StatusView {
         StatusView {
             hx: self.cfg.hx.as_angstrom(),
             hz: self.cfg.hz.as_angstrom(),
             diam: self.cfg.diam,
-            speed: st.speed(self.machine.tick()),
+            speed,
             starved: self.machine.starved(),
+        }
+    }
+
+    /// Hands the view to a transport that runs motion in the background
+    /// (it answers a status byte itself while it waits); no work for one
+    /// without.
+    fn share_view<I: Io>(&self, io: &mut I) {
+        if io.background().is_some() {
+            let view = self.view(self.machine.speed());
+            io.view(&view);
         }
     }
 
@@ -1235,8 +1243,7 @@ impl Session {
             issued.z.get()
         );
         io.send(line.finish());
-        let view = self.view(io);
-        io.view(&view);
+        self.share_view(io);
     }
 
     /// The commanded coordinate of `axis` after a word: absolute, or added
@@ -1512,52 +1519,12 @@ impl<I: Io> Io for Suffixed<'_, I> {
         self.inner.run_end(ticks);
     }
 
-    fn start(&mut self, item: Item, drive: &DriveTiming) -> Result<(), Item> {
-        self.inner.start(item, drive)
-    }
-
-    fn hold(&mut self) -> bool {
-        self.inner.hold()
-    }
-
-    fn resume(&mut self) -> bool {
-        self.inner.resume()
-    }
-
-    fn abort(&mut self) -> Option<Aborted> {
-        self.inner.abort()
-    }
-
-    fn motion(&mut self) -> Option<Axes> {
-        self.inner.motion()
-    }
-
-    fn hungry(&mut self) -> bool {
-        self.inner.hungry()
+    fn background(&mut self) -> Option<&mut dyn Background> {
+        self.inner.background()
     }
 
     fn view(&mut self, view: &StatusView) {
         self.inner.view(view);
-    }
-
-    fn queued(&mut self, blocks: usize) {
-        self.inner.queued(blocks);
-    }
-
-    fn drain(&mut self) {
-        self.inner.drain();
-    }
-
-    fn issued(&mut self) -> Option<ImpulsePoint> {
-        self.inner.issued()
-    }
-
-    fn set_issued(&mut self, registers: ImpulsePoint) {
-        self.inner.set_issued(registers);
-    }
-
-    fn take_record(&mut self) -> Option<Record> {
-        self.inner.take_record()
     }
 }
 
@@ -1675,47 +1642,17 @@ impl<'a, I: Io> Sink<'a, I> {
 
 impl<I: Io> StepSink for Sink<'_, I> {
     fn start(&mut self, item: Item) -> Result<(), Item> {
-        self.io.start(item, &self.drive)
+        match self.io.background() {
+            Some(b) => {
+                b.start(item, &self.drive);
+                Ok(())
+            }
+            None => Err(item),
+        }
     }
 
-    fn hold(&mut self) -> bool {
-        self.io.hold()
-    }
-
-    fn resume(&mut self) -> bool {
-        self.io.resume()
-    }
-
-    fn abort(&mut self) -> Option<Aborted> {
-        self.io.abort()
-    }
-
-    fn motion(&mut self) -> Option<Axes> {
-        self.io.motion()
-    }
-
-    fn hungry(&mut self) -> bool {
-        self.io.hungry()
-    }
-
-    fn queued(&mut self, blocks: usize) {
-        self.io.queued(blocks);
-    }
-
-    fn drain(&mut self) {
-        self.io.drain();
-    }
-
-    fn issued(&mut self) -> Option<ImpulsePoint> {
-        self.io.issued()
-    }
-
-    fn set_issued(&mut self, registers: ImpulsePoint) {
-        self.io.set_issued(registers);
-    }
-
-    fn take_record(&mut self) -> Option<Record> {
-        self.io.take_record()
+    fn background(&mut self) -> Option<&mut dyn Background> {
+        self.io.background()
     }
 
     fn run_start(&mut self) {
