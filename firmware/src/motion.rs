@@ -159,6 +159,33 @@ const WANT_RESET: u8 = 2;
 static MOTION: Mutex<RefCell<Option<Motion>>> = Mutex::new(RefCell::new(None));
 
 impl Motion {
+    /// The registers of the steps issued: the stepper counts an event when
+    /// it hands it out, and the one waiting for its tick is not issued yet.
+    fn issued(&self) -> ImpulsePoint {
+        let mut p = self.stepper.issued();
+        if let Some((e, _)) = self.next {
+            let (dx, dz) = e.moves();
+            p.x.0 -= i32::from(dx);
+            p.z.0 -= i32::from(dz);
+        }
+        p
+    }
+
+    /// Reset: outputs low, the motion dropped, the event waiting for its
+    /// tick never issued (nor counted); what was running.
+    fn abort(&mut self) -> Aborted {
+        let registers = self.issued();
+        let mut found = self.stepper.abort();
+        if self.next.take().is_some() {
+            found.done = found.done.saturating_sub(1);
+        }
+        self.stepper.set_issued(registers);
+        self.alarm.stop();
+        self.axes.stop_outputs();
+        self.busy = false;
+        found
+    }
+
     /// Issues what is due, then arms the alarm for the next event or goes
     /// idle.
     fn service(&mut self) {
@@ -331,22 +358,7 @@ pub fn act(rt: Realtime) {
             });
         }
         Realtime::Reset => {
-            with(|m| {
-                let mut found = m.stepper.abort();
-                // The event waiting for its tick was counted, never issued.
-                if let Some((e, _)) = m.next.take() {
-                    let (dx, dz) = e.moves();
-                    let mut p = m.stepper.issued();
-                    p.x.0 -= i32::from(dx);
-                    p.z.0 -= i32::from(dz);
-                    m.stepper.set_issued(p);
-                    found.done = found.done.saturating_sub(1);
-                }
-                m.alarm.stop();
-                m.axes.stop_outputs();
-                m.busy = false;
-                m.aborted = Some(found);
-            });
+            with(|m| m.aborted = Some(m.abort()));
             ABORTING.store(true, Ordering::Release);
         }
     }
@@ -381,33 +393,14 @@ pub fn wanted() -> bool {
 /// (the reset itself happened when the byte arrived; a reset that did not
 /// come through the serial interrupt happens now).
 pub fn abort() -> Option<Aborted> {
-    let found = with(|m| match m.aborted.take() {
-        Some(found) => found,
-        None => {
-            let found = m.stepper.abort();
-            m.next = None;
-            m.alarm.stop();
-            m.axes.stop_outputs();
-            m.busy = false;
-            found
-        }
-    });
+    let found = with(|m| m.aborted.take().unwrap_or_else(|| m.abort()));
     ABORTING.store(false, Ordering::Release);
     found
 }
 
-/// The registers of the steps issued (the stepper counts an event when
-/// it hands it out; the one waiting for its tick is not issued yet).
+/// The registers of the steps issued.
 pub fn issued() -> Option<ImpulsePoint> {
-    with(|m| {
-        let mut p = m.stepper.issued();
-        if let Some((e, _)) = m.next {
-            let (dx, dz) = e.moves();
-            p.x.0 -= i32::from(dx);
-            p.z.0 -= i32::from(dz);
-        }
-        p
-    })
+    with(|m| m.issued())
 }
 
 /// Sets them, at rest.
