@@ -421,16 +421,14 @@ impl<const R: usize> Stepper<R> {
                     return None;
                 }
             }
-            Rest::Part(block, planned_exit) => {
-                if block.span().1 == 0 && block.lead_len() == 0 {
-                    // Nothing left of it.
-                } else {
-                    let x2 = planned_exit.min(block.two_al());
-                    let timed = profile(&block, 0, x2, 0);
-                    (self.end, self.exit2) = (timed.span_q64().1, x2);
-                    self.now = Now::Timed(timed.events(), block);
-                }
+            // What is left of the block, unless nothing is.
+            Rest::Part(block, planned_exit) if block.span().1 > 0 || block.lead_len() > 0 => {
+                let x2 = planned_exit.min(block.two_al());
+                let timed = profile(&block, 0, x2, 0);
+                (self.end, self.exit2) = (timed.span_q64().1, x2);
+                self.now = Now::Timed(timed.events(), block);
             }
+            Rest::Part(..) => {}
             Rest::Fixed(events, rate) => {
                 self.now = Now::Fixed(FixedRun::new(rate, events));
             }
@@ -506,7 +504,9 @@ mod tests {
     use crate::stepper::Motion;
     use std::vec::Vec;
 
-    fn timed(from_um: i64, to_um: i64) -> Started {
+    /// A block along Z from `from_um` to `to_um` (µm), rapid or at a feed
+    /// (mm/min), started alone.
+    fn z_block(from_um: i64, to_um: i64, feed: Option<&str>) -> Started {
         let rates = Rates::DEFAULT;
         let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
         let (a, b) = (
@@ -518,7 +518,8 @@ mod tests {
             z: quantize(z, h[1]).unwrap(),
         };
         let events = LinearBlock::new(at(a), at(b)).unwrap();
-        let block = Block::new([0, q32(a)], [0, q32(b)], events, None, h, &rates).unwrap();
+        let feed = feed.map(|f| crate::plan::Feed::new(Length::from_mm_str(f).unwrap()).unwrap());
+        let block = Block::new([0, q32(a)], [0, q32(b)], events, feed, h, &rates).unwrap();
         let mut p = Planner::<WINDOW>::new(WINDOW);
         p.push(block, &rates).unwrap();
         p.start_block(&rates).unwrap()
@@ -526,7 +527,7 @@ mod tests {
 
     #[test]
     fn a_block_comes_out_as_its_events_with_the_run_around_it() {
-        let started = timed(0, -2_000);
+        let started = z_block(0, -2_000, None);
         let t = *started.timed();
         let mut s = Stepper::<AHEAD>::new();
         assert!(s.is_idle());
@@ -613,23 +614,7 @@ mod tests {
         assert_eq!(s.waiting(), 1);
     }
 
-    fn feed_block(to_um: i64, f_mm_min: &str) -> Started {
-        let rates = Rates::DEFAULT;
-        let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
-        let b = Length::from_um(to_um).unwrap();
-        let at = |z| ImpulsePoint {
-            x: Impulses(0),
-            z: quantize(z, h[1]).unwrap(),
-        };
-        let events = LinearBlock::new(at(Length::ZERO), at(b)).unwrap();
-        let f = crate::plan::Feed::new(Length::from_mm_str(f_mm_min).unwrap());
-        let block = Block::new([0, 0], [0, q32(b)], events, f, h, &rates).unwrap();
-        let mut p = Planner::<WINDOW>::new(WINDOW);
-        p.push(block, &rates).unwrap();
-        p.start_block(&rates).unwrap()
-    }
-
-    /// Pulls everything, splitting at `hold_after` issued events.
+    /// Pulls everything there is to pull; the step events.
     fn steps(s: &mut Stepper<AHEAD>) -> Vec<(u8, u64)> {
         core::iter::from_fn(|| s.pull())
             .filter_map(|p| match p {
@@ -641,7 +626,7 @@ mod tests {
 
     #[test]
     fn a_hold_decelerates_along_the_path_and_a_resume_ends_where_the_block_ends() {
-        let started = feed_block(-20_000, "1200");
+        let started = z_block(0, -20_000, Some("1200"));
         let planned: Vec<(u8, u64)> = started
             .timed()
             .events()
@@ -714,7 +699,7 @@ mod tests {
 
     #[test]
     fn a_reset_drops_everything_and_keeps_the_registers_of_the_steps_issued() {
-        let started = feed_block(-20_000, "1200");
+        let started = z_block(0, -20_000, Some("1200"));
         let mut s = Stepper::<AHEAD>::new();
         for item in [Item::RunStart, Item::Block(started), Item::RunEnd(0)] {
             s.push(item).unwrap();

@@ -90,6 +90,8 @@ pub struct Steps {
     pub blocks: Vec<(usize, u32)>,
     /// The in-process device's replies, one per request.
     pub replies: Vec<Reply>,
+    /// Its `POS` final line after the program.
+    pub pos: String,
 }
 
 /// Runs `lines` on the in-process device, keeping every event.
@@ -99,6 +101,7 @@ pub fn steps(lines: &[String]) -> Result<Steps, LinkError> {
     for l in lines {
         replies.push(Transport::request(&mut dev, l)?);
     }
+    let pos = Transport::request(&mut dev, "POS")?.last;
     let starts: Vec<(usize, u32)> = dev
         .block_starts()
         .iter()
@@ -125,6 +128,7 @@ pub fn steps(lines: &[String]) -> Result<Steps, LinkError> {
         positions,
         blocks: starts,
         replies,
+        pos,
     })
 }
 
@@ -269,10 +273,6 @@ pub fn paced_proof(
             .unwrap_or_default(),
         pos.last.clone(),
     );
-    let mut dev = LocalDevice::new();
-    for l in &lines {
-        Transport::request(&mut dev, l)?;
-    }
     let after_hold_expected = (
         local
             .replies
@@ -280,7 +280,7 @@ pub fn paced_proof(
             .and_then(|r| r.value("EV"))
             .unwrap_or("")
             .to_string(),
-        Transport::request(&mut dev, "POS")?.last,
+        local.pos.clone(),
     );
 
     // 3. A reset in the middle of the run.

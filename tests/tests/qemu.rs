@@ -7,7 +7,7 @@
 
 use host_sim::compare::Comparator;
 use host_sim::device::LocalDevice;
-use host_sim::link::final_lines;
+use host_sim::link::{final_lines, Client};
 use host_sim::qemu::{build_firmware, firmware_dir, qemu_available, Qemu};
 use host_sim::scenario;
 use std::process::Command;
@@ -22,6 +22,15 @@ fn qemu_or_skip() -> bool {
     false
 }
 
+/// The firmware built for QEMU, booted with instruction counting, and a
+/// link to it.
+fn booted() -> (Qemu, Client) {
+    let elf = build_firmware("qemu").unwrap();
+    let mut qemu = Qemu::boot(&elf, true).unwrap();
+    let client = qemu.connect(Duration::from_secs(30)).unwrap();
+    (qemu, client)
+}
+
 #[test]
 fn firmware_answers_the_mixed_session_like_the_in_process_device() {
     if !qemu_or_skip() {
@@ -29,9 +38,7 @@ fn firmware_answers_the_mixed_session_like_the_in_process_device() {
     }
     let session = scenario::mixed_session();
     let expected = LocalDevice::new().feed(&session);
-    let elf = build_firmware("qemu").unwrap();
-    let mut qemu = Qemu::boot(&elf, true).unwrap();
-    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let (_qemu, mut client) = booted();
     // The whole session at once: the firmware must keep up through its
     // receive queue, with long blocks among the requests.
     client.write_raw(&session).unwrap();
@@ -47,9 +54,7 @@ fn firmware_impulses_equal_the_reference() {
     if !qemu_or_skip() {
         return;
     }
-    let elf = build_firmware("qemu").unwrap();
-    let mut qemu = Qemu::boot(&elf, true).unwrap();
-    let client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let (_qemu, client) = booted();
     let mut cmp = Comparator::new(client).unwrap();
     for s in [
         scenario::table21(),
@@ -117,9 +122,7 @@ fn firmware_answers_real_time_bytes_like_the_in_process_device() {
     if !qemu_or_skip() {
         return;
     }
-    let elf = build_firmware("qemu").unwrap();
-    let mut qemu = Qemu::boot(&elf, true).unwrap();
-    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let (_qemu, mut client) = booted();
     let mut local = LocalDevice::new();
     let mut exchange = |bytes: &[u8]| -> (Vec<String>, Vec<String>) {
         let want = String::from_utf8_lossy(&local.feed(bytes)).into_owned();
