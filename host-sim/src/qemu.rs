@@ -33,6 +33,18 @@ pub fn qemu_available() -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// For tests: whether QEMU is here. Where it is not, a note on standard
+/// error and `false` (the test is skipped), but under CI (`CI` set) a
+/// missing QEMU is a failure.
+pub fn qemu_or_skip() -> bool {
+    if qemu_available() {
+        return true;
+    }
+    assert!(std::env::var_os("CI").is_none(), "CI needs {QEMU}");
+    eprintln!("{QEMU} not found: QEMU test skipped");
+    false
+}
+
 fn other(msg: String) -> LinkError {
     LinkError::Io(io::Error::other(msg))
 }

@@ -8,19 +8,10 @@
 use host_sim::compare::Comparator;
 use host_sim::device::LocalDevice;
 use host_sim::link::{final_lines, Client};
-use host_sim::qemu::{build_firmware, firmware_dir, qemu_available, Qemu};
+use host_sim::qemu::{build_firmware, firmware_dir, qemu_or_skip, Qemu};
 use host_sim::scenario;
 use std::process::Command;
 use std::time::Duration;
-
-fn qemu_or_skip() -> bool {
-    if qemu_available() {
-        return true;
-    }
-    assert!(std::env::var_os("CI").is_none(), "CI needs qemu-system-arm");
-    eprintln!("qemu-system-arm not found: QEMU test skipped");
-    false
-}
 
 /// The firmware built for QEMU, booted with instruction counting, and a
 /// link to it.
@@ -171,36 +162,4 @@ fn firmware_answers_real_time_bytes_like_the_in_process_device() {
     client.write_raw(b"SYNC\nPOS\n").unwrap();
     assert!(client.read_line().unwrap().starts_with("OK EV=100 "));
     assert!(client.read_line().unwrap().starts_with("OK PX=200 PZ=-200"));
-}
-
-/// Done when of the step interrupt: a 500-request program (feeds, rapids,
-/// arcs by chords) streamed to the paced firmware, its events on their
-/// ticks of virtual time, answers as the in-process device does and ends
-/// with its `SYNC`; a hold and a resume, and a reset, in the middle of the
-/// run leave the registers on the program's steps.
-#[test]
-fn a_program_streamed_to_the_paced_firmware_ends_with_the_in_process_sync() {
-    if !qemu_or_skip() {
-        return;
-    }
-    let elf = build_firmware("qemu-paced").unwrap();
-    let mut running = Vec::new();
-    let report = host_sim::stream::paced_proof(
-        || {
-            let mut q = Qemu::boot_paced(&elf)?;
-            let c = q.connect(Duration::from_secs(60))?;
-            running.push(q);
-            Ok(c)
-        },
-        2026,
-        500,
-    )
-    .unwrap();
-    eprintln!("{report:#?}");
-    assert!(report.mismatches.is_empty(), "{:?}", report.mismatches);
-    assert_eq!(report.sync.0, report.sync.1);
-    assert!(report.sync.0.ends_with(" STARVED=0"), "{}", report.sync.0);
-    assert!(report.held_prefix.is_some(), "held at {:?}", report.held_at);
-    assert_eq!(report.after_hold, report.after_hold_expected);
-    assert!(report.reset_consistent, "{}", report.reset_line);
 }
