@@ -28,6 +28,8 @@
 //! - [`machine`]: the planner and the stepper behind one front, as the
 //!   virtual-clock device of `docs/motion.md`.
 //! - [`stepdir`]: step/dir outputs on `embedded-hal` pins, paced by a timer.
+//! - [`watch`]: the supervisor's judgement of a stalled step interrupt or
+//!   main loop, for a board's watchdog.
 //!
 //! # Numeric conventions
 //! | quantity | type | unit stored | overflow |
@@ -61,4 +63,5 @@ pub mod step;
 pub mod stepdir;
 pub mod stepper;
 pub mod trig;
+pub mod watch;
 mod wide;

@@ -56,7 +56,7 @@ pub fn init(dp: pac::Peripherals) -> Board {
         .modify(|_, w| w.gpioaen().set_bit().gpiocen().set_bit());
     rcc.apb2enr().modify(|_, w| w.usart1en().set_bit());
     rcc.apb1enr()
-        .modify(|_, w| w.tim2en().set_bit().tim5en().set_bit());
+        .modify(|_, w| w.tim2en().set_bit().tim3en().set_bit().tim5en().set_bit());
 
     // PA9, PA10: alternate function 7, PA10 pulled up.
     let gpioa = &dp.GPIOA;
@@ -120,10 +120,18 @@ pub fn init(dp: pac::Peripherals) -> Board {
         high: 0,
     };
     tim2.count_ticks();
+    if crate::supervisor::was_reset_by_watchdog(&dp.RCC) {
+        defmt::warn!("the watchdog reset the board");
+    }
     Board {
         serial: Serial { usart },
         tim2,
         tim5: dp.TIM5,
+        watchdog: Watchdog {
+            iwdg: dp.IWDG,
+            tim3: dp.TIM3,
+            dbgmcu: dp.DBGMCU,
+        },
     }
 }
 
@@ -185,6 +193,18 @@ pub struct Board {
     pub tim2: StepTimer,
     /// The step interrupt's alarm (enabled, not configured).
     pub tim5: pac::TIM5,
+    /// The watchdog and its supervisor's timer (not started).
+    pub watchdog: Watchdog,
+}
+
+/// What [`crate::supervisor::start`] takes.
+pub struct Watchdog {
+    /// The independent watchdog.
+    pub iwdg: pac::IWDG,
+    /// The supervisor's timer (enabled, not configured).
+    pub tim3: pac::TIM3,
+    /// Debug freeze of both.
+    pub dbgmcu: pac::DBGMCU,
 }
 
 /// USART1: replies out, request bytes in through its interrupt.
@@ -226,6 +246,7 @@ pub fn sleep_unless(ready: impl Fn() -> bool) {
             cortex_m::asm::wfi();
         }
     });
+    crate::supervisor::beat();
 }
 
 /// Whether bytes are waiting.
@@ -263,6 +284,12 @@ fn USART1() {
             });
         }
     }
+}
+
+/// TIM2's count: microseconds, free-running (it wraps after 71 minutes).
+pub fn ticks() -> u32 {
+    // SAFETY: a read of the counter, which nothing else writes after init.
+    unsafe { &*pac::TIM2::ptr() }.cnt().read().bits()
 }
 
 /// TIM2 as the step clock: a free-running 32-bit counter at the device's

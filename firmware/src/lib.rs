@@ -16,11 +16,12 @@
 pub mod board;
 pub mod log;
 pub mod motion;
+pub mod supervisor;
 
 use board::{Board, Serial};
 use core_nostd::interleave::ImpulsePoint;
 use core_nostd::machine::Background;
-use core_nostd::protocol::{status_line, Io, Realtime, StatusView};
+use core_nostd::protocol::{status_line, Io, Realtime, StatusView, Timing};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
 use core_nostd::stepper::{Aborted, Item, Motion};
@@ -33,6 +34,8 @@ pub struct Controller {
     /// What a status line needs of the session, and the blocks queued.
     view: StatusView,
     queued: usize,
+    /// When the status byte being answered arrived (TIM2 count).
+    asked: Option<u32>,
 }
 
 impl Controller {
@@ -40,6 +43,7 @@ impl Controller {
     /// interrupt (STEP outputs low).
     pub fn new(board: Board) -> Self {
         motion::install(board.tim2, board.tim5);
+        supervisor::start(board.watchdog);
         Controller {
             serial: board.serial,
             view: StatusView {
@@ -50,16 +54,46 @@ impl Controller {
                 starved: 0,
             },
             queued: 0,
+            asked: None,
         }
     }
 }
 
-/// Sends the `!STATUS` line a real-time byte asked for, if one did.
+/// The board's timing for a status line answering a byte that arrived at
+/// TIM2 count `asked`.
+fn timing(asked: u32) -> Timing {
+    Timing {
+        latency_us: board::ticks().wrapping_sub(asked),
+        late_events: motion::late_events(),
+    }
+}
+
+/// Sends the `!STATUS` line a real-time byte asked for, if one did, while
+/// thread mode waits or works (it ends with `LAT= LATE=`, as the
+/// protocol's).
 fn answer_status(serial: &mut Serial, view: &StatusView, queued: usize) {
-    if motion::take_status() {
+    if let Some(asked) = motion::take_status() {
         let issued = motion::issued().unwrap_or_default();
         let mut line = status_line("!STATUS", motion::motion(), issued, queued, view);
+        timing(asked).write_to(&mut line);
         serial.send(line.finish());
+    }
+}
+
+impl Controller {
+    /// Answers what the serial interrupt left for thread mode through the
+    /// protocol: a reset's report and new session first, else a status
+    /// line. Returns whether there was anything.
+    pub fn realtime(&mut self, device: &mut core_nostd::protocol::Device) -> bool {
+        if motion::take_reset() {
+            device.realtime(Realtime::Reset, self);
+        } else if let Some(asked) = motion::take_status() {
+            self.asked = Some(asked);
+            device.realtime(Realtime::Status, self);
+        } else {
+            return false;
+        }
+        true
     }
 }
 
@@ -74,6 +108,15 @@ impl Io for Controller {
 
     fn view(&mut self, view: &StatusView) {
         self.view = *view;
+    }
+
+    fn pause(&mut self) {
+        supervisor::beat();
+        answer_status(&mut self.serial, &self.view, self.queued);
+    }
+
+    fn timing(&mut self) -> Option<Timing> {
+        self.asked.take().map(timing)
     }
 }
 
@@ -138,6 +181,12 @@ pub fn boot() -> board::Board {
     };
     log::init();
     board::init(dp)
+}
+
+/// A fault stops the steps; the watchdog then resets the board.
+#[cortex_m_rt::exception]
+unsafe fn HardFault(_: &cortex_m_rt::ExceptionFrame) -> ! {
+    halt()
 }
 
 /// Stops here for good, outputs safe.

@@ -22,10 +22,10 @@ fn main() -> ! {
         board::SYSCLK_HZ
     );
     loop {
+        firmware::supervisor::beat();
         // Real-time requests the serial interrupt acted on: the protocol's
         // part (the reset's report and session, a status line) first.
-        if let Some(rt) = firmware::motion::take_wanted() {
-            device.realtime(rt, &mut io);
+        if io.realtime(device) {
             continue;
         }
         // The step interrupt runs the last block started: the next one

@@ -16,8 +16,9 @@
 #[cfg(not(feature = "qemu-paced"))]
 use crate::board::TIM2_CLK_HZ;
 use crate::board::{sleep_unless, CycleDelay, PortCPin, StepTimer};
+use crate::supervisor;
 use core::cell::RefCell;
-use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
 use core_nostd::interleave::{ImpulsePoint, StepEvent};
 use core_nostd::protocol::Realtime;
 use core_nostd::step::Record;
@@ -144,6 +145,8 @@ struct Motion {
     busy: bool,
     /// What a reset found, until the protocol reports it.
     aborted: Option<Aborted>,
+    /// Events issued after their tick since power-on.
+    late: u32,
 }
 
 /// A reset dropped the motion; what the protocol still hands over is
@@ -155,6 +158,8 @@ static ABORTING: AtomicBool = AtomicBool::new(false);
 static WANTED: AtomicU8 = AtomicU8::new(0);
 const WANT_STATUS: u8 = 1;
 const WANT_RESET: u8 = 2;
+/// When the byte a wanted status line answers arrived (TIM2 count).
+static STATUS_ASKED: AtomicU32 = AtomicU32::new(0);
 
 static MOTION: Mutex<RefCell<Option<Motion>>> = Mutex::new(RefCell::new(None));
 
@@ -183,7 +188,17 @@ impl Motion {
         self.alarm.stop();
         self.axes.stop_outputs();
         self.busy = false;
+        supervisor::step_idle();
         found
+    }
+
+    /// Has the interrupt look at its work now, unless it already has work.
+    fn wake(&mut self) {
+        if !self.busy {
+            self.busy = true;
+            supervisor::step_due(self.clock.count());
+            pac::NVIC::pend(Interrupt::TIM5);
+        }
     }
 
     /// Issues what is due, then arms the alarm for the next event or goes
@@ -195,12 +210,20 @@ impl Motion {
                 if PACED {
                     let now = self.clock.now();
                     let lead = u64::from(self.drive.setup_us()) + LEAD;
+                    if now > tick {
+                        self.late = self.late.wrapping_add(1);
+                    }
                     if tick > now + lead {
-                        self.alarm.arm(tick - now - lead);
+                        let wait = tick - now - lead;
+                        self.alarm.arm(wait);
+                        let wait = wait.min(i32::MAX as u64) as u32;
+                        supervisor::step_due(self.clock.count().wrapping_add(wait));
                         return;
                     }
                 }
                 self.next = None;
+                // Progress: the supervisor's deadline moves on.
+                supervisor::step_due(self.clock.count());
                 // Waits for the tick itself; a late one steps at once.
                 if self
                     .axes
@@ -213,6 +236,7 @@ impl Motion {
             match self.stepper.pull() {
                 None => {
                     self.busy = false;
+                    supervisor::step_idle();
                     return;
                 }
                 Some(Pulled::RunStart) => self.clock.start_run(),
@@ -238,6 +262,7 @@ pub fn install(clock: StepTimer, alarm: pac::TIM5) {
         next: None,
         busy: false,
         aborted: None,
+        late: 0,
     };
     critical_section::with(|cs| {
         if let Ok(mut m) = MOTION.borrow(cs).try_borrow_mut() {
@@ -285,10 +310,7 @@ pub fn start(item: Item, drive: &DriveTiming, mut wait: impl FnMut()) -> Result<
                 let _ = m.stepper.push(i);
             }
             m.drive = *drive;
-            if !m.busy {
-                m.busy = true;
-                pac::NVIC::pend(Interrupt::TIM5);
-            }
+            m.wake();
             true
         });
         match (taken, item.take()) {
@@ -330,12 +352,15 @@ pub fn motion() -> State {
 /// its line.
 pub fn realtime(rt: Realtime) {
     act(rt);
-    let want = if rt == Realtime::Reset {
-        WANT_RESET
+    if rt == Realtime::Reset {
+        WANTED.fetch_or(WANT_RESET, Ordering::AcqRel);
     } else {
-        WANT_STATUS
-    };
-    WANTED.fetch_or(want, Ordering::AcqRel);
+        // The first byte of those one status line answers sets the time.
+        if WANTED.load(Ordering::Acquire) & WANT_STATUS == 0 {
+            STATUS_ASKED.store(crate::board::ticks(), Ordering::Relaxed);
+        }
+        WANTED.fetch_or(WANT_STATUS, Ordering::AcqRel);
+    }
 }
 
 /// Acts on a real-time command: hold, resume, or reset (the outputs low, the
@@ -351,9 +376,8 @@ pub fn act(rt: Realtime) {
                 if let Some(Pulled::RunStart) = m.stepper.resume() {
                     m.clock.start_run();
                 }
-                if !m.stepper.is_idle() && !m.busy {
-                    m.busy = true;
-                    pac::NVIC::pend(Interrupt::TIM5);
+                if !m.stepper.is_idle() {
+                    m.wake();
                 }
             });
         }
@@ -364,24 +388,17 @@ pub fn act(rt: Realtime) {
     }
 }
 
-/// Takes a wanted status line, if one is wanted.
-pub fn take_status() -> bool {
-    WANTED.fetch_and(!WANT_STATUS, Ordering::AcqRel) & WANT_STATUS != 0
+/// Takes a wanted status line, if one is wanted: the TIM2 count at which
+/// the byte arrived.
+pub fn take_status() -> Option<u32> {
+    let w = WANTED.fetch_and(!WANT_STATUS, Ordering::AcqRel);
+    (w & WANT_STATUS != 0).then(|| STATUS_ASKED.load(Ordering::Relaxed))
 }
 
-/// The real-time request thread mode has to answer next, if any: a reset
-/// before a status line.
-pub fn take_wanted() -> Option<Realtime> {
-    let w = WANTED.load(Ordering::Acquire);
-    if w & WANT_RESET != 0 {
-        WANTED.fetch_and(!WANT_RESET, Ordering::AcqRel);
-        Some(Realtime::Reset)
-    } else if w & WANT_STATUS != 0 {
-        WANTED.fetch_and(!WANT_STATUS, Ordering::AcqRel);
-        Some(Realtime::Status)
-    } else {
-        None
-    }
+/// Whether the protocol has a reset to handle (taken: the request is
+/// cleared).
+pub fn take_reset() -> bool {
+    WANTED.fetch_and(!WANT_RESET, Ordering::AcqRel) & WANT_RESET != 0
 }
 
 /// Whether a real-time request waits for thread mode.
@@ -396,6 +413,12 @@ pub fn abort() -> Option<Aborted> {
     let found = with(|m| m.aborted.take().unwrap_or_else(|| m.abort()));
     ABORTING.store(false, Ordering::Release);
     found
+}
+
+/// Step events issued after their tick since power-on: the step interrupt
+/// found the clock past the event's tick when it came to issue it.
+pub fn late_events() -> u32 {
+    with(|m| m.late).unwrap_or(0)
 }
 
 /// The registers of the steps issued.

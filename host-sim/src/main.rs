@@ -383,7 +383,53 @@ fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {
     for line in host_sim::qemu::icount_bench(&bench)? {
         println!("  {line}");
     }
-    Ok(ExitCode::SUCCESS)
+    status_latency()
+}
+
+/// `!STATUS` answers while the step interrupt runs at rising event rates:
+/// the paced firmware at 125 M instructions a second of virtual time, a
+/// status byte whenever 20 ms pass without a reply line.
+fn status_latency() -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let elf = host_sim::qemu::build_firmware("qemu-paced")?;
+    println!(
+        "Status latency while streaming (paced firmware, -icount shift=3: 125 M instructions/s; 150 blocks of 20 ms):"
+    );
+    println!(
+        "  events/s   LAT worst   median   samples   final SYNC equal to the in-process device's"
+    );
+    let mut all_equal = true;
+    for rate in [10_000u32, 25_000, 50_000, 100_000, 150_000, 200_000] {
+        let lines = host_sim::stream::rate_program(rate, 150);
+        let local = host_sim::stream::steps(&lines)?;
+        let mut q = host_sim::qemu::Qemu::boot_paced_timed(&elf)?;
+        let mut c = q.connect(Duration::from_secs(60))?;
+        let got = host_sim::stream::status_latency(
+            &mut c,
+            &lines,
+            Duration::from_millis(20),
+            Duration::from_secs(300),
+        )?;
+        let (worst, median) = got.worst_and_median();
+        let want = local.replies.last().map(|r| r.last.as_str());
+        let equal = got.replies.last().map(String::as_str) == want;
+        all_equal &= equal;
+        println!(
+            "  {rate:>8}   {:>6.2} ms   {:>6.2} ms   {:>7}   {}",
+            f64::from(worst) / 1000.0,
+            f64::from(median) / 1000.0,
+            got.samples.len(),
+            if equal {
+                "yes".to_string()
+            } else {
+                format!("NO: {:?} vs {:?}", got.replies.last(), want)
+            }
+        );
+    }
+    Ok(if all_equal {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }
 
 /// A progress bar over `len` blocks.

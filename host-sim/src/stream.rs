@@ -322,3 +322,99 @@ pub fn paced_proof(
         reset_consistent,
     })
 }
+
+/// A program at one event rate: `moves` collinear moves along −Z, each
+/// 20 ms long at cruise, at the price 0.001 mm and `F = rate·0.06` mm/min
+/// (`rate` events a second), accelerating at 5000 mm/s² from rest at the
+/// start and to rest at the end.
+pub fn rate_program(rate: u32, moves: usize) -> Vec<String> {
+    let mut lines: Vec<String> = [
+        "ZERO",
+        "CFG HX=0.001 HZ=0.001 DIAM=0",
+        "DRIVE RATE=200000",
+        "LIMITS VX=6000 VZ=12000 AX=5000 AZ=5000",
+    ]
+    .map(String::from)
+    .into();
+    let feed = f64::from(rate) * 0.06;
+    // 20 ms of events, in µm (one event per µm).
+    let step_um = u64::from(rate) / 50;
+    for k in 1..=moves as u64 {
+        let um = k * step_um;
+        lines.push(format!(
+            "MOVE Z=-{}.{:03} F={feed:.3}",
+            um / 1000,
+            um % 1000
+        ));
+    }
+    lines.push("SYNC".into());
+    lines
+}
+
+/// What [`status_latency`] found.
+#[derive(Debug)]
+pub struct Latency {
+    /// `LAT=` of every `!STATUS` line (µs from the byte to the line).
+    pub samples: Vec<u32>,
+    /// The final replies (the last is the `SYNC`).
+    pub replies: Vec<String>,
+}
+
+impl Latency {
+    /// The worst sample, and the median.
+    pub fn worst_and_median(&self) -> (u32, u32) {
+        let mut s = self.samples.clone();
+        s.sort_unstable();
+        (
+            s.last().copied().unwrap_or(0),
+            s.get(s.len() / 2).copied().unwrap_or(0),
+        )
+    }
+}
+
+/// Streams `lines` (each request when the previous one is answered) and
+/// sends a status byte whenever `every` passes without a reply line, as a
+/// sender polling its display does; collects the board's `LAT=`.
+pub fn status_latency(
+    client: &mut Client,
+    lines: &[String],
+    every: Duration,
+    deadline: Duration,
+) -> Result<Latency, LinkError> {
+    let end = Instant::now() + deadline;
+    client.set_timeout(every);
+    let mut out = Latency {
+        samples: Vec::new(),
+        replies: Vec::new(),
+    };
+    for l in lines {
+        let mut bytes = crate::link::with_checksum(l).into_bytes();
+        bytes.extend_from_slice(b"\r\n");
+        client.write_raw(&bytes)?;
+        loop {
+            if Instant::now() > end {
+                return Err(LinkError::Timeout);
+            }
+            let line = match client.read_line() {
+                Ok(line) => line,
+                Err(LinkError::Timeout) => {
+                    client.write_raw(&[0x80])?;
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
+            let body = crate::link::check_reply_line(&line)?;
+            if body.starts_with('!') {
+                if let Some(v) = crate::link::words_value(body, "LAT") {
+                    out.samples.push(v.parse().map_err(|_| {
+                        LinkError::Io(std::io::Error::other(format!("bad LAT in {body:?}")))
+                    })?);
+                }
+            } else if body.starts_with("OK") || body.starts_with("ERR") {
+                out.replies.push(body.to_string());
+                break;
+            }
+        }
+    }
+    Ok(out)
+}

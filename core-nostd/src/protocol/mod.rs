@@ -17,6 +17,7 @@ use crate::machine::Background;
 use crate::stepdir::DriveTiming;
 use core::fmt;
 use framing::{Framed, LineAssembler};
+use reply::ReplyLine;
 
 /// The error codes of the protocol.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -153,7 +154,39 @@ pub trait Io {
     fn view(&mut self, view: &StatusView) {
         let _ = view;
     }
+
+    /// The handler is in the middle of a long computation and between two
+    /// of its steps (every [`CHORDS_PER_PAUSE`] chords of an arc's check):
+    /// a board answers a waiting status byte here and shows it is alive.
+    fn pause(&mut self) {}
+
+    /// For a `!STATUS` line: how the transport keeps time, where it
+    /// measures it (a board); the line then ends with `LAT= LATE=`.
+    fn timing(&mut self) -> Option<Timing> {
+        None
+    }
 }
+
+/// A board's own timing, at the end of its `!STATUS` lines.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Timing {
+    /// Microseconds from the status byte's arrival to the line (`LAT=`).
+    pub latency_us: u32,
+    /// Step events issued later than their tick since power-on (`LATE=`).
+    pub late_events: u32,
+}
+
+impl Timing {
+    /// Appends ` LAT= LATE=` to a status line.
+    pub fn write_to(&self, line: &mut ReplyLine) {
+        use core::fmt::Write;
+        let _ = write!(line, " LAT={} LATE={}", self.latency_us, self.late_events);
+    }
+}
+
+/// Chords an arc's check takes between two [`Io::pause`] calls (about
+/// 150 000 instructions on a Cortex-M4: 1 ms at 168 MHz).
+pub const CHORDS_PER_PAUSE: u32 = 16;
 
 /// One protocol endpoint: framing plus a session.
 #[derive(Clone, Debug, Default)]

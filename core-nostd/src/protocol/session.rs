@@ -6,7 +6,7 @@
 
 use super::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, ArgError, Words};
-use super::{ErrorCode, Io, Realtime, StatusView};
+use super::{ErrorCode, Io, Realtime, StatusView, CHORDS_PER_PAUSE};
 use crate::arc::{centre_from_radius, ArcDir, ArcError, ArcPoints, ChordPlan, DirectArc};
 use crate::comp::{
     CompError, Contour, Element, Move, MoveKind, Moves, Origin, Shape, TipCode, Tool, MAX_MOVES,
@@ -617,7 +617,7 @@ impl Session {
     ) -> Outcome<'a> {
         let plan = ChordPlan::new(points, dir, tol, finish)?;
         let n = plan.chords();
-        self.check_chords(&plan, self.pos)?;
+        self.check_chords(&plan, self.pos, io)?;
         let start = self.pos;
         let crc = self.run_chords(&plan, points, feed, io, true, Crc32::new());
         let at = self.pos;
@@ -793,7 +793,7 @@ impl Session {
                 Origin::Current => now,
                 Origin::Corner => now.or(self.element_feed),
             };
-            let p = self.plan_move(cmd, pos, m, feed)?;
+            let p = self.plan_move(cmd, pos, m, feed, io)?;
             (cmd, pos) = (p.end(), p.registers());
             // As many plans as moves: never full.
             let _ = planned.push(p);
@@ -824,12 +824,13 @@ impl Session {
 
     /// Plans one move from the commanded point `cmd` and registers `pos`,
     /// checking every block of it against the machine's limits.
-    fn plan_move(
+    fn plan_move<I: Io>(
         &self,
         cmd: [Length; 2],
         pos: ImpulsePoint,
         m: &Move,
         feed: Option<Feed>,
+        io: &mut I,
     ) -> Result<Planned, Refusal<'static>> {
         let end = point(m.to)?;
         match m.kind {
@@ -854,7 +855,7 @@ impl Session {
                 };
                 let plan =
                     ChordPlan::new(&points, dir, self.cfg.tol, self.cfg.pass == Pass::Finish)?;
-                let to = self.check_chords(&plan, pos)?;
+                let to = self.check_chords(&plan, pos, io)?;
                 Ok(Planned::Arc {
                     plan,
                     points,
@@ -936,14 +937,19 @@ impl Session {
         LinearBlock::new(self.pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))
     }
 
-    /// Checks every chord of a plan before the first one moves.
-    fn check_chords(
+    /// Checks every chord of a plan before the first one moves (a long
+    /// check lets the transport answer its real-time requests meanwhile).
+    fn check_chords<I: Io>(
         &self,
         plan: &ChordPlan,
         from: ImpulsePoint,
+        io: &mut I,
     ) -> Result<ImpulsePoint, Refusal<'static>> {
         let mut at = from;
         for i in 1..=plan.chords() {
+            if i % CHORDS_PER_PAUSE == 0 {
+                io.pause();
+            }
             let to = plan
                 .chord_end(i, self.cfg.hx, self.cfg.hz)
                 .map_err(|_| Refusal::Range(RANGE_POS))?;
@@ -1159,6 +1165,9 @@ impl Session {
         let st = self.machine.status(&mut Sink::new(io, self.drive));
         let view = self.view(st.speed(self.machine.tick()));
         let mut line = status_line(prefix, st.motion, st.issued, st.queued, &view);
+        if let Some(timing) = io.timing().filter(|_| prefix.starts_with('!')) {
+            timing.write_to(&mut line);
+        }
         io.send(line.finish());
     }
 
@@ -1525,6 +1534,14 @@ impl<I: Io> Io for Suffixed<'_, I> {
 
     fn view(&mut self, view: &StatusView) {
         self.inner.view(view);
+    }
+
+    fn pause(&mut self) {
+        self.inner.pause();
+    }
+
+    fn timing(&mut self) -> Option<super::Timing> {
+        self.inner.timing()
     }
 }
 

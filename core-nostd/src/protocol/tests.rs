@@ -860,3 +860,57 @@ fn a_reset_byte_drops_the_queue_keeps_the_registers_and_ends_the_session() {
     assert!(ask1(&mut dev, &with_crc("@5 POS")).starts_with("ERR SESSION"));
     assert_eq!(ask1(&mut dev, "SESSION"), "OK TOKEN=0");
 }
+
+#[test]
+fn a_long_arc_check_pauses_for_the_transport_every_few_chords() {
+    #[derive(Default)]
+    struct Pauses {
+        pauses: u32,
+        last: String,
+    }
+    impl Io for Pauses {
+        fn send(&mut self, line: &[u8]) {
+            self.last = String::from_utf8_lossy(line).trim_end().to_string();
+        }
+        fn pause(&mut self) {
+            self.pauses += 1;
+        }
+    }
+    let chords = |reply: &str| -> u32 {
+        let n = reply.split(' ').find_map(|w| w.strip_prefix("N="));
+        n.unwrap().parse().unwrap()
+    };
+    let mut dev = Device::new();
+    ask1(&mut dev, "CFG DIAM=0");
+    ask1(&mut dev, "MOVE X=37.5");
+    // A full circle, R 37.5 mm at σ 0.001 mm: the check pauses every
+    // CHORDS_PER_PAUSE chords (and the chords themselves do not).
+    let mut io = Pauses::default();
+    dev.receive_bytes(b"ARC X=37.5 Z=0 I=-37.5 K=0 DIR=CW TOL=0.001\n", &mut io);
+    let n = chords(&io.last);
+    assert!(n > 400, "{}", io.last);
+    assert_eq!(io.pauses, n / CHORDS_PER_PAUSE);
+    // Through a session's numbered, CRC-checked requests the same.
+    let mut io = Pauses::default();
+    dev.receive_bytes(
+        std::format!("{}\n", with_crc("@1 SESSION TOKEN=5")).as_bytes(),
+        &mut io,
+    );
+    let mut io = Pauses::default();
+    dev.receive_bytes(
+        std::format!(
+            "{}\n",
+            with_crc("@2 ARC X=37.5 Z=0 I=-37.5 K=0 DIR=CW TOL=0.001")
+        )
+        .as_bytes(),
+        &mut io,
+    );
+    assert!(io.last.starts_with("OK N="), "{}", io.last);
+    assert_eq!(io.pauses, n / CHORDS_PER_PAUSE);
+    // And a G-code arc of the same circle, half of it.
+    ask1(&mut dev, "CFG TOL=0.001");
+    let mut io = Pauses::default();
+    dev.receive_bytes(b"G02 X-37.5 Z0 I-37.5 K0 F100\n", &mut io);
+    assert!(io.last.starts_with("OK"), "{}", io.last);
+    assert_eq!(io.pauses, n.div_ceil(2) / CHORDS_PER_PAUSE, "{}", io.pauses);
+}
