@@ -159,15 +159,45 @@ where
         clock: &mut C,
         delay: &mut D,
     ) -> Result<(), PinError> {
-        let result = self.issue_inner(event, tick, timing, clock, delay);
+        self.rise(event, tick, timing, clock, delay)?;
+        delay.delay_us(timing.pulse_us);
+        self.fall()
+    }
+
+    /// The first half of [`StepDir::issue`]: DIR, its set-up, the tick, the
+    /// STEP lines high. The caller ends the pulse with [`StepDir::fall`] no
+    /// sooner than the pulse width later, and may work meanwhile (a step
+    /// interrupt pulls its next event). On a pin failure both STEP lines
+    /// are driven low.
+    #[inline]
+    pub fn rise<C: TickClock, D: DelayNs>(
+        &mut self,
+        event: StepEvent,
+        tick: u64,
+        timing: &DriveTiming,
+        clock: &mut C,
+        delay: &mut D,
+    ) -> Result<(), PinError> {
+        let result = self.rise_inner(event, tick, timing, clock, delay);
         if result.is_err() {
             self.stop_outputs();
         }
         result
     }
 
+    /// Ends a pulse: both STEP lines low.
+    #[inline]
+    pub fn fall(&mut self) -> Result<(), PinError> {
+        let x = self.x_step.set_low();
+        let z = self.z_step.set_low();
+        match (x, z) {
+            (Ok(()), Ok(())) => Ok(()),
+            _ => Err(PinError),
+        }
+    }
+
     #[inline(always)]
-    fn issue_inner<C: TickClock, D: DelayNs>(
+    fn rise_inner<C: TickClock, D: DelayNs>(
         &mut self,
         event: StepEvent,
         tick: u64,
@@ -194,25 +224,12 @@ where
             delay.delay_us(timing.setup_us);
         }
         clock.wait_until(tick);
-        self.pulse(event, timing, delay)
-    }
-
-    #[inline(always)]
-    fn pulse<D: DelayNs>(
-        &mut self,
-        event: StepEvent,
-        timing: &DriveTiming,
-        delay: &mut D,
-    ) -> Result<(), PinError> {
         if event.x_steps() {
             self.x_step.set_high().map_err(|_| PinError)?;
         }
         if event.z_steps() {
             self.z_step.set_high().map_err(|_| PinError)?;
         }
-        delay.delay_us(timing.pulse_us);
-        self.x_step.set_low().map_err(|_| PinError)?;
-        self.z_step.set_low().map_err(|_| PinError)?;
         Ok(())
     }
 }
@@ -338,6 +355,51 @@ mod tests {
                 assert_eq!(*t, (i as u64 + 1) * 50_000);
             }
         }
+    }
+
+    #[test]
+    fn rise_and_fall_are_issue_in_two_halves() {
+        let timing = DriveTiming::new(20_000, 5, 8).unwrap();
+        let whole = run(4, -7, timing, 50);
+        // The same events, the pulse ended by the caller 5 µs after the rise.
+        let log: Log = Rc::new(RefCell::new((0, Vec::new())));
+        let mut sd = StepDir::new(
+            Pin(XS, log.clone()),
+            Pin(XD, log.clone()),
+            Pin(ZS, log.clone()),
+            Pin(ZD, log.clone()),
+        );
+        log.borrow_mut().1.clear();
+        let p = |x, z| ImpulsePoint {
+            x: Impulses(x),
+            z: Impulses(z),
+        };
+        let block = LinearBlock::new(p(10, 10), p(14, 3)).unwrap();
+        let mut time = Time(log.clone(), 0);
+        let mut clock = Time(log.clone(), 0);
+        clock.start_run();
+        for (i, e) in block.events().enumerate() {
+            let tick = (i as u64 + 1) * 50;
+            sd.rise(e, tick, &timing, &mut clock, &mut time).unwrap();
+            time.delay_us(5);
+            sd.fall().unwrap();
+        }
+        // Rises and DIR writes as `issue` makes them; every STEP line is
+        // written low at each fall (a line already low stays low).
+        let rises = |l: &[(u64, usize, bool)]| -> Vec<(u64, usize, bool)> {
+            l.iter()
+                .copied()
+                .filter(|e| e.2 || e.1 == XD || e.1 == ZD)
+                .collect()
+        };
+        assert_eq!(rises(&log.borrow().1), rises(&whole));
+        let falls = |l: &[(u64, usize, bool)]| -> Vec<(u64, usize)> {
+            l.iter()
+                .filter(|e| !e.2 && (e.1 == XS || e.1 == ZS))
+                .map(|e| (e.0, e.1))
+                .collect()
+        };
+        assert_eq!(falls(&log.borrow().1), falls(&whole));
     }
 
     #[test]

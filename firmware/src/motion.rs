@@ -147,6 +147,8 @@ struct Motion {
     aborted: Option<Aborted>,
     /// Events issued after their tick since power-on.
     late: u32,
+    /// The TIM2 count at which the STEP pulse in progress may end.
+    pulse_end: Option<u32>,
 }
 
 /// A reset dropped the motion; what the protocol still hands over is
@@ -186,6 +188,7 @@ impl Motion {
         }
         self.stepper.set_issued(registers);
         self.alarm.stop();
+        self.pulse_end = None;
         self.axes.stop_outputs();
         self.busy = false;
         supervisor::step_idle();
@@ -201,8 +204,22 @@ impl Motion {
         }
     }
 
+    /// Ends the STEP pulse in progress, if any, once its width has passed
+    /// (unpaced under QEMU at once).
+    fn end_pulse(&mut self) {
+        if let Some(end) = self.pulse_end.take() {
+            if PACED {
+                while (self.clock.count().wrapping_sub(end) as i32) < 0 {}
+            }
+            if self.axes.fall().is_err() {
+                defmt::error!("step outputs failed");
+            }
+        }
+    }
+
     /// Issues what is due, then arms the alarm for the next event or goes
-    /// idle.
+    /// idle. A STEP pulse stays high while the next event is pulled, and
+    /// ends before anything else touches the outputs.
     fn service(&mut self) {
         self.alarm.stop();
         loop {
@@ -214,6 +231,7 @@ impl Motion {
                         self.late = self.late.wrapping_add(1);
                     }
                     if tick > now + lead {
+                        self.end_pulse();
                         let wait = tick - now - lead;
                         self.alarm.arm(wait);
                         let wait = wait.min(i32::MAX as u64) as u32;
@@ -222,19 +240,24 @@ impl Motion {
                     }
                 }
                 self.next = None;
+                self.end_pulse();
                 // Progress: the supervisor's deadline moves on.
                 supervisor::step_due(self.clock.count());
                 // Waits for the tick itself; a late one steps at once.
                 if self
                     .axes
-                    .issue(event, tick, &self.drive, &mut self.clock, &mut CycleDelay)
+                    .rise(event, tick, &self.drive, &mut self.clock, &mut CycleDelay)
                     .is_err()
                 {
                     defmt::error!("step outputs failed");
                 }
+                // The count ticks at 1 µs: one more makes the width whole.
+                let width = self.drive.pulse_us() + 1;
+                self.pulse_end = Some(self.clock.count().wrapping_add(width));
             }
             match self.stepper.pull() {
                 None => {
+                    self.end_pulse();
                     self.busy = false;
                     supervisor::step_idle();
                     return;
@@ -242,7 +265,10 @@ impl Motion {
                 Some(Pulled::RunStart) => self.clock.start_run(),
                 Some(Pulled::BlockStart(_)) => {}
                 Some(Pulled::Step(event, tick)) => self.next = Some((event, tick)),
-                Some(Pulled::RunEnd(_)) => self.axes.stop_outputs(),
+                Some(Pulled::RunEnd(_)) => {
+                    self.end_pulse();
+                    self.axes.stop_outputs();
+                }
             }
         }
     }
@@ -263,6 +289,7 @@ pub fn install(clock: StepTimer, alarm: pac::TIM5) {
         busy: false,
         aborted: None,
         late: 0,
+        pulse_end: None,
     };
     critical_section::with(|cs| {
         if let Ok(mut m) = MOTION.borrow(cs).try_borrow_mut() {
