@@ -1,22 +1,33 @@
 //! G-code blocks: words parsed and checked, before any motion.
 //!
 //! A block is a line of address words: a letter followed by a number, with or
-//! without spaces between words (`N10 G01 X27.532 Z0`, `G1X12.5`). Comments in
-//! parentheses and everything after `;` are ignored. Each address may appear
-//! once, except `G`, which may appear once per modal group.
+//! without spaces between words (`N10 G01 X27.532 Z0`, `G1X12.5`), letters in
+//! either case. Comments in parentheses and everything after `;` are ignored.
+//! Each address may appear once, except `G`, which may appear once per modal
+//! group. Lines as CAM posts and machinists write them are read too:
+//!
+//! - numbers `30.`, `.5`, `+2`, with up to 15 decimals, rounded once to the
+//!   ångström (10⁻⁷ mm) half away from zero;
+//! - `%` (the tape mark a program begins and ends with) alone on its line;
+//! - a program number alone on its line: `O1234`, `O<name>`, `:1234`
+//!   (an `o<name>` followed by a word is a subroutine, expanded by the host);
+//! - `/` at the start: block delete, skipped when the switch is on;
+//! - `Y0` (lathe posts write it); any other `Y` is refused by name.
 //!
 //! | address | meaning | value |
 //! |---|---|---|
 //! | `N` | sequence number | kept to name the block in refusals |
-//! | `G` | 00 01 02 03 (motion), 40 41 42 (nose compensation), 90 91 (absolute, incremental), 450 451 (outside corners: transition arc, intersection) | whole number |
+//! | `G` | 00 01 02 03 (motion), 18 (ZX plane), 21 (millimetres), 40 41 42 (nose compensation), 90 91 (absolute, incremental), 450 451 (outside corners: transition arc, intersection) | whole number |
 //! | `X` | X end point: a diameter when `DIAM=1` | length |
 //! | `Z` | Z end point | length |
+//! | `Y` | only 0 | length |
 //! | `I`, `K` | arc centre minus start point, radius values | length |
 //! | `R` | arc radius: positive for an arc of at most 180°, negative for more | length |
 //! | `F` | feed along the path, mm/min (modal) | length |
 //! | `S`, `T`, `M` | speed, tool, miscellaneous | accepted, not acted on |
 
 use crate::length::{Length, LengthError};
+use core::fmt;
 
 /// Motion modes (group 1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -66,9 +77,26 @@ pub enum Corner {
     Intersection,
 }
 
+/// What a line holds besides words.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LineKind {
+    /// Address words (or nothing but comments).
+    #[default]
+    Words,
+    /// `%`: the tape mark.
+    TapeMark,
+    /// A program number: `O1234`, `O<name>`, `:1234`.
+    Program,
+}
+
 /// One parsed block.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Block {
+    /// Words, the tape mark, or a program number.
+    pub kind: LineKind,
+    /// Block delete: the line began with `/`.
+    pub deleted: bool,
     /// G00–G03 if given.
     pub motion: Option<Motion>,
     /// G40–G42 if given.
@@ -77,6 +105,10 @@ pub struct Block {
     pub incremental: Option<bool>,
     /// G450 or G451 if given.
     pub corner: Option<Corner>,
+    /// G18 given: the ZX plane, the only one a lathe has.
+    pub plane_zx: bool,
+    /// G21 given: millimetres, the only unit taken so far.
+    pub metric: bool,
     /// The sequence number, when written as a whole number below 2³².
     pub n: Option<u32>,
     /// X word.
@@ -107,23 +139,100 @@ pub enum BlockError {
     Comment,
     /// A malformed or out-of-range number at an address (`ERR VALUE`).
     Value(u8, LengthError),
-    /// A G code this control does not run (`ERR VALUE`).
-    UnsupportedG,
+    /// A G code this control does not run (`ERR VALUE`): its code in
+    /// tenths (G90.1 is 901), or `None` when the number is no G code.
+    UnsupportedG(Option<u16>),
+    /// A `Y` word other than 0: a lathe has no Y axis (`ERR VALUE`).
+    NoYAxis,
+    /// A program number with other words, or not at the line's start
+    /// (`ERR SYNTAX`).
+    ProgramNumber,
+    /// An `o<name>` subroutine, loop or condition, which the host expands
+    /// before streaming (`ERR SYNTAX`).
+    HostLanguage,
 }
 
-/// Whether a request line is a G-code block: its first word is an address
-/// letter directly followed by a number.
+impl BlockError {
+    /// Whether the protocol answers it `ERR VALUE` (a number or a code
+    /// this control does not take) rather than `ERR SYNTAX`.
+    pub const fn is_value(&self) -> bool {
+        matches!(
+            self,
+            BlockError::Value(..) | BlockError::UnsupportedG(_) | BlockError::NoYAxis
+        )
+    }
+}
+
+/// What a refusal says, naming the word: `unknown address Q`, `G71 canned
+/// cycles not supported`, `X more than 15 decimals`.
+impl fmt::Display for BlockError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            BlockError::UnknownAddress(l) => write!(f, "unknown address {}", char::from(l)),
+            BlockError::Repeated(l) => write!(f, "address given twice: {}", char::from(l)),
+            BlockError::NotAWord => f.write_str("not an address word"),
+            BlockError::Comment => f.write_str("unclosed comment"),
+            BlockError::Value(l, why) => write!(f, "{} {why}", char::from(l)),
+            BlockError::UnsupportedG(None) => f.write_str("G not a G code"),
+            BlockError::UnsupportedG(Some(tenths)) => {
+                let (whole, tenth) = (tenths / 10, tenths % 10);
+                let why = match whole {
+                    17 | 19 if tenth == 0 => "plane not supported: a lathe cuts in G18 (ZX)",
+                    70..=76 if tenth == 0 => "canned cycles not supported",
+                    _ => "not supported",
+                };
+                if tenth == 0 {
+                    write!(f, "G{whole:02} {why}")
+                } else {
+                    write!(f, "G{whole}.{tenth} {why}")
+                }
+            }
+            BlockError::NoYAxis => f.write_str("Y a lathe has no Y axis: only Y0"),
+            BlockError::ProgramNumber => {
+                f.write_str("a program number stands alone at a line's start: O")
+            }
+            BlockError::HostLanguage => {
+                f.write_str("o-word subroutines, loops and conditions are expanded by the host")
+            }
+        }
+    }
+}
+
+/// A refusal and the column (from 1, in bytes) of the word it names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Located {
+    /// What is wrong.
+    pub error: BlockError,
+    /// Where it begins.
+    pub column: usize,
+}
+
+/// Whether a request line is a G-code line: its first word is an address
+/// letter directly followed by a number, or it begins with `%`, `/`, `(`,
+/// `;`, `:` or `O<`.
 ///
 /// ```
 /// use core_nostd::gcode::is_block;
 /// assert!(is_block("N10 G01 X12"));
 /// assert!(is_block("x-1.5"));
+/// assert!(is_block("X.5"));
+/// assert!(is_block("%"));
+/// assert!(is_block("(FACE)"));
+/// assert!(is_block("O<part> (name)"));
 /// assert!(!is_block("ZERO"));
 /// assert!(!is_block("MOVE X=1"));
 /// ```
 pub fn is_block(line: &str) -> bool {
     let b = line.trim_start().as_bytes();
-    matches!(b, [l, d, ..] if l.is_ascii_alphabetic() && (d.is_ascii_digit() || matches!(d, b'+' | b'-' | b'.')))
+    match b {
+        [b'%' | b'/' | b'(' | b';' | b':', ..] => true,
+        [b'O' | b'o', b'<', ..] => true,
+        [l, d, ..] => {
+            l.is_ascii_alphabetic() && (d.is_ascii_digit() || matches!(d, b'+' | b'-' | b'.'))
+        }
+        _ => false,
+    }
 }
 
 /// Parses a block.
@@ -135,10 +244,65 @@ pub fn is_block(line: &str) -> bool {
 /// assert_eq!(b.x.unwrap().to_string(), "27.5320");
 /// ```
 pub fn parse_block(line: &str) -> Result<Block, BlockError> {
+    parse_located(line).map_err(|l| l.error)
+}
+
+/// Parses a block; a refusal says where.
+///
+/// ```
+/// use core_nostd::gcode::{parse_located, BlockError};
+/// let e = parse_located("G00 X30. Y5 Z2.").unwrap_err();
+/// assert_eq!((e.error, e.column), (BlockError::NoYAxis, 10));
+/// ```
+pub fn parse_located(line: &str) -> Result<Block, Located> {
     let mut block = Block::default();
     let mut seen = [false; 26];
     let bytes = line.as_bytes();
-    let mut pos = 0;
+    let at = |error, pos: usize| Located {
+        error,
+        column: pos + 1,
+    };
+    let mut pos = bytes
+        .iter()
+        .take_while(|b| matches!(b, b' ' | b'\t'))
+        .count();
+    let start = pos;
+    match bytes.get(pos..) {
+        Some([b'%', ..]) => {
+            block.kind = LineKind::TapeMark;
+            pos += 1;
+        }
+        Some([b'/', ..]) => {
+            block.deleted = true;
+            pos += 1;
+        }
+        Some([b':', ..]) => {
+            block.kind = LineKind::Program;
+            pos = program_number(bytes, pos + 1).ok_or(at(BlockError::NotAWord, pos))?;
+        }
+        Some([b'O' | b'o', b'<', ..]) => {
+            block.kind = LineKind::Program;
+            let close = bytes
+                .iter()
+                .skip(pos)
+                .position(|&b| b == b'>')
+                .ok_or(at(BlockError::NotAWord, pos))?;
+            let name = bytes.get(pos + 2..pos + close).unwrap_or(&[]);
+            if name.is_empty()
+                || !name
+                    .iter()
+                    .all(|b| b.is_ascii_alphanumeric() || b"_.-".contains(b))
+            {
+                return Err(at(BlockError::NotAWord, pos));
+            }
+            pos += close + 1;
+        }
+        Some([b'O' | b'o', d, ..]) if d.is_ascii_digit() => {
+            block.kind = LineKind::Program;
+            pos = program_number(bytes, pos + 1).ok_or(at(BlockError::NotAWord, pos))?;
+        }
+        _ => {}
+    }
     while let Some(&c) = bytes.get(pos) {
         match c {
             b' ' | b'\t' => pos += 1,
@@ -147,30 +311,54 @@ pub fn parse_block(line: &str) -> Result<Block, BlockError> {
                 let close = bytes
                     .get(pos..)
                     .and_then(|rest| rest.iter().position(|&b| b == b')'))
-                    .ok_or(BlockError::Comment)?;
+                    .ok_or(at(BlockError::Comment, pos))?;
                 pos += close + 1;
+            }
+            _ if block.kind != LineKind::Words => {
+                // A tape mark or a program number stands alone.
+                let error = if block.kind == LineKind::Program
+                    && bytes.get(start + 1) == Some(&b'<')
+                    && c.is_ascii_alphabetic()
+                {
+                    BlockError::HostLanguage
+                } else if block.kind == LineKind::Program {
+                    BlockError::ProgramNumber
+                } else {
+                    BlockError::NotAWord
+                };
+                return Err(at(error, pos));
             }
             _ if c.is_ascii_alphabetic() => {
                 let letter = c.to_ascii_uppercase();
-                let start = pos + 1;
-                let mut end = start;
+                let from = pos + 1;
+                let mut end = from;
                 while bytes
                     .get(end)
                     .is_some_and(|b| b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.'))
                 {
                     end += 1;
                 }
-                let number = line.get(start..end).ok_or(BlockError::NotAWord)?;
+                let number = line.get(from..end).ok_or(at(BlockError::NotAWord, pos))?;
                 if number.is_empty() {
-                    return Err(BlockError::NotAWord);
+                    return Err(at(BlockError::NotAWord, pos));
                 }
-                word(&mut block, &mut seen, letter, number)?;
+                word(&mut block, &mut seen, letter, number).map_err(|e| at(e, pos))?;
                 pos = end;
             }
-            _ => return Err(BlockError::NotAWord),
+            _ => return Err(at(BlockError::NotAWord, pos)),
         }
     }
     Ok(block)
+}
+
+/// The end of a program number's digits from `pos` (at least one).
+fn program_number(bytes: &[u8], pos: usize) -> Option<usize> {
+    let n = bytes
+        .iter()
+        .skip(pos)
+        .take_while(|b| b.is_ascii_digit())
+        .count();
+    (n > 0).then_some(pos + n)
 }
 
 fn word(
@@ -179,7 +367,7 @@ fn word(
     letter: u8,
     number: &str,
 ) -> Result<(), BlockError> {
-    let length = || Length::from_mm_str(number).map_err(|e| BlockError::Value(letter, e));
+    let length = || Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e));
     if letter == b'G' {
         return g_word(block, number);
     }
@@ -201,6 +389,14 @@ fn word(
             block.n = number.parse().ok();
         }
         b'F' => block.f = Some(length()?),
+        b'Y' => {
+            // Only a written zero: `Y0`, `Y-0.000`.
+            length()?;
+            if number.bytes().any(|b| matches!(b, b'1'..=b'9')) {
+                return Err(BlockError::NoYAxis);
+            }
+        }
+        b'O' => return Err(BlockError::ProgramNumber),
         // Accepted and checked as numbers, not acted on.
         b'S' | b'T' | b'M' => {
             length()?;
@@ -210,13 +406,28 @@ fn word(
     Ok(())
 }
 
-fn g_word(block: &mut Block, number: &str) -> Result<(), BlockError> {
-    if number.is_empty() || number.len() > 3 || !number.bytes().all(|b| b.is_ascii_digit()) {
-        return Err(BlockError::UnsupportedG);
+/// A G number as a code in tenths: `1`, `01`, `90.1`; `None` if it is no
+/// G code (a sign, more than one decimal, more than 3 digits).
+fn g_code(number: &str) -> Option<u16> {
+    let (whole, tenth) = match number.split_once('.') {
+        Some((w, t)) => (w, Some(t)),
+        None => (number, None),
+    };
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if !digits(whole) || whole.len() > 3 || tenth.is_some_and(|t| t.len() != 1 || !digits(t)) {
+        return None;
     }
-    let code = number
-        .bytes()
-        .fold(0u16, |n, b| n * 10 + u16::from(b - b'0'));
+    let value = |s: &str| s.bytes().fold(0u16, |n, b| n * 10 + u16::from(b - b'0'));
+    Some(value(whole) * 10 + tenth.map_or(0, value))
+}
+
+fn g_word(block: &mut Block, number: &str) -> Result<(), BlockError> {
+    let tenths = g_code(number).ok_or(BlockError::UnsupportedG(None))?;
+    let unsupported = Err(BlockError::UnsupportedG(Some(tenths)));
+    if tenths % 10 != 0 {
+        return unsupported;
+    }
+    let code = tenths / 10;
     let repeated = Err(BlockError::Repeated(b'G'));
     match code {
         0..=3 => {
@@ -246,6 +457,18 @@ fn g_word(block: &mut Block, number: &str) -> Result<(), BlockError> {
             }
             block.incremental = Some(code == 91);
         }
+        18 => {
+            if block.plane_zx {
+                return repeated;
+            }
+            block.plane_zx = true;
+        }
+        21 => {
+            if block.metric {
+                return repeated;
+            }
+            block.metric = true;
+        }
         450 | 451 => {
             if block.corner.is_some() {
                 return repeated;
@@ -256,7 +479,7 @@ fn g_word(block: &mut Block, number: &str) -> Result<(), BlockError> {
                 Corner::Intersection
             });
         }
-        _ => return Err(BlockError::UnsupportedG),
+        _ => return unsupported,
     }
     Ok(())
 }
@@ -290,19 +513,84 @@ mod tests {
     }
 
     #[test]
+    fn lines_as_cam_posts_and_machinists_write_them() {
+        let b = parse_block("N10 G00 G18 G21 X30. Z2. Y0").unwrap();
+        assert_eq!((b.x, b.z, b.n), (mm("30"), mm("2"), Some(10)));
+        assert!(b.plane_zx && b.metric);
+        let b = parse_block("x.5 z-.25 F+100").unwrap();
+        assert_eq!((b.x, b.z, b.f), (mm("0.5"), mm("-0.25"), mm("100")));
+        // Rounded once to the ångström, half away from zero.
+        let b = parse_block("X1.00000005 Z-1.00000004999999").unwrap();
+        assert_eq!(b.x.unwrap().as_angstrom(), 10_000_001);
+        assert_eq!(b.z.unwrap().as_angstrom(), -10_000_000);
+        for (line, kind) in [
+            ("%", LineKind::TapeMark),
+            ("  % (end)", LineKind::TapeMark),
+            ("O1000 (SHAFT)", LineKind::Program),
+            ("o<shaft_op10>", LineKind::Program),
+            (":0042", LineKind::Program),
+            ("(MSG, FACE THE PART)", LineKind::Words),
+            ("; only a comment", LineKind::Words),
+        ] {
+            let b = parse_block(line).unwrap();
+            assert_eq!(b.kind, kind, "{line}");
+            assert_eq!((b.motion, b.x, b.z), (None, None, None), "{line}");
+        }
+        let b = parse_block("/N20 G01 X20.").unwrap();
+        assert!(b.deleted);
+        assert_eq!(b.x, mm("20"));
+        assert!(
+            !parse_block("N20 G01 X20. (a / in a comment)")
+                .unwrap()
+                .deleted
+        );
+        assert_eq!(parse_block("Y-0.000").unwrap(), Block::default());
+    }
+
+    #[test]
+    fn refusals_say_where() {
+        let at = |line: &str| {
+            let e = parse_located(line).unwrap_err();
+            (e.error, e.column)
+        };
+        assert_eq!(at("G00 X30. Y5 Z2."), (BlockError::NoYAxis, 10));
+        assert_eq!(at("G20 G00 X1"), (BlockError::UnsupportedG(Some(200)), 1));
+        assert_eq!(at("G18 G00 G18"), (BlockError::Repeated(b'G'), 9));
+        assert_eq!(at("G90.1"), (BlockError::UnsupportedG(Some(901)), 1));
+        assert_eq!(at("O1000 G00 X1"), (BlockError::ProgramNumber, 7));
+        assert_eq!(at("G00 O1000"), (BlockError::ProgramNumber, 5));
+        assert_eq!(at("o<sub> call"), (BlockError::HostLanguage, 8));
+        assert_eq!(at("% G00"), (BlockError::NotAWord, 3));
+        assert_eq!(at("O<bad name>"), (BlockError::NotAWord, 1));
+        assert_eq!(at("X1 (open"), (BlockError::Comment, 4));
+        assert_eq!(
+            at("G01 X."),
+            (BlockError::Value(b'X', LengthError::Malformed), 5)
+        );
+        assert_eq!(
+            at("Z99999.99999995"),
+            (BlockError::Value(b'Z', LengthError::OutOfRange), 1)
+        );
+    }
+
+    #[test]
     fn refusals() {
         assert_eq!(parse_block("G01 X1 X2"), Err(BlockError::Repeated(b'X')));
         assert_eq!(parse_block("G01 G02"), Err(BlockError::Repeated(b'G')));
-        assert_eq!(parse_block("G04 X1"), Err(BlockError::UnsupportedG));
+        assert_eq!(
+            parse_block("G04 X1"),
+            Err(BlockError::UnsupportedG(Some(40)))
+        );
         assert_eq!(parse_block("G450 G451"), Err(BlockError::Repeated(b'G')));
-        assert_eq!(parse_block("G1.5"), Err(BlockError::UnsupportedG));
+        assert_eq!(parse_block("G1.5"), Err(BlockError::UnsupportedG(Some(15))));
+        assert_eq!(parse_block("G-1"), Err(BlockError::UnsupportedG(None)));
         assert_eq!(parse_block("Q5"), Err(BlockError::UnknownAddress(b'Q')));
         assert_eq!(parse_block("G01 X"), Err(BlockError::NotAWord));
         assert_eq!(parse_block("G01 X1 $"), Err(BlockError::NotAWord));
         assert_eq!(parse_block("G01 (open"), Err(BlockError::Comment));
         assert!(matches!(
-            parse_block("X1.1234567"),
-            Err(BlockError::Value(b'X', _))
+            parse_block("X1.1234567890123456"),
+            Err(BlockError::Value(b'X', LengthError::TooManyGcodeDecimals))
         ));
         assert!(matches!(
             parse_block("Z--1"),

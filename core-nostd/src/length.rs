@@ -29,6 +29,8 @@ pub enum LengthError {
     TooManyDecimals,
     /// Magnitude not below 100 000 mm.
     OutOfRange,
+    /// More than 15 decimals (a G-code number).
+    TooManyGcodeDecimals,
 }
 
 impl LengthError {
@@ -38,6 +40,7 @@ impl LengthError {
             LengthError::Malformed => "not a length [+-]digits[.digits]",
             LengthError::TooManyDecimals => "more than 6 decimals",
             LengthError::OutOfRange => "beyond 99999.999999 mm",
+            LengthError::TooManyGcodeDecimals => "more than 15 decimals",
         }
     }
 }
@@ -141,6 +144,57 @@ impl Length {
             nm = nm * 10 + digit;
         }
         let angstrom = (mm * 1_000_000 + nm) * 10;
+        Ok(Length {
+            angstrom: if negative { -angstrom } else { angstrom },
+        })
+    }
+
+    /// Parses a number of millimetres as G-code programs write it:
+    /// `[+-]`, then digits with an optional point (`30.`, `2.5`) or a point
+    /// and digits (`.5`), at most 15 decimals, rounded once to the
+    /// ångström half away from zero (exact up to 7 decimals).
+    ///
+    /// ```
+    /// use core_nostd::length::{Length, LengthError};
+    /// let mm = |t| Length::from_gcode_mm(t).map(Length::as_angstrom);
+    /// assert_eq!(mm("30."), Ok(300_000_000));
+    /// assert_eq!(mm("-.5"), Ok(-5_000_000));
+    /// assert_eq!(mm("0.00000005"), Ok(1));
+    /// assert_eq!(mm("-0.00000004999"), Ok(0));
+    /// assert_eq!(mm("1.1234567890123456"), Err(LengthError::TooManyGcodeDecimals));
+    /// assert_eq!(mm("."), Err(LengthError::Malformed));
+    /// assert_eq!(mm("99999.99999995"), Err(LengthError::OutOfRange));
+    /// ```
+    pub fn from_gcode_mm(text: &str) -> Result<Length, LengthError> {
+        let (negative, int_part, frac_part) = split_decimal(text)?;
+        if frac_part.len() > 15 {
+            return Err(LengthError::TooManyGcodeDecimals);
+        }
+        let mut mm: i64 = 0;
+        for &d in int_part {
+            mm = mm * 10 + i64::from(d - b'0');
+            if mm >= 100_000 {
+                return Err(LengthError::OutOfRange);
+            }
+        }
+        // The decimals as an integer of up to 15 digits, scaled to ångström.
+        let frac = frac_part
+            .iter()
+            .fold(0i64, |n, &d| n * 10 + i64::from(d - b'0'));
+        let shift = frac_part.len() as u32;
+        let frac = if shift <= 7 {
+            frac * 10i64.pow(7 - shift)
+        } else {
+            // 10 … 10⁸: never zero.
+            let unit = core::num::NonZeroU64::new(10u64.pow(shift - 7))
+                .unwrap_or(core::num::NonZeroU64::MIN);
+            let (q, r) = (frac as u64 / unit, frac as u64 % unit);
+            (q + u64::from(2 * r >= unit.get())) as i64
+        };
+        let angstrom = mm * ANGSTROM_PER_MM + frac;
+        if angstrom > LENGTH_LIMIT.angstrom {
+            return Err(LengthError::OutOfRange);
+        }
         Ok(Length {
             angstrom: if negative { -angstrom } else { angstrom },
         })
@@ -250,6 +304,29 @@ pub(crate) fn write_mm4<W: fmt::Write + ?Sized>(w: &mut W, tenth_um: i64) -> fmt
     let sign = if tenth_um < 0 { "-" } else { "" };
     let a = tenth_um.unsigned_abs();
     write!(w, "{}{}.{:04}", sign, a / 10_000, a % 10_000)
+}
+
+/// Splits `[+-]digits[.digits]`, `digits.` or `.digits` into its sign,
+/// integer digits and decimals (G-code numbers).
+fn split_decimal(text: &str) -> Result<(bool, &[u8], &[u8]), LengthError> {
+    let bytes = text.as_bytes();
+    let (negative, rest) = match bytes.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, bytes),
+    };
+    let (int_part, frac_part) = match rest.iter().position(|&b| b == b'.') {
+        Some(dot) => {
+            let (i, f) = rest.split_at(dot);
+            (i, f.get(1..).unwrap_or(&[]))
+        }
+        None => (rest, &[][..]),
+    };
+    let digits = |p: &[u8]| p.iter().all(u8::is_ascii_digit);
+    if (int_part.is_empty() && frac_part.is_empty()) || !digits(int_part) || !digits(frac_part) {
+        return Err(LengthError::Malformed);
+    }
+    Ok((negative, int_part, frac_part))
 }
 
 #[cfg(test)]

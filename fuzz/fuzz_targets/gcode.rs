@@ -17,12 +17,14 @@
 //!   that switches G41/G42 on: nothing moves until the block after it.
 #![no_main]
 
-use core_nostd::gcode::{is_block, parse_block, Block, BlockError, Compensation, Corner, Motion};
+use core_nostd::gcode::{
+    is_block, parse_block, Block, BlockError, Compensation, Corner, LineKind, Motion,
+};
 use core_nostd::length::LengthError;
 use core_nostd::protocol::Device;
 use fuzz_oracle::{
-    device_after, exact_mm, reference_block, reference_is_block, Checker, LengthRefusal, RefBlock,
-    RefBlockError, LIMIT_ANGSTROM, MAX_LINE,
+    device_after, exact_gcode_mm, reference_block, reference_is_block, Checker, LengthRefusal,
+    RefBlock, RefBlockError, LIMIT_ANGSTROM, MAX_LINE,
 };
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
@@ -55,6 +57,12 @@ fn preludes() -> &'static [(Device, bool)] {
 fn as_reference(b: &Block) -> RefBlock {
     let a = |l: Option<core_nostd::length::Length>| l.map(|l| l.as_angstrom());
     RefBlock {
+        kind: match b.kind {
+            LineKind::Words => 0,
+            LineKind::TapeMark => 1,
+            LineKind::Program => 2,
+        },
+        deleted: b.deleted,
         motion: b.motion.map(|m| match m {
             Motion::Rapid => 0,
             Motion::Linear => 1,
@@ -67,6 +75,8 @@ fn as_reference(b: &Block) -> RefBlock {
             Compensation::Right => 42,
         }),
         distance: b.incremental.map(|i| if i { 91 } else { 90 }),
+        plane: b.plane_zx.then_some(18),
+        units: b.metric.then_some(21),
         corner: b.corner.map(|c| match c {
             Corner::Arc => 450,
             Corner::Intersection => 451,
@@ -82,13 +92,17 @@ fn as_reference_error(e: BlockError) -> RefBlockError {
         BlockError::Repeated(l) => RefBlockError::Repeated(l),
         BlockError::NotAWord => RefBlockError::NotAWord,
         BlockError::Comment => RefBlockError::Comment,
-        BlockError::UnsupportedG => RefBlockError::UnsupportedG,
+        BlockError::UnsupportedG(_) => RefBlockError::UnsupportedG,
+        BlockError::NoYAxis => RefBlockError::NoYAxis,
+        BlockError::ProgramNumber => RefBlockError::ProgramNumber,
+        BlockError::HostLanguage => RefBlockError::HostLanguage,
         BlockError::Value(l, e) => RefBlockError::Value(
             l,
             match e {
                 LengthError::Malformed => LengthRefusal::Malformed,
                 LengthError::TooManyDecimals => LengthRefusal::TooManyDecimals,
                 LengthError::OutOfRange => LengthRefusal::OutOfRange,
+                LengthError::TooManyGcodeDecimals => LengthRefusal::TooManyGcodeDecimals,
             },
         ),
     }
@@ -96,8 +110,16 @@ fn as_reference_error(e: BlockError) -> RefBlockError {
 
 /// The block written back in canonical form.
 fn canonical(b: &RefBlock) -> String {
+    match b.kind {
+        1 => return "%".to_string(),
+        2 => return "O1".to_string(),
+        _ => {}
+    }
     let mut words = Vec::new();
-    for g in [b.motion, b.compensation, b.distance].into_iter().flatten() {
+    for g in [b.motion, b.plane, b.units, b.compensation, b.distance]
+        .into_iter()
+        .flatten()
+    {
         words.push(format!("G{g:02}"));
     }
     if let Some(g) = b.corner {
@@ -108,10 +130,15 @@ fn canonical(b: &RefBlock) -> String {
         .zip(b.xzikr.iter().chain([&b.f]))
     {
         if let Some(v) = v {
-            words.push(format!("{letter}{}", exact_mm(*v)));
+            words.push(format!("{letter}{}", exact_gcode_mm(*v)));
         }
     }
-    words.join(" ")
+    let line = words.join(" ");
+    if b.deleted {
+        format!("/{line}")
+    } else {
+        line
+    }
 }
 
 fuzz_target!(|text: &str| {
@@ -157,7 +184,9 @@ fuzz_target!(|text: &str| {
         match (&parsed, answer.err()) {
             (Err(e), code) => {
                 let want = match e {
-                    BlockError::Value(..) | BlockError::UnsupportedG => "VALUE",
+                    BlockError::Value(..) | BlockError::UnsupportedG(_) | BlockError::NoYAxis => {
+                        "VALUE"
+                    }
                     _ => "SYNTAX",
                 };
                 assert_eq!(code, Some(want), "{line:?} ({e:?}) -> {:?}", answer.lines);

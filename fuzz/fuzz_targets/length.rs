@@ -1,4 +1,4 @@
-//! Arbitrary UTF-8 into `Length::from_mm_str`.
+//! Arbitrary UTF-8 into `Length::from_mm_str` and `Length::from_gcode_mm`.
 //!
 //! Checked against an independent reading of `[+-]?[0-9]+(\.[0-9]{1,6})?`
 //! with magnitude below 100 000 mm (exact integer arithmetic):
@@ -6,14 +6,35 @@
 //!   number of ångström; a refusal names the same reason (malformed before
 //!   too many decimals before out of range);
 //! - `to_string()` is the value in 0.0001 mm rounded half away from zero,
-//!   and re-parses to within 0.00005 mm of the value.
+//!   and re-parses to within 0.00005 mm of the value;
+//! - the G-code reading (`30.`, `.5`, up to 15 decimals rounded once to the
+//!   ångström) agrees with its reference to the ångström and in its refusal,
+//!   and equals the protocol's reading wherever that one accepts.
 #![no_main]
 
 use core_nostd::length::{Length, LengthError};
-use fuzz_oracle::{mm4_of, parse_mm, LengthRefusal};
+use fuzz_oracle::{mm4_of, parse_gcode_mm, parse_mm, LengthRefusal};
 use libfuzzer_sys::fuzz_target;
 
+fn refusal(e: LengthError) -> LengthRefusal {
+    match e {
+        LengthError::Malformed => LengthRefusal::Malformed,
+        LengthError::TooManyDecimals => LengthRefusal::TooManyDecimals,
+        LengthError::OutOfRange => LengthRefusal::OutOfRange,
+        LengthError::TooManyGcodeDecimals => LengthRefusal::TooManyGcodeDecimals,
+    }
+}
+
 fuzz_target!(|text: &str| {
+    let gcode = Length::from_gcode_mm(text).map(Length::as_angstrom);
+    assert_eq!(
+        gcode.map_err(refusal),
+        parse_gcode_mm(text),
+        "G-code number {text:?}"
+    );
+    if let Ok(l) = Length::from_mm_str(text) {
+        assert_eq!(gcode, Ok(l.as_angstrom()), "{text:?}");
+    }
     let got = Length::from_mm_str(text);
     let want = parse_mm(text);
     match (got, want) {
@@ -36,14 +57,7 @@ fuzz_target!(|text: &str| {
                 back.as_angstrom() - a
             );
         }
-        (Err(e), Err(r)) => {
-            let e = match e {
-                LengthError::Malformed => LengthRefusal::Malformed,
-                LengthError::TooManyDecimals => LengthRefusal::TooManyDecimals,
-                LengthError::OutOfRange => LengthRefusal::OutOfRange,
-            };
-            assert_eq!(e, r, "{text:?}");
-        }
+        (Err(e), Err(r)) => assert_eq!(refusal(e), r, "{text:?}"),
         (got, want) => panic!("{text:?}: core {got:?}, reference {want:?}"),
     }
 });

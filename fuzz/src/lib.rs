@@ -56,6 +56,8 @@ pub enum LengthRefusal {
     TooManyDecimals,
     /// Magnitude not below 100 000 mm.
     OutOfRange,
+    /// A G-code number with more than 15 decimals.
+    TooManyGcodeDecimals,
 }
 
 /// A decimal millimetre value `[+-]?[0-9]+(\.[0-9]{1,6})?` with magnitude
@@ -124,6 +126,19 @@ pub fn exact_mm(angstrom: i64) -> String {
         format!("{sign}{}", a / 1_000_000)
     } else {
         format!("{sign}{}.{frac}", a / 1_000_000)
+    }
+}
+
+/// Ångström as an exact decimal with up to 7 decimals (a G-code number).
+pub fn exact_gcode_mm(angstrom: i64) -> String {
+    let sign = if angstrom < 0 { "-" } else { "" };
+    let a = angstrom.unsigned_abs();
+    let frac = format!("{:07}", a % 10_000_000);
+    let frac = frac.trim_end_matches('0');
+    if frac.is_empty() {
+        format!("{sign}{}", a / 10_000_000)
+    } else {
+        format!("{sign}{}.{frac}", a / 10_000_000)
     }
 }
 
@@ -1056,12 +1071,20 @@ pub fn device_after(lines: &[&str]) -> Device {
 /// A G-code block as the reference reading gives it: lengths in ångström.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RefBlock {
+    /// 0 words, 1 the tape mark `%`, 2 a program number.
+    pub kind: u8,
+    /// The line began with `/`.
+    pub deleted: bool,
     /// G00–G03.
     pub motion: Option<u8>,
     /// G40–G42.
     pub compensation: Option<u8>,
     /// G90 / G91.
     pub distance: Option<u8>,
+    /// G18.
+    pub plane: Option<u8>,
+    /// G21.
+    pub units: Option<u8>,
     /// G450 / G451.
     pub corner: Option<u16>,
     /// X, Z, I, K, R words.
@@ -1085,16 +1108,92 @@ pub enum RefBlockError {
     Value(u8, LengthRefusal),
     /// A G code outside 00–03, 40–42, 90, 91, 450, 451.
     UnsupportedG,
+    /// `Y` other than zero.
+    NoYAxis,
+    /// A program number with other words, or an `O` word elsewhere.
+    ProgramNumber,
+    /// `o<name>` followed by a word.
+    HostLanguage,
 }
 
-/// Reads a block per the `gcode` module docs: address words (a letter and
-/// the run of `0-9 + - .` after it), spaces and tabs between words optional,
-/// `( … )` comments, `;` ends the block; `N F S T M X Z I K R` once each and
-/// numbers that must be lengths; `G` once per group, 1–3 digits.
+/// A G-code number of millimetres: `[+-]` then `d+`, `d+.`, `d+.d+` or
+/// `.d+`, at most 15 decimals, as ångström rounded half away from zero,
+/// magnitude at most 99 999.999999 mm after rounding.
+pub fn parse_gcode_mm(text: &str) -> Result<i64, LengthRefusal> {
+    let (negative, body) = match text.as_bytes().first() {
+        Some(b'-') => (true, &text[1..]),
+        Some(b'+') => (false, &text[1..]),
+        _ => (false, text),
+    };
+    let (int, frac) = body.split_once('.').unwrap_or((body, ""));
+    let all_digits = |s: &str| s.chars().all(|c| c.is_ascii_digit());
+    if (int.is_empty() && frac.is_empty()) || !all_digits(int) || !all_digits(frac) {
+        return Err(LengthRefusal::Malformed);
+    }
+    if frac.len() > 15 {
+        return Err(LengthRefusal::TooManyGcodeDecimals);
+    }
+    let int = int.trim_start_matches('0');
+    if int.len() > 5 {
+        return Err(LengthRefusal::OutOfRange);
+    }
+    // value = digits / 10^decimals mm; in ångström ×10^7, as a fraction.
+    let digits: i128 = format!("{int}{frac}0").parse::<i128>().unwrap() / 10;
+    let num = digits * 10_000_000;
+    let den = 10i128.pow(frac.len() as u32);
+    let (q, r) = (num / den, num % den);
+    let a = if 2 * r >= den { q + 1 } else { q };
+    if a > 999_999_999_990 {
+        return Err(LengthRefusal::OutOfRange);
+    }
+    Ok(if negative { -(a as i64) } else { a as i64 })
+}
+
+/// Reads a block per the `gcode` module docs: an optional line head (`%`,
+/// `/`, a program number `O123`, `O<name>`, `:123`), then address words (a
+/// letter and the run of `0-9 + - .` after it), spaces and tabs between
+/// words optional, `( … )` comments, `;` ends the block; `N F S T M X Y Z I
+/// K R` once each and numbers that must be G-code lengths, `Y` zero; `G`
+/// once per group (00–03, 18, 21, 40–42, 90–91, 450–451), 1–3 digits and
+/// at most one decimal.
 pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
     let mut b = RefBlock::default();
     let mut seen = [false; 26];
-    let mut chars = line.char_indices().peekable();
+    let head = line.len() - line.trim_start_matches([' ', '\t']).len();
+    let mut rest = &line[head..];
+    let mut angle = false;
+    if let Some(r) = rest.strip_prefix('%') {
+        b.kind = 1;
+        rest = r;
+    } else if let Some(r) = rest.strip_prefix('/') {
+        b.deleted = true;
+        rest = r;
+    } else if let Some(r) = rest.strip_prefix(':') {
+        let n = r.chars().take_while(char::is_ascii_digit).count();
+        if n == 0 {
+            return Err(RefBlockError::NotAWord);
+        }
+        b.kind = 2;
+        rest = &r[n..];
+    } else if rest.starts_with("O<") || rest.starts_with("o<") {
+        let Some((name, r)) = rest[2..].split_once('>') else {
+            return Err(RefBlockError::NotAWord);
+        };
+        let ok = |c: char| c.is_ascii_alphanumeric() || "_.-".contains(c);
+        if name.is_empty() || !name.chars().all(ok) {
+            return Err(RefBlockError::NotAWord);
+        }
+        b.kind = 2;
+        angle = true;
+        rest = r;
+    } else if (rest.starts_with('O') || rest.starts_with('o'))
+        && rest[1..].starts_with(|c: char| c.is_ascii_digit())
+    {
+        let n = rest[1..].chars().take_while(char::is_ascii_digit).count();
+        b.kind = 2;
+        rest = &rest[1 + n..];
+    }
+    let mut chars = rest.char_indices().peekable();
     while let Some((at, c)) = chars.next() {
         match c {
             ' ' | '\t' => {}
@@ -1106,6 +1205,14 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     None => return Err(RefBlockError::Comment),
                 }
             },
+            c if b.kind == 2 => {
+                return Err(if angle && c.is_ascii_alphabetic() {
+                    RefBlockError::HostLanguage
+                } else {
+                    RefBlockError::ProgramNumber
+                })
+            }
+            _ if b.kind == 1 => return Err(RefBlockError::NotAWord),
             c if c.is_ascii_alphabetic() => {
                 let letter = c.to_ascii_uppercase() as u8;
                 let mut end = at + 1;
@@ -1117,15 +1224,23 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                         break;
                     }
                 }
-                let number = &line[at + 1..end];
+                let number = &rest[at + 1..end];
                 if number.is_empty() {
                     return Err(RefBlockError::NotAWord);
                 }
                 if letter == b'G' {
-                    if number.len() > 3 || !number.bytes().all(|d| d.is_ascii_digit()) {
+                    let (whole, tenth) = number.split_once('.').unwrap_or((number, ""));
+                    let digits = |s: &str| !s.is_empty() && s.bytes().all(|d| d.is_ascii_digit());
+                    if !digits(whole)
+                        || whole.len() > 3
+                        || (number.contains('.') && (tenth.len() != 1 || !digits(tenth)))
+                    {
                         return Err(RefBlockError::UnsupportedG);
                     }
-                    let code: u16 = number.parse().map_err(|_| RefBlockError::UnsupportedG)?;
+                    if tenth.bytes().any(|d| d != b'0') {
+                        return Err(RefBlockError::UnsupportedG);
+                    }
+                    let code: u16 = whole.parse().map_err(|_| RefBlockError::UnsupportedG)?;
                     if matches!(code, 450 | 451) {
                         if b.corner.is_some() {
                             return Err(RefBlockError::Repeated(b'G'));
@@ -1135,6 +1250,8 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     }
                     let slot = match code {
                         0..=3 => &mut b.motion,
+                        18 => &mut b.plane,
+                        21 => &mut b.units,
                         40..=42 => &mut b.compensation,
                         90 | 91 => &mut b.distance,
                         _ => return Err(RefBlockError::UnsupportedG),
@@ -1158,13 +1275,19 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     b'K' => Some(3),
                     b'R' => Some(4),
                     b'F' => Some(5),
-                    b'N' | b'S' | b'T' | b'M' => None,
+                    b'N' | b'S' | b'T' | b'M' | b'Y' => None,
+                    b'O' => return Err(RefBlockError::ProgramNumber),
                     _ => return Err(RefBlockError::UnknownAddress(letter)),
                 };
-                let v = parse_mm(number).map_err(|e| RefBlockError::Value(letter, e))?;
+                let v = parse_gcode_mm(number).map_err(|e| RefBlockError::Value(letter, e))?;
                 match slot {
                     Some(5) => b.f = Some(v),
                     Some(s) => b.xzikr[s] = Some(v),
+                    None if letter == b'Y'
+                        && number.contains(|c: char| ('1'..='9').contains(&c)) =>
+                    {
+                        return Err(RefBlockError::NoYAxis)
+                    }
                     None => {}
                 }
             }
@@ -1179,8 +1302,12 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
 pub fn reference_is_block(line: &str) -> bool {
     let t = line.trim_start();
     let mut c = t.chars();
-    matches!(
-        (c.next(), c.next()),
-        (Some(l), Some(d)) if l.is_ascii_alphabetic() && (d.is_ascii_digit() || matches!(d, '+' | '-' | '.'))
-    )
+    match (c.next(), c.next()) {
+        (Some('%' | '/' | '(' | ';' | ':'), _) => true,
+        (Some('O' | 'o'), Some('<')) => true,
+        (Some(l), Some(d)) => {
+            l.is_ascii_alphabetic() && (d.is_ascii_digit() || matches!(d, '+' | '-' | '.'))
+        }
+        _ => false,
+    }
 }

@@ -20,8 +20,11 @@
 //!   comparison with the reference;
 //! - [`compensate`]: `host-sim compensate`, a G41/G42 program printed as the
 //!   tool-tip program the device runs;
+//! - [`check`]: `host-sim check`, every line of a G-code file the device
+//!   would refuse, with its line and column;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
+pub mod check;
 pub mod compare;
 pub mod compensate;
 pub mod contour;

@@ -53,6 +53,12 @@ enum Command {
         #[arg(long)]
         radius: bool,
     },
+    /// List every line of a G-code file the device would refuse (line,
+    /// column, what); exit status 1 if there is any.
+    Check {
+        /// The G-code program.
+        file: std::path::PathBuf,
+    },
     /// Serve the in-process device for a terminal or another program.
     Serve {
         /// Serve on standard input and output.
@@ -154,6 +160,25 @@ fn compensate(
     }
 }
 
+fn check(file: &std::path::Path) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let bytes = std::fs::read(file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let items = host_sim::check::check(&String::from_utf8_lossy(&bytes));
+    for i in &items {
+        println!("{}:{}:{}: {}", file.display(), i.line, i.column, i.what);
+    }
+    if items.is_empty() {
+        println!("{}: every line is one the device reads", file.display());
+        Ok(ExitCode::SUCCESS)
+    } else {
+        println!(
+            "{}: {} lines the device would refuse",
+            file.display(),
+            items.len()
+        );
+        Ok(ExitCode::from(1))
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command.unwrap_or(Command::Run(RunArgs::default())) {
@@ -167,6 +192,7 @@ fn main() -> ExitCode {
             tip,
             radius,
         } => compensate(&file, rn, tip, !radius),
+        Command::Check { file } => check(&file),
         Command::Serve {
             stdio: _,
             pty: true,

@@ -232,8 +232,13 @@ fn tricky_numbers() {
     assert!(ask1(&mut dev, "MOVE X=0.0025 Z=-0.005").starts_with("OK NX=1 NZ=-1 "));
     assert!(ask1(&mut dev, "MOVE X=-0.0025 Z=0.005").starts_with("OK NX=-2 NZ=2 "));
     assert!(ask1(&mut dev, "MOVE X=-0").starts_with("OK NX=1 NZ=0 PX=0 PZ=1 "));
-    // Half a nanometre is a seventh decimal.
-    assert!(ask1(&mut dev, "G91 G01 Z-0.0000005").starts_with("ERR VALUE Z"));
+    // Half a nanometre is a seventh decimal: too many for a request's
+    // length; a G-code number takes up to 15.
+    assert!(ask1(&mut dev, "MOVE Z=-0.0000005 INC=1").starts_with("ERR VALUE Z"));
+    assert_eq!(
+        ask1(&mut dev, "G91 G01 Z-0.0000000000000005 F100"),
+        "ERR VALUE Z more than 15 decimals"
+    );
     assert_eq!(ask1(&mut dev, "POS"), "OK PX=0 PZ=1 X=0.0000 Z=0.0050");
 }
 

@@ -121,6 +121,9 @@ pub struct Session {
     last_moves: Moves,
     /// The host's session token (`SESSION`); 0 after power-on.
     token: u32,
+    /// The block delete switch (`OPT BDEL=`): blocks that begin with `/`
+    /// are skipped while it is on.
+    block_delete: bool,
     /// The id of the last request that carried one, and its final reply.
     last_id: Option<u32>,
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
@@ -214,6 +217,7 @@ impl Session {
             contour: Contour::new(),
             last_moves: Moves::new(),
             token: 0,
+            block_delete: false,
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
@@ -357,6 +361,16 @@ impl Session {
             self.arc_command(words, io)
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
+        } else if command.eq_ignore_ascii_case("OPT") {
+            let [bdel] = parse_args(words, ["BDEL"])?;
+            if let Some(v) = bdel {
+                self.block_delete = parse_flag("BDEL", v)?;
+            }
+            send_ok(
+                io,
+                Some(format_args!("BDEL={}", u8::from(self.block_delete))),
+            );
+            Ok(())
         } else if command.eq_ignore_ascii_case("LIMITS") {
             self.limits_command(words, io)
         } else if command.eq_ignore_ascii_case("SYNC") {
@@ -694,6 +708,11 @@ impl Session {
     /// contour engine (compensation off: the block itself).
     fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
         let b = parse_block(text).map_err(Refusal::Block)?;
+        if b.deleted && self.block_delete {
+            let none = MotionSummary::new(self.pos, self.pos, &Crc32::new());
+            send_ok(io, Some(format_args!("{none} SKIP=BDEL")));
+            return Ok(());
+        }
         let modal = Modal {
             motion: b.motion.unwrap_or(self.modal.motion),
             incremental: b.incremental.unwrap_or(self.modal.incremental),
@@ -1785,22 +1804,8 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         ),
         Refusal::Contour(e) => send_contour_refusal(io, e),
         Refusal::Block(e) => {
-            let (code, what, letter) = match e {
-                BlockError::UnknownAddress(l) => (E::Syntax, "unknown address", l),
-                BlockError::Repeated(l) => (E::Syntax, "address given twice:", l),
-                BlockError::NotAWord => (E::Syntax, "not an address word", b' '),
-                BlockError::Comment => (E::Syntax, "unclosed comment", b' '),
-                BlockError::UnsupportedG => (E::Value, "G code not supported", b'G'),
-                BlockError::Value(l, why) => {
-                    send_error(
-                        io,
-                        E::Value,
-                        format_args!("{} {}", char::from(l), why.as_str()),
-                    );
-                    return;
-                }
-            };
-            send_error(io, code, format_args!("{what} {}", char::from(letter)))
+            let code = if e.is_value() { E::Value } else { E::Syntax };
+            send_error(io, code, format_args!("{e}"))
         }
     }
 }

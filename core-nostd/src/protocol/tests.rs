@@ -914,3 +914,54 @@ fn a_long_arc_check_pauses_for_the_transport_every_few_chords() {
     assert!(io.last.starts_with("OK"), "{}", io.last);
     assert_eq!(io.pauses, n.div_ceil(2) / CHORDS_PER_PAUSE, "{}", io.pauses);
 }
+
+#[test]
+fn a_posted_program_runs_line_by_line_and_names_what_it_cannot() {
+    let mut dev = Device::new();
+    let program = [
+        "%",
+        "O1000 (SHAFT 30 X 40)",
+        "(MSG, CHECK THE STOCK)",
+        "N5 G18 G21 G40",
+        "N10 G00 X30. Z2. Y0",
+        "N20 G01 Z-40. F120.",
+        "/N30 X32.",
+        "N40 X.5 ; facing down",
+        "%",
+    ];
+    for line in program {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+    }
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=50 PZ=-4000 "));
+    // With the block delete switch on, `/` blocks are skipped, and say so.
+    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0");
+    assert_eq!(ask1(&mut dev, "OPT BDEL=1"), "OK BDEL=1");
+    let r = ask(&mut dev, b"/N50 X40.\n");
+    assert_eq!(r.len(), 1);
+    assert!(r[0].ends_with(" SEQ=00000000 SKIP=BDEL"), "{r:?}");
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=50 PZ=-4000 "));
+    assert!(ask1(&mut dev, "OPT BDEL=2").starts_with("ERR VALUE BDEL"));
+    for (line, want) in [
+        ("G20 G00 X1", "ERR VALUE G20 not supported"),
+        (
+            "G17",
+            "ERR VALUE G17 plane not supported: a lathe cuts in G18 (ZX)",
+        ),
+        ("G71 U1. R.5", "ERR VALUE G71 canned cycles not supported"),
+        ("G90.1", "ERR VALUE G90.1 not supported"),
+        ("G00 X1 Y2", "ERR VALUE Y a lathe has no Y axis: only Y0"),
+        (
+            "O1000 G00 X1",
+            "ERR SYNTAX a program number stands alone at a line's start: O",
+        ),
+        (
+            "o<sub> call",
+            "ERR SYNTAX o-word subroutines, loops and conditions are expanded by the host",
+        ),
+        ("X1.1234567890123456", "ERR VALUE X more than 15 decimals"),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+    }
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=50 PZ=-4000 "));
+}

@@ -1,0 +1,111 @@
+//! `host-sim check`: every line of a G-code file the device would refuse as
+//! written, with its line and column, before the program is sent.
+//!
+//! Each line is read by the device's own reader (`core_nostd::gcode`), so
+//! what is listed here is exactly what the device refuses at the word
+//! level: unknown addresses, malformed numbers, unsupported G codes, lines
+//! longer than the protocol's limit. A line's first item is listed (the
+//! reader stops there); geometry (an arc whose radii differ, a move beyond
+//! the machine) is the device's to judge when it runs.
+
+use core_nostd::gcode::{is_block, parse_located};
+use core_nostd::protocol::framing::MAX_LINE;
+
+/// One refused item.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Item {
+    /// Line, from 1.
+    pub line: usize,
+    /// Column, from 1 (bytes).
+    pub column: usize,
+    /// What is wrong, as the device says it.
+    pub what: String,
+}
+
+/// The items of a program's text, in order.
+pub fn check(text: &str) -> Vec<Item> {
+    let mut items = Vec::new();
+    for (i, raw) in text.split('\n').enumerate() {
+        let line = raw.strip_suffix('\r').unwrap_or(raw);
+        let item = |column, what: String| Item {
+            line: i + 1,
+            column,
+            what,
+        };
+        if line.trim().is_empty() {
+            continue;
+        }
+        if line.len() > MAX_LINE {
+            items.push(item(
+                MAX_LINE + 1,
+                format!("line longer than {MAX_LINE} bytes"),
+            ));
+            continue;
+        }
+        if let Some(at) = line.find(|c: char| !(c == '\t' || (' '..='~').contains(&c))) {
+            items.push(item(at + 1, "not printable ASCII".to_string()));
+            continue;
+        }
+        if !is_block(line) {
+            let at = line.len() - line.trim_start().len();
+            items.push(item(at + 1, "not a G-code line".to_string()));
+            continue;
+        }
+        if let Err(e) = parse_located(line) {
+            items.push(item(e.column, e.error.to_string()));
+        }
+    }
+    items
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_refused_line_is_listed_with_its_place() {
+        let program = "%\r\nO1000 (SHAFT)\r\nN10 G18 G20\r\nN20 G00 X30. Z2. Y1\r\n\r\nN30 G01 X.5 F100\r\nMOVE X=1\r\nN40 Q5\r\n%\r\n";
+        let items = check(program);
+        let got: Vec<(usize, usize, &str)> = items
+            .iter()
+            .map(|i| (i.line, i.column, i.what.as_str()))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (3, 9, "G20 not supported"),
+                (4, 18, "Y a lathe has no Y axis: only Y0"),
+                (7, 1, "not a G-code line"),
+                (8, 5, "unknown address Q"),
+            ]
+        );
+        assert!(check("G01 X1\nG02 X2 Z2 R1\n").is_empty());
+        let long = format!("G01 X1 ({})", "A".repeat(MAX_LINE));
+        assert_eq!(
+            check(&long)[0].what,
+            format!("line longer than {MAX_LINE} bytes")
+        );
+    }
+
+    #[test]
+    fn the_example_programs_hold_only_their_surface_speed_line_the_device_refuses() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+        let mut seen = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "nc") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                // `G96 S120 M03`: constant surface speed comes with the
+                // spindle's work; `compensate` passes the line through.
+                let want = Item {
+                    line: 4,
+                    column: 1,
+                    what: "G96 not supported".to_string(),
+                };
+                assert_eq!(check(&text), [want], "{}", path.display());
+                seen += 1;
+            }
+        }
+        assert!(seen >= 3);
+    }
+}
