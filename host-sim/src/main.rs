@@ -170,11 +170,9 @@ fn check(file: &std::path::Path) -> Result<ExitCode, Box<dyn std::error::Error>>
         println!("{}: every line is one the device reads", file.display());
         Ok(ExitCode::SUCCESS)
     } else {
-        println!(
-            "{}: {} lines the device would refuse",
-            file.display(),
-            items.len()
-        );
+        let n = items.len();
+        let lines = if n == 1 { "line" } else { "lines" };
+        println!("{}: {n} {lines} the device would refuse", file.display());
         Ok(ExitCode::from(1))
     }
 }
