@@ -12,12 +12,15 @@
 //! - a program number alone on its line: `O1234`, `O<name>`, `:1234`
 //!   (an `o<name>` followed by a word is a subroutine, expanded by the host);
 //! - `/` at the start: block delete, skipped when the switch is on;
-//! - `Y0` (lathe posts write it); any other `Y` is refused by name.
+//! - `Y0` (lathe posts write it); any other `Y` is refused by name;
+//! - `G20`/`G21` anywhere in a block reads all its lengths and its feed in
+//!   inches (25.4 mm, rounded once to the ångström) or millimetres
+//!   ([`parse_in`] takes the modal unit for blocks without one).
 //!
 //! | address | meaning | value |
 //! |---|---|---|
 //! | `N` | sequence number | kept to name the block in refusals |
-//! | `G` | 00 01 02 03 (motion), 18 (ZX plane), 21 (millimetres), 40 41 42 (nose compensation), 90 91 (absolute, incremental), 450 451 (outside corners: transition arc, intersection) | whole number |
+//! | `G` | 00 01 02 03 (motion), 18 (ZX plane), 20 21 (inch, millimetres), 40 41 42 (nose compensation), 90 91 (absolute, incremental), 450 451 (outside corners: transition arc, intersection) | whole number |
 //! | `X` | X end point: a diameter when `DIAM=1` | length |
 //! | `Z` | Z end point | length |
 //! | `Y` | only 0 | length |
@@ -90,6 +93,17 @@ pub enum LineKind {
     Program,
 }
 
+/// The unit of a block's lengths and feed (group 6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Units {
+    /// G21: millimetres (power-on).
+    #[default]
+    Mm,
+    /// G20: inches, 25.4 mm each; feeds in inches per minute.
+    Inch,
+}
+
 /// One parsed block.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Block {
@@ -107,8 +121,8 @@ pub struct Block {
     pub corner: Option<Corner>,
     /// G18 given: the ZX plane, the only one a lathe has.
     pub plane_zx: bool,
-    /// G21 given: millimetres, the only unit taken so far.
-    pub metric: bool,
+    /// G20 or G21 if given; the block's lengths are read in it.
+    pub units: Option<Units>,
     /// The sequence number, when written as a whole number below 2³².
     pub n: Option<u32>,
     /// X word.
@@ -247,6 +261,21 @@ pub fn parse_block(line: &str) -> Result<Block, BlockError> {
     parse_located(line).map_err(|l| l.error)
 }
 
+/// Parses a block whose lengths are in `units` unless it says otherwise
+/// (a `G20` or `G21` anywhere in it applies to all of its words).
+///
+/// ```
+/// use core_nostd::gcode::{parse_in, Units};
+/// let b = parse_in("G01 X1. F10.", Units::Inch).unwrap();
+/// assert_eq!(b.x.unwrap().to_string(), "25.4000");
+/// assert_eq!(b.f.unwrap().to_string(), "254.0000");
+/// let b = parse_in("X1. G21", Units::Inch).unwrap();
+/// assert_eq!(b.x.unwrap().to_string(), "1.0000");
+/// ```
+pub fn parse_in(line: &str, units: Units) -> Result<Block, Located> {
+    parse_with(line, units_word(line).unwrap_or(units))
+}
+
 /// Parses a block; a refusal says where.
 ///
 /// ```
@@ -255,6 +284,45 @@ pub fn parse_block(line: &str) -> Result<Block, BlockError> {
 /// assert_eq!((e.error, e.column), (BlockError::NoYAxis, 10));
 /// ```
 pub fn parse_located(line: &str) -> Result<Block, Located> {
+    parse_in(line, Units::Mm)
+}
+
+/// The unit a line's own `G20`/`G21` sets, if it has one: the first such
+/// word outside comments and before any `;` (an unclosed comment ends the
+/// search; the parser refuses the line anyway).
+fn units_word(line: &str) -> Option<Units> {
+    let bytes = line.as_bytes();
+    let mut pos = 0;
+    let mut found = None;
+    while let Some(&c) = bytes.get(pos) {
+        match c {
+            b';' => break,
+            b'(' => {
+                let Some(close) = bytes.iter().skip(pos).position(|&b| b == b')') else {
+                    break;
+                };
+                pos += close + 1;
+            }
+            b'G' | b'g' => {
+                let n = bytes
+                    .iter()
+                    .skip(pos + 1)
+                    .take_while(|b| b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.'))
+                    .count();
+                match line.get(pos + 1..pos + 1 + n).and_then(g_code) {
+                    Some(200) if found.is_none() => found = Some(Units::Inch),
+                    Some(210) if found.is_none() => found = Some(Units::Mm),
+                    _ => {}
+                }
+                pos += 1 + n;
+            }
+            _ => pos += 1,
+        }
+    }
+    found
+}
+
+fn parse_with(line: &str, units: Units) -> Result<Block, Located> {
     let mut block = Block::default();
     let mut seen = [false; 26];
     let bytes = line.as_bytes();
@@ -342,7 +410,7 @@ pub fn parse_located(line: &str) -> Result<Block, Located> {
                 if number.is_empty() {
                     return Err(at(BlockError::NotAWord, pos));
                 }
-                word(&mut block, &mut seen, letter, number).map_err(|e| at(e, pos))?;
+                word(&mut block, &mut seen, letter, number, units).map_err(|e| at(e, pos))?;
                 pos = end;
             }
             _ => return Err(at(BlockError::NotAWord, pos)),
@@ -366,8 +434,15 @@ fn word(
     seen: &mut [bool; 26],
     letter: u8,
     number: &str,
+    units: Units,
 ) -> Result<(), BlockError> {
-    let length = || Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e));
+    let length = || {
+        match units {
+            Units::Mm => Length::from_gcode_mm(number),
+            Units::Inch => Length::from_gcode_inch(number),
+        }
+        .map_err(|e| BlockError::Value(letter, e))
+    };
     if letter == b'G' {
         return g_word(block, number);
     }
@@ -385,7 +460,7 @@ fn word(
         b'K' => block.k = Some(length()?),
         b'R' => block.r = Some(length()?),
         b'N' => {
-            length()?;
+            Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e))?;
             block.n = number.parse().ok();
         }
         b'F' => block.f = Some(length()?),
@@ -399,7 +474,7 @@ fn word(
         b'O' => return Err(BlockError::ProgramNumber),
         // Accepted and checked as numbers, not acted on.
         b'S' | b'T' | b'M' => {
-            length()?;
+            Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e))?;
         }
         _ => return Err(BlockError::UnknownAddress(letter)),
     }
@@ -463,11 +538,11 @@ fn g_word(block: &mut Block, number: &str) -> Result<(), BlockError> {
             }
             block.plane_zx = true;
         }
-        21 => {
-            if block.metric {
+        20 | 21 => {
+            if block.units.is_some() {
                 return repeated;
             }
-            block.metric = true;
+            block.units = Some(if code == 20 { Units::Inch } else { Units::Mm });
         }
         450 | 451 => {
             if block.corner.is_some() {
@@ -516,7 +591,8 @@ mod tests {
     fn lines_as_cam_posts_and_machinists_write_them() {
         let b = parse_block("N10 G00 G18 G21 X30. Z2. Y0").unwrap();
         assert_eq!((b.x, b.z, b.n), (mm("30"), mm("2"), Some(10)));
-        assert!(b.plane_zx && b.metric);
+        assert!(b.plane_zx);
+        assert_eq!(b.units, Some(Units::Mm));
         let b = parse_block("x.5 z-.25 F+100").unwrap();
         assert_eq!((b.x, b.z, b.f), (mm("0.5"), mm("-0.25"), mm("100")));
         // Rounded once to the ångström, half away from zero.
@@ -554,7 +630,8 @@ mod tests {
             (e.error, e.column)
         };
         assert_eq!(at("G00 X30. Y5 Z2."), (BlockError::NoYAxis, 10));
-        assert_eq!(at("G20 G00 X1"), (BlockError::UnsupportedG(Some(200)), 1));
+        assert_eq!(at("G17 G00 X1"), (BlockError::UnsupportedG(Some(170)), 1));
+        assert_eq!(at("G20 X1 G21"), (BlockError::Repeated(b'G'), 8));
         assert_eq!(at("G18 G00 G18"), (BlockError::Repeated(b'G'), 9));
         assert_eq!(at("G90.1"), (BlockError::UnsupportedG(Some(901)), 1));
         assert_eq!(at("O1000 G00 X1"), (BlockError::ProgramNumber, 7));

@@ -200,6 +200,58 @@ impl Length {
         })
     }
 
+    /// Parses a number of inches as G-code programs write it (the grammar
+    /// of [`Length::from_gcode_mm`]): 25.4 mm each, rounded once to the
+    /// ångström half away from zero (exact up to 6 decimals: 1 µin is
+    /// 254 Å).
+    ///
+    /// ```
+    /// use core_nostd::length::{Length, LengthError};
+    /// let inch = |t| Length::from_gcode_inch(t).map(Length::as_angstrom);
+    /// assert_eq!(inch("1."), Ok(254_000_000));
+    /// assert_eq!(inch("-.000001"), Ok(-254));
+    /// assert_eq!(inch("0.0000000019685"), Ok(0)); // 0.499999 Å
+    /// assert_eq!(inch("0.000000001969"), Ok(1)); // 0.500126 Å
+    /// assert_eq!(inch("3937.0078"), Ok(999_999_981_200));
+    /// assert_eq!(inch("3937.008"), Err(LengthError::OutOfRange));
+    /// ```
+    pub fn from_gcode_inch(text: &str) -> Result<Length, LengthError> {
+        let (negative, int_part, frac_part) = split_decimal(text)?;
+        if frac_part.len() > 15 {
+            return Err(LengthError::TooManyGcodeDecimals);
+        }
+        let mut whole: u64 = 0;
+        for &d in int_part {
+            whole = whole * 10 + u64::from(d - b'0');
+            if whole >= 100_000 {
+                return Err(LengthError::OutOfRange);
+            }
+        }
+        // 254 000 000 Å an inch: the whole inches exactly, the decimals F
+        // (d digits) as F·254·10⁶⁻ᵈ, rounded once when d > 6. Within u64:
+        // F·254 < 2.6·10¹⁷.
+        let decimals = frac_part.len() as u32;
+        let frac = frac_part
+            .iter()
+            .fold(0u64, |n, &d| n * 10 + u64::from(d - b'0'));
+        let frac = if decimals <= 6 {
+            frac * 254 * 10u64.pow(6 - decimals)
+        } else {
+            let unit = core::num::NonZeroU64::new(10u64.pow(decimals - 6))
+                .unwrap_or(core::num::NonZeroU64::MIN);
+            let scaled = frac * 254;
+            scaled / unit + u64::from(2 * (scaled % unit) >= unit.get())
+        };
+        let angstrom = whole * 254_000_000 + frac;
+        if angstrom > LENGTH_LIMIT.angstrom as u64 {
+            return Err(LengthError::OutOfRange);
+        }
+        let angstrom = angstrom as i64;
+        Ok(Length {
+            angstrom: if negative { -angstrom } else { angstrom },
+        })
+    }
+
     /// The raw count of ångström (10⁻⁷ mm).
     pub const fn as_angstrom(self) -> i64 {
         self.angstrom

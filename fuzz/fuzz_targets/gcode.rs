@@ -18,7 +18,7 @@
 #![no_main]
 
 use core_nostd::gcode::{
-    is_block, parse_block, Block, BlockError, Compensation, Corner, LineKind, Motion,
+    is_block, parse_block, Block, BlockError, Compensation, Corner, LineKind, Motion, Units,
 };
 use core_nostd::length::LengthError;
 use core_nostd::protocol::Device;
@@ -76,7 +76,10 @@ fn as_reference(b: &Block) -> RefBlock {
         }),
         distance: b.incremental.map(|i| if i { 91 } else { 90 }),
         plane: b.plane_zx.then_some(18),
-        units: b.metric.then_some(21),
+        units: b.units.map(|u| match u {
+            Units::Inch => 20,
+            Units::Mm => 21,
+        }),
         corner: b.corner.map(|c| match c {
             Corner::Arc => 450,
             Corner::Intersection => 451,
@@ -108,6 +111,17 @@ fn as_reference_error(e: BlockError) -> RefBlockError {
     }
 }
 
+/// Ångström as inches with 15 decimals (rounded half away from zero; read
+/// back at 254 000 000 Å an inch it is within 10⁻⁶ Å of the value).
+fn inch_15(angstrom: i64) -> String {
+    let a = i128::from(angstrom.unsigned_abs()) * 10i128.pow(15);
+    let q = a / 254_000_000 + i128::from(2 * (a % 254_000_000) >= 254_000_000);
+    let sign = if angstrom < 0 { "-" } else { "" };
+    let unit = 10i128.pow(15);
+    let frac = format!("{:015}", q % unit);
+    format!("{sign}{}.{}", q / unit, frac.trim_end_matches('0'))
+}
+
 /// The block written back in canonical form.
 fn canonical(b: &RefBlock) -> String {
     match b.kind {
@@ -130,7 +144,12 @@ fn canonical(b: &RefBlock) -> String {
         .zip(b.xzikr.iter().chain([&b.f]))
     {
         if let Some(v) = v {
-            words.push(format!("{letter}{}", exact_gcode_mm(*v)));
+            let value = if b.units == Some(20) {
+                inch_15(*v)
+            } else {
+                exact_gcode_mm(*v)
+            };
+            words.push(format!("{letter}{value}"));
         }
     }
     let line = words.join(" ");

@@ -8,12 +8,13 @@
 //! - `to_string()` is the value in 0.0001 mm rounded half away from zero,
 //!   and re-parses to within 0.00005 mm of the value;
 //! - the G-code reading (`30.`, `.5`, up to 15 decimals rounded once to the
-//!   ångström) agrees with its reference to the ångström and in its refusal,
+//!   ångström), in millimetres and in inches, agrees with its reference to
+//!   the ångström and in its refusal,
 //!   and equals the protocol's reading wherever that one accepts.
 #![no_main]
 
 use core_nostd::length::{Length, LengthError};
-use fuzz_oracle::{mm4_of, parse_gcode_mm, parse_mm, LengthRefusal};
+use fuzz_oracle::{mm4_of, parse_gcode_inch, parse_gcode_mm, parse_mm, LengthRefusal};
 use libfuzzer_sys::fuzz_target;
 
 fn refusal(e: LengthError) -> LengthRefusal {
@@ -31,6 +32,13 @@ fuzz_target!(|text: &str| {
         gcode.map_err(refusal),
         parse_gcode_mm(text),
         "G-code number {text:?}"
+    );
+    assert_eq!(
+        Length::from_gcode_inch(text)
+            .map(Length::as_angstrom)
+            .map_err(refusal),
+        parse_gcode_inch(text),
+        "G-code inches {text:?}"
     );
     if let Ok(l) = Length::from_mm_str(text) {
         assert_eq!(gcode, Ok(l.as_angstrom()), "{text:?}");

@@ -602,6 +602,13 @@ impl Collect {
                 direct.extend_from_slice(&self.bytes[at..start.min(self.bytes.len())]);
             }
             let end = start + n;
+            if end > self.bytes.len() && self.over_budget {
+                // Beyond the budget the events are not kept: only the
+                // increments of these blocks are.
+                self.moves.push(block.delta());
+                at = self.bytes.len();
+                continue;
+            }
             let next = self.blocks.get(k + 1).map_or(usize::MAX, |b| b.0);
             assert!(end <= next, "a block's events cut short by the next block");
             if !self.over_budget {
@@ -1083,7 +1090,7 @@ pub struct RefBlock {
     pub distance: Option<u8>,
     /// G18.
     pub plane: Option<u8>,
-    /// G21.
+    /// G20 / G21.
     pub units: Option<u8>,
     /// G450 / G451.
     pub corner: Option<u16>,
@@ -1114,6 +1121,70 @@ pub enum RefBlockError {
     ProgramNumber,
     /// `o<name>` followed by a word.
     HostLanguage,
+}
+
+/// A G-code number of inches (the grammar of [`parse_gcode_mm`]), as
+/// ångström at 254 000 000 an inch, rounded half away from zero, magnitude
+/// at most 99 999.999999 mm after rounding.
+pub fn parse_gcode_inch(text: &str) -> Result<i64, LengthRefusal> {
+    // Read as if millimetres for the grammar and the decimals; the value
+    // is then recomputed from the digits.
+    let (negative, body) = match text.as_bytes().first() {
+        Some(b'-') => (true, &text[1..]),
+        Some(b'+') => (false, &text[1..]),
+        _ => (false, text),
+    };
+    parse_gcode_mm(text)?;
+    let (int, frac) = body.split_once('.').unwrap_or((body, ""));
+    let digits: i128 = format!("{int}{frac}0").parse::<i128>().unwrap() / 10;
+    let num = digits * 254_000_000;
+    let den = 10i128.pow(frac.len() as u32);
+    let a = num / den + i128::from(2 * (num % den) >= den);
+    if a > 999_999_999_990 {
+        return Err(LengthRefusal::OutOfRange);
+    }
+    Ok(if negative { -(a as i64) } else { a as i64 })
+}
+
+/// The unit a line's own `G20`/`G21` sets (true: inch): the first such
+/// word outside comments, before any `;`.
+fn reference_units(line: &str) -> Option<bool> {
+    let mut in_comment = false;
+    let chars: Vec<char> = line.chars().collect();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        i += 1;
+        if in_comment {
+            in_comment = c != ')';
+            continue;
+        }
+        match c {
+            '(' => in_comment = true,
+            ';' => return None,
+            'G' | 'g' => {
+                let mut number = String::new();
+                while i < chars.len() && (chars[i].is_ascii_digit() || "+-.".contains(chars[i])) {
+                    number.push(chars[i]);
+                    i += 1;
+                }
+                let (whole, tenth) = number.split_once('.').unwrap_or((&number, "0"));
+                let ok = !whole.is_empty()
+                    && whole.len() <= 3
+                    && whole.bytes().all(|d| d.is_ascii_digit())
+                    && tenth == "0";
+                if ok && number.matches('.').count() <= 1 {
+                    match whole.parse::<u16>() {
+                        Ok(20) => return Some(true),
+                        Ok(21) => return Some(false),
+                        _ => {}
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// A G-code number of millimetres: `[+-]` then `d+`, `d+.`, `d+.d+` or
@@ -1154,11 +1225,13 @@ pub fn parse_gcode_mm(text: &str) -> Result<i64, LengthRefusal> {
 /// letter and the run of `0-9 + - .` after it), spaces and tabs between
 /// words optional, `( … )` comments, `;` ends the block; `N F S T M X Y Z I
 /// K R` once each and numbers that must be G-code lengths, `Y` zero; `G`
-/// once per group (00–03, 18, 21, 40–42, 90–91, 450–451), 1–3 digits and
-/// at most one decimal.
+/// once per group (00–03, 18, 20–21, 40–42, 90–91, 450–451), 1–3 digits
+/// and at most one decimal; a `G20` anywhere in the line reads its lengths
+/// in inches.
 pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
     let mut b = RefBlock::default();
     let mut seen = [false; 26];
+    let inch = reference_units(line) == Some(true);
     let head = line.len() - line.trim_start_matches([' ', '\t']).len();
     let mut rest = &line[head..];
     let mut angle = false;
@@ -1251,7 +1324,7 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     let slot = match code {
                         0..=3 => &mut b.motion,
                         18 => &mut b.plane,
-                        21 => &mut b.units,
+                        20 | 21 => &mut b.units,
                         40..=42 => &mut b.compensation,
                         90 | 91 => &mut b.distance,
                         _ => return Err(RefBlockError::UnsupportedG),
@@ -1279,7 +1352,13 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     b'O' => return Err(RefBlockError::ProgramNumber),
                     _ => return Err(RefBlockError::UnknownAddress(letter)),
                 };
-                let v = parse_gcode_mm(number).map_err(|e| RefBlockError::Value(letter, e))?;
+                let length = matches!(letter, b'X' | b'Z' | b'I' | b'K' | b'R' | b'F' | b'Y');
+                let v = if inch && length {
+                    parse_gcode_inch(number)
+                } else {
+                    parse_gcode_mm(number)
+                }
+                .map_err(|e| RefBlockError::Value(letter, e))?;
                 match slot {
                     Some(5) => b.f = Some(v),
                     Some(s) => b.xzikr[s] = Some(v),

@@ -13,7 +13,7 @@ use crate::comp::{
 };
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
-use crate::gcode::{is_block, parse_block, BlockError, Motion};
+use crate::gcode::{is_block, parse_in, BlockError, Motion, Units};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
@@ -140,15 +140,18 @@ pub struct Session {
 struct Modal {
     motion: Motion,
     incremental: bool,
+    /// G20 / G21.
+    units: Units,
     /// The programmed feed (mm/min), none after power-on.
     feed: Option<Feed>,
 }
 
 impl Modal {
-    /// Power-on: G00, G90, no feed.
+    /// Power-on: G00, G90, G21, no feed.
     const POWER_ON: Modal = Modal {
         motion: Motion::Rapid,
         incremental: false,
+        units: Units::Mm,
         feed: None,
     };
 }
@@ -707,7 +710,7 @@ impl Session {
     /// Runs one G-code block in the session's modal state, through the
     /// contour engine (compensation off: the block itself).
     fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
-        let b = parse_block(text).map_err(Refusal::Block)?;
+        let b = parse_in(text, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
         if b.deleted && self.block_delete {
             let none = MotionSummary::new(self.pos, self.pos, &Crc32::new());
             send_ok(io, Some(format_args!("{none} SKIP=BDEL")));
@@ -716,6 +719,7 @@ impl Session {
         let modal = Modal {
             motion: b.motion.unwrap_or(self.modal.motion),
             incremental: b.incremental.unwrap_or(self.modal.incremental),
+            units: b.units.unwrap_or(self.modal.units),
             feed: match b.f {
                 Some(f) => Some(
                     Feed::new(f)

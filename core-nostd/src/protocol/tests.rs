@@ -943,7 +943,6 @@ fn a_posted_program_runs_line_by_line_and_names_what_it_cannot() {
     assert!(ask1(&mut dev, "POS").starts_with("OK PX=50 PZ=-4000 "));
     assert!(ask1(&mut dev, "OPT BDEL=2").starts_with("ERR VALUE BDEL"));
     for (line, want) in [
-        ("G20 G00 X1", "ERR VALUE G20 not supported"),
         (
             "G17",
             "ERR VALUE G17 plane not supported: a lathe cuts in G18 (ZX)",
@@ -964,4 +963,33 @@ fn a_posted_program_runs_line_by_line_and_names_what_it_cannot() {
         assert_eq!(ask1(&mut dev, line), want, "{line}");
     }
     assert!(ask1(&mut dev, "POS").starts_with("OK PX=50 PZ=-4000 "));
+}
+
+#[test]
+fn inch_programs_move_the_same_steps_as_their_millimetres() {
+    let last =
+        |dev: &mut Device, line: &str| ask(dev, std::format!("{line}\n").as_bytes()).pop().unwrap();
+    let mut inch = Device::new();
+    let mut mm = Device::new();
+    // 1.25 in = 31.75 mm; 0.5 in/min = 12.7 mm/min; a G20 in a block reads
+    // every word of it in inches, then stays.
+    for (a, b) in [
+        ("G00 X1.25 Z.1 G20", "G00 X31.75 Z2.54"),
+        ("G01 Z-1.5 F.5", "G01 Z-38.1 F12.7"),
+        ("G02 X1.75 Z-1.75 R.25", "G02 X44.45 Z-44.45 R6.35"),
+        ("G91 X-.000001", "G91 X-0.0000254"),
+        ("G21 G90 X20 Z0", "G90 X20 Z0"),
+    ] {
+        assert_eq!(last(&mut inch, a), last(&mut mm, b), "{a} / {b}");
+    }
+    assert_eq!(ask1(&mut inch, "POS"), ask1(&mut mm, "POS"));
+    // Power-on and RESET are millimetres.
+    last(&mut inch, "G20");
+    ask1(&mut inch, "RESET");
+    last(&mut inch, "G00 X10 Z0");
+    assert!(ask1(&mut inch, "POS").starts_with("OK PX=1000 PZ=0 "));
+    assert_eq!(
+        last(&mut inch, "G20 X3937.008"),
+        "ERR VALUE X beyond 99999.999999 mm"
+    );
 }
