@@ -166,38 +166,7 @@ impl Length {
     /// assert_eq!(mm("99999.99999995"), Err(LengthError::OutOfRange));
     /// ```
     pub fn from_gcode_mm(text: &str) -> Result<Length, LengthError> {
-        let (negative, int_part, frac_part) = split_decimal(text)?;
-        if frac_part.len() > 15 {
-            return Err(LengthError::TooManyGcodeDecimals);
-        }
-        let mut mm: i64 = 0;
-        for &d in int_part {
-            mm = mm * 10 + i64::from(d - b'0');
-            if mm >= 100_000 {
-                return Err(LengthError::OutOfRange);
-            }
-        }
-        // The decimals as an integer of up to 15 digits, scaled to ångström.
-        let frac = frac_part
-            .iter()
-            .fold(0i64, |n, &d| n * 10 + i64::from(d - b'0'));
-        let shift = frac_part.len() as u32;
-        let frac = if shift <= 7 {
-            frac * 10i64.pow(7 - shift)
-        } else {
-            // 10 … 10⁸: never zero.
-            let unit = core::num::NonZeroU64::new(10u64.pow(shift - 7))
-                .unwrap_or(core::num::NonZeroU64::MIN);
-            let (q, r) = (frac as u64 / unit, frac as u64 % unit);
-            (q + u64::from(2 * r >= unit.get())) as i64
-        };
-        let angstrom = mm * ANGSTROM_PER_MM + frac;
-        if angstrom > LENGTH_LIMIT.angstrom {
-            return Err(LengthError::OutOfRange);
-        }
-        Ok(Length {
-            angstrom: if negative { -angstrom } else { angstrom },
-        })
+        from_gcode(text, 1, 7)
     }
 
     /// Parses a number of inches as G-code programs write it (the grammar
@@ -216,40 +185,7 @@ impl Length {
     /// assert_eq!(inch("3937.008"), Err(LengthError::OutOfRange));
     /// ```
     pub fn from_gcode_inch(text: &str) -> Result<Length, LengthError> {
-        let (negative, int_part, frac_part) = split_decimal(text)?;
-        if frac_part.len() > 15 {
-            return Err(LengthError::TooManyGcodeDecimals);
-        }
-        let mut whole: u64 = 0;
-        for &d in int_part {
-            whole = whole * 10 + u64::from(d - b'0');
-            if whole >= 100_000 {
-                return Err(LengthError::OutOfRange);
-            }
-        }
-        // 254 000 000 Å an inch: the whole inches exactly, the decimals F
-        // (d digits) as F·254·10⁶⁻ᵈ, rounded once when d > 6. Within u64:
-        // F·254 < 2.6·10¹⁷.
-        let decimals = frac_part.len() as u32;
-        let frac = frac_part
-            .iter()
-            .fold(0u64, |n, &d| n * 10 + u64::from(d - b'0'));
-        let frac = if decimals <= 6 {
-            frac * 254 * 10u64.pow(6 - decimals)
-        } else {
-            let unit = core::num::NonZeroU64::new(10u64.pow(decimals - 6))
-                .unwrap_or(core::num::NonZeroU64::MIN);
-            let scaled = frac * 254;
-            scaled / unit + u64::from(2 * (scaled % unit) >= unit.get())
-        };
-        let angstrom = whole * 254_000_000 + frac;
-        if angstrom > LENGTH_LIMIT.angstrom as u64 {
-            return Err(LengthError::OutOfRange);
-        }
-        let angstrom = angstrom as i64;
-        Ok(Length {
-            angstrom: if negative { -angstrom } else { angstrom },
-        })
+        from_gcode(text, 254, 6)
     }
 
     /// The raw count of ångström (10⁻⁷ mm).
@@ -356,6 +292,45 @@ pub(crate) fn write_mm4<W: fmt::Write + ?Sized>(w: &mut W, tenth_um: i64) -> fmt
     let sign = if tenth_um < 0 { "-" } else { "" };
     let a = tenth_um.unsigned_abs();
     write!(w, "{}{}.{:04}", sign, a / 10_000, a % 10_000)
+}
+
+/// A G-code number in a unit of `m·10ᵉ` ångström (millimetres: 1·10⁷,
+/// inches: 254·10⁶): whole units exactly, the decimals `F` (d digits) as
+/// `F·m·10ᵉ⁻ᵈ`, rounded once half away from zero when d > e. Within u64:
+/// `F·m < 2.6·10¹⁷`.
+fn from_gcode(text: &str, m: u64, e: u32) -> Result<Length, LengthError> {
+    let (negative, int_part, frac_part) = split_decimal(text)?;
+    if frac_part.len() > 15 {
+        return Err(LengthError::TooManyGcodeDecimals);
+    }
+    let mut whole: u64 = 0;
+    for &d in int_part {
+        whole = whole * 10 + u64::from(d - b'0');
+        if whole >= 100_000 {
+            return Err(LengthError::OutOfRange);
+        }
+    }
+    let decimals = frac_part.len() as u32;
+    let digits = frac_part
+        .iter()
+        .fold(0u64, |n, &d| n * 10 + u64::from(d - b'0'));
+    let frac = if decimals <= e {
+        digits * m * 10u64.pow(e - decimals)
+    } else {
+        // 10 … 10⁹: never zero.
+        let unit = core::num::NonZeroU64::new(10u64.pow(decimals - e))
+            .unwrap_or(core::num::NonZeroU64::MIN);
+        let scaled = digits * m;
+        scaled / unit + u64::from(2 * (scaled % unit) >= unit.get())
+    };
+    let angstrom = whole * m * 10u64.pow(e) + frac;
+    if angstrom > LENGTH_LIMIT.angstrom as u64 {
+        return Err(LengthError::OutOfRange);
+    }
+    let angstrom = angstrom as i64;
+    Ok(Length {
+        angstrom: if negative { -angstrom } else { angstrom },
+    })
 }
 
 /// Splits `[+-]digits[.digits]`, `digits.` or `.digits` into its sign,

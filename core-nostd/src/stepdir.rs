@@ -289,8 +289,16 @@ mod tests {
     const ZS: usize = 2;
     const ZD: usize = 3;
 
-    /// Issues a block's events at `period` µs apart, then a reversal on X.
-    fn run(dx: i32, dz: i32, timing: DriveTiming, period: u64) -> Vec<(u64, usize, bool)> {
+    type Outputs = StepDir<Pin, Pin, Pin, Pin>;
+
+    /// Issues a block's events `period` µs apart through `issue`; returns
+    /// every pin write.
+    fn run_with(
+        dx: i32,
+        dz: i32,
+        period: u64,
+        mut issue: impl FnMut(&mut Outputs, StepEvent, u64, &mut Time, &mut Time),
+    ) -> Vec<(u64, usize, bool)> {
         let log: Log = Rc::new(RefCell::new((0, Vec::new())));
         let mut sd = StepDir::new(
             Pin(XS, log.clone()),
@@ -309,10 +317,17 @@ mod tests {
         clock.start_run();
         for (i, e) in block.events().enumerate() {
             let tick = (i as u64 + 1) * period;
-            sd.issue(e, tick, &timing, &mut clock, &mut time).unwrap();
+            issue(&mut sd, e, tick, &mut clock, &mut time);
         }
         let out = log.borrow().1.clone();
         out
+    }
+
+    /// Issues a block's events `period` µs apart with [`StepDir::issue`].
+    fn run(dx: i32, dz: i32, timing: DriveTiming, period: u64) -> Vec<(u64, usize, bool)> {
+        run_with(dx, dz, period, |sd, e, tick, clock, time| {
+            sd.issue(e, tick, &timing, clock, time).unwrap()
+        })
     }
 
     #[test]
@@ -362,28 +377,11 @@ mod tests {
         let timing = DriveTiming::new(20_000, 5, 8).unwrap();
         let whole = run(4, -7, timing, 50);
         // The same events, the pulse ended by the caller 5 µs after the rise.
-        let log: Log = Rc::new(RefCell::new((0, Vec::new())));
-        let mut sd = StepDir::new(
-            Pin(XS, log.clone()),
-            Pin(XD, log.clone()),
-            Pin(ZS, log.clone()),
-            Pin(ZD, log.clone()),
-        );
-        log.borrow_mut().1.clear();
-        let p = |x, z| ImpulsePoint {
-            x: Impulses(x),
-            z: Impulses(z),
-        };
-        let block = LinearBlock::new(p(10, 10), p(14, 3)).unwrap();
-        let mut time = Time(log.clone(), 0);
-        let mut clock = Time(log.clone(), 0);
-        clock.start_run();
-        for (i, e) in block.events().enumerate() {
-            let tick = (i as u64 + 1) * 50;
-            sd.rise(e, tick, &timing, &mut clock, &mut time).unwrap();
+        let halves = run_with(4, -7, 50, |sd, e, tick, clock, time| {
+            sd.rise(e, tick, &timing, clock, time).unwrap();
             time.delay_us(5);
             sd.fall().unwrap();
-        }
+        });
         // Rises and DIR writes as `issue` makes them; every STEP line is
         // written low at each fall (a line already low stays low).
         let rises = |l: &[(u64, usize, bool)]| -> Vec<(u64, usize, bool)> {
@@ -392,14 +390,14 @@ mod tests {
                 .filter(|e| e.2 || e.1 == XD || e.1 == ZD)
                 .collect()
         };
-        assert_eq!(rises(&log.borrow().1), rises(&whole));
+        assert_eq!(rises(&halves), rises(&whole));
         let falls = |l: &[(u64, usize, bool)]| -> Vec<(u64, usize)> {
             l.iter()
                 .filter(|e| !e.2 && (e.1 == XS || e.1 == ZS))
                 .map(|e| (e.0, e.1))
                 .collect()
         };
-        assert_eq!(falls(&log.borrow().1), falls(&whole));
+        assert_eq!(falls(&halves), falls(&whole));
     }
 
     #[test]
