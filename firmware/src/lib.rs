@@ -57,6 +57,21 @@ impl Controller {
             asked: None,
         }
     }
+
+    /// Answers what the serial interrupt left for thread mode through the
+    /// protocol: a reset's report and new session first, else a status
+    /// line. Returns whether there was anything.
+    pub fn realtime(&mut self, device: &mut core_nostd::protocol::Device) -> bool {
+        if motion::take_reset() {
+            device.realtime(Realtime::Reset, self);
+        } else if let Some(asked) = motion::take_status() {
+            self.asked = Some(asked);
+            device.realtime(Realtime::Status, self);
+        } else {
+            return false;
+        }
+        true
+    }
 }
 
 /// The board's timing for a status line answering a byte that arrived at
@@ -77,23 +92,6 @@ fn answer_status(serial: &mut Serial, view: &StatusView, queued: usize) {
         let mut line = status_line("!STATUS", motion::motion(), issued, queued, view);
         timing(asked).write_to(&mut line);
         serial.send(line.finish());
-    }
-}
-
-impl Controller {
-    /// Answers what the serial interrupt left for thread mode through the
-    /// protocol: a reset's report and new session first, else a status
-    /// line. Returns whether there was anything.
-    pub fn realtime(&mut self, device: &mut core_nostd::protocol::Device) -> bool {
-        if motion::take_reset() {
-            device.realtime(Realtime::Reset, self);
-        } else if let Some(asked) = motion::take_status() {
-            self.asked = Some(asked);
-            device.realtime(Realtime::Status, self);
-        } else {
-            return false;
-        }
-        true
     }
 }
 

@@ -243,8 +243,6 @@ impl Motion {
                 }
                 self.next = None;
                 self.end_pulse();
-                // Progress: the supervisor's deadline moves on.
-                supervisor::step_due(self.clock.count());
                 // Waits for the tick itself; a late one steps at once.
                 if self
                     .axes
@@ -254,8 +252,10 @@ impl Motion {
                     defmt::error!("step outputs failed");
                 }
                 // The count ticks at 1 µs: one more makes the width whole.
-                let width = self.drive.pulse_us() + 1;
-                self.pulse_end = Some(self.clock.count().wrapping_add(width));
+                // The same reading moves the supervisor's deadline on.
+                let rose = self.clock.count();
+                supervisor::step_due(rose);
+                self.pulse_end = Some(rose.wrapping_add(self.drive.pulse_us() + 1));
             }
             match self.stepper.pull() {
                 None => {

@@ -117,16 +117,7 @@ pub fn mm4_of(angstrom: i128) -> String {
 /// Ångström (a multiple of 10) as an exact decimal with up to 6 decimals.
 pub fn exact_mm(angstrom: i64) -> String {
     assert_eq!(angstrom % 10, 0, "not a whole nanometre: {angstrom}");
-    let nm = angstrom / 10;
-    let sign = if nm < 0 { "-" } else { "" };
-    let a = nm.unsigned_abs();
-    let frac = format!("{:06}", a % 1_000_000);
-    let frac = frac.trim_end_matches('0');
-    if frac.is_empty() {
-        format!("{sign}{}", a / 1_000_000)
-    } else {
-        format!("{sign}{}.{frac}", a / 1_000_000)
-    }
+    exact_gcode_mm(angstrom)
 }
 
 /// Ångström as an exact decimal with up to 7 decimals (a G-code number).

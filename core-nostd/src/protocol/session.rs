@@ -1188,8 +1188,10 @@ impl Session {
         let st = self.machine.status(&mut Sink::new(io, self.drive));
         let view = self.view(st.speed(self.machine.tick()));
         let mut line = status_line(prefix, st.motion, st.issued, st.queued, &view);
-        if let Some(timing) = io.timing().filter(|_| prefix.starts_with('!')) {
-            timing.write_to(&mut line);
+        if prefix.starts_with('!') {
+            if let Some(timing) = io.timing() {
+                timing.write_to(&mut line);
+            }
         }
         io.send(line.finish());
     }
