@@ -3,8 +3,9 @@
 //! A block is a line of address words: a letter followed by a number, with or
 //! without spaces between words (`N10 G01 X27.532 Z0`, `G1X12.5`), letters in
 //! either case. Comments in parentheses and everything after `;` are ignored.
-//! Each address may appear once, except `G`, which may appear once per modal
-//! group. Lines as CAM posts and machinists write them are read too:
+//! Each address may appear once, except `G` and `M`, which may appear once
+//! per modal group. Lines as CAM posts and machinists write them are read
+//! too:
 //!
 //! - numbers `30.`, `.5`, `+2`, with up to 15 decimals, rounded once to the
 //!   ångström (10⁻⁷ mm) half away from zero;
@@ -15,21 +16,31 @@
 //! - `Y0` (lathe posts write it); any other `Y` is refused by name;
 //! - `G20`/`G21` anywhere in a block reads all its lengths and its feed in
 //!   inches (25.4 mm, rounded once to the ångström) or millimetres
-//!   ([`parse_in`] takes the modal unit for blocks without one).
+//!   ([`parse`] takes the modal unit for blocks without one).
+//!
+//! Two dialects ([`Dialect`]) read the same lines differently where their
+//! codes differ; a code of the other dialect is refused naming it.
 //!
 //! | address | meaning | value |
 //! |---|---|---|
 //! | `N` | sequence number | kept to name the block in refusals |
-//! | `G` | 00 01 02 03 (motion), 18 (ZX plane), 20 21 (inch, millimetres), 40 41 42 (nose compensation), 90 91 (absolute, incremental), 450 451 (outside corners: transition arc, intersection) | whole number |
-//! | `X` | X end point: a diameter when `DIAM=1` | length |
+//! | `G` both | 00 01 02 03 (motion), 04 (dwell), 18 (ZX plane), 20 21 (inch, millimetres), 40 41 42 (nose compensation), 96 97 (surface speed, rpm), 450 451 (outside corners: transition arc, intersection) | code |
+//! | `G` ISO | 7 8 (diameter, radius), 90 91 (absolute, incremental), 90.1 91.1 (arc centres absolute, from the start), 94 95 (feed per minute, per revolution) | code |
+//! | `G` Fanuc | 50 (with `S`: the spindle speed limit), 98 99 (feed per minute, per revolution) | code |
+//! | `X` | X end point: a diameter when `DIAM=1`; in a Fanuc `G04`, seconds | length |
 //! | `Z` | Z end point | length |
+//! | `U`, `W` | Fanuc: X, Z increments (`U` in a `G04`: seconds) | length |
 //! | `Y` | only 0 | length |
-//! | `I`, `K` | arc centre minus start point, radius values | length |
+//! | `I`, `K` | arc centre minus start point (or the centre, under G90.1), radius values | length |
 //! | `R` | arc radius: positive for an arc of at most 180°, negative for more | length |
-//! | `F` | feed along the path, mm/min (modal) | length |
-//! | `S`, `T`, `M` | speed, tool, miscellaneous | accepted, not acted on |
+//! | `F` | feed along the path, per minute or per revolution (modal) | length |
+//! | `S` | spindle speed, rpm, or surface speed under G96 (m/min, ft/min under G20) | 0 … 99 999.999999 |
+//! | `D` | ISO, with G96: the spindle speed limit, rpm | 0 … 99 999.999999 |
+//! | `P` | with G04: the dwell, seconds (ISO) or milliseconds (Fanuc) | 0 … 99 999.999999 |
+//! | `T` | ISO: the tool, 0 … 99; Fanuc: tool and offset register, `T0101` | whole number |
+//! | `M` | 02 30 (end of program), 03 04 05 (spindle cw, ccw, stop), 07 08 09 (mist, flood, off) | code |
 
-use crate::length::{Length, LengthError};
+use crate::length::{gcode_scaled, Length, LengthError};
 use core::fmt;
 
 /// Motion modes (group 1).
@@ -104,6 +115,95 @@ pub enum Units {
     Inch,
 }
 
+/// The G-code dialect a program is written in (`OPT DIALECT=`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Dialect {
+    /// ISO 6983 as LinuxCNC and grbl read it: `G90`/`G91`, `G94`/`G95`,
+    /// `G7`/`G8`, `G4 P` in seconds (power-on).
+    #[default]
+    Iso,
+    /// Fanuc G-code system A, as Fanuc and Haas lathes read it: `U`/`W`
+    /// incremental words, `G98`/`G99`, `G50 S`, `G04 P` in milliseconds,
+    /// `T0101`.
+    Fanuc,
+}
+
+impl Dialect {
+    /// The word of `OPT DIALECT=`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Dialect::Iso => "ISO",
+            Dialect::Fanuc => "FANUC",
+        }
+    }
+}
+
+/// What the feed word means (ISO `G94`/`G95`, Fanuc `G98`/`G99`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FeedMode {
+    /// Millimetres (inches) per minute (power-on).
+    #[default]
+    PerMinute,
+    /// Millimetres (inches) per revolution of the spindle.
+    PerRev,
+}
+
+/// What the spindle's `S` word means (`G96`/`G97`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SpindleMode {
+    /// `G97`: revolutions per minute (power-on).
+    #[default]
+    Rpm,
+    /// `G96`: constant surface speed, m/min (ft/min under `G20`).
+    Surface,
+}
+
+/// Spindle commands (`M03`, `M04`, `M05`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Spindle {
+    /// `M03`: clockwise, looking from the headstock to the tailstock.
+    Cw,
+    /// `M04`: counter-clockwise.
+    Ccw,
+    /// `M05`: stopped.
+    Off,
+}
+
+/// Coolant commands (`M07`, `M08`, `M09`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Coolant {
+    /// `M07`: mist.
+    Mist,
+    /// `M08`: flood.
+    Flood,
+    /// `M09`: off.
+    Off,
+}
+
+/// Program stops (`M02`, `M30`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Stop {
+    /// `M02`, `M30`: end of program.
+    End,
+}
+
+/// A tool word: the tool, and in the Fanuc dialect its offset register.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ToolWord {
+    /// The tool (turret station), 0 … 99.
+    pub tool: u8,
+    /// The offset register (Fanuc `T0101`: tool 01, register 01; `T5` is
+    /// `T0505`); `None` in the ISO dialect, where `T` names the tool alone.
+    pub offset: Option<u8>,
+}
+
 /// One parsed block.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Block {
@@ -115,28 +215,57 @@ pub struct Block {
     pub motion: Option<Motion>,
     /// G40–G42 if given.
     pub compensation: Option<Compensation>,
-    /// G90 (false) or G91 (true) if given.
+    /// G90 (false) or G91 (true) if given (ISO).
     pub incremental: Option<bool>,
+    /// G90.1 (true) or G91.1 (false) if given: arc centres absolute or from
+    /// the start (ISO).
+    pub arc_absolute: Option<bool>,
+    /// G7 (true) or G8 (false) if given: X words are diameters or radii
+    /// (ISO).
+    pub diameter: Option<bool>,
     /// G450 or G451 if given.
     pub corner: Option<Corner>,
     /// G18 given: the ZX plane, the only one a lathe has.
     pub plane_zx: bool,
     /// G20 or G21 if given; the block's lengths are read in it.
     pub units: Option<Units>,
+    /// G94/G95 (ISO), G98/G99 (Fanuc) if given.
+    pub feed_mode: Option<FeedMode>,
+    /// G96/G97 if given.
+    pub spindle_mode: Option<SpindleMode>,
+    /// G04: the dwell, in microseconds (rounded half away from zero).
+    pub dwell: Option<u64>,
+    /// Fanuc `G50 S`: the spindle speed limit, rpm (ISO writes it as `D`
+    /// in a `G96` block; both land here).
+    pub clamp: Option<Length>,
     /// The sequence number, when written as a whole number below 2³².
     pub n: Option<u32>,
-    /// X word.
+    /// X word (or X from a Fanuc `U`, which [`Block::incremental_x`] says).
     pub x: Option<Length>,
-    /// Z word.
+    /// Z word (or Z from a Fanuc `W`).
     pub z: Option<Length>,
+    /// The X word was a Fanuc `U`: an increment.
+    pub incremental_x: bool,
+    /// The Z word was a Fanuc `W`: an increment.
+    pub incremental_z: bool,
     /// I word.
     pub i: Option<Length>,
     /// K word.
     pub k: Option<Length>,
     /// R word.
     pub r: Option<Length>,
-    /// F word: the feed, mm/min.
+    /// F word: the feed, mm/min or mm/rev as the feed mode says.
     pub f: Option<Length>,
+    /// S word: rpm, or the surface speed under G96 (unit-free number).
+    pub s: Option<Length>,
+    /// T word.
+    pub tool: Option<ToolWord>,
+    /// M03/M04/M05.
+    pub spindle: Option<Spindle>,
+    /// M07/M08/M09.
+    pub coolant: Option<Coolant>,
+    /// M02/M30.
+    pub stop: Option<Stop>,
 }
 
 /// Why a block was refused.
@@ -145,7 +274,7 @@ pub struct Block {
 pub enum BlockError {
     /// An address letter this control does not know (`ERR SYNTAX`).
     UnknownAddress(u8),
-    /// An address given twice, or two G words of one group (`ERR SYNTAX`).
+    /// An address given twice, or two G (M) words of one group (`ERR SYNTAX`).
     Repeated(u8),
     /// A letter without a number, or text that is not a word (`ERR SYNTAX`).
     NotAWord,
@@ -156,6 +285,21 @@ pub enum BlockError {
     /// A G code this control does not run (`ERR VALUE`): its code in
     /// tenths (G90.1 is 901), or `None` when the number is no G code.
     UnsupportedG(Option<u16>),
+    /// An M code this control does not run (`ERR VALUE`), or `None` when
+    /// the number is no M code.
+    UnsupportedM(Option<u16>),
+    /// A canned cycle (`G70`–`G76`; Fanuc's `G90`, `G92`, `G94`), by its
+    /// code in tenths (`ERR VALUE`).
+    Cycle(u16),
+    /// A number outside what its address takes, or no number for it
+    /// (`ERR VALUE`): the address and what it takes.
+    Range(u8, &'static str),
+    /// A word of the other dialect (`ERR VALUE`): its letter, its code
+    /// in tenths for a G word, and the dialect it belongs to.
+    OtherDialect(u8, u16, Dialect),
+    /// Words that do not go together, or a word a code needs
+    /// (`ERR SYNTAX`): what the rule is.
+    Form(&'static str),
     /// A `Y` word other than 0: a lathe has no Y axis (`ERR VALUE`).
     NoYAxis,
     /// A program number with other words, or not at the line's start
@@ -172,8 +316,28 @@ impl BlockError {
     pub const fn is_value(&self) -> bool {
         matches!(
             self,
-            BlockError::Value(..) | BlockError::UnsupportedG(_) | BlockError::NoYAxis
+            BlockError::Value(..)
+                | BlockError::UnsupportedG(_)
+                | BlockError::UnsupportedM(_)
+                | BlockError::Cycle(_)
+                | BlockError::Range(..)
+                | BlockError::OtherDialect(..)
+                | BlockError::NoYAxis
         )
+    }
+}
+
+/// A code in tenths as written: `G04`, `G90.1`.
+struct Code(u8, u16);
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (whole, tenth) = (self.1 / 10, self.1 % 10);
+        if tenth == 0 {
+            write!(f, "{}{whole:02}", char::from(self.0))
+        } else {
+            write!(f, "{}{whole}.{tenth}", char::from(self.0))
+        }
     }
 }
 
@@ -188,19 +352,36 @@ impl fmt::Display for BlockError {
             BlockError::Comment => f.write_str("unclosed comment"),
             BlockError::Value(l, why) => write!(f, "{} {why}", char::from(l)),
             BlockError::UnsupportedG(None) => f.write_str("G not a G code"),
+            BlockError::UnsupportedM(None) => f.write_str("M not an M code"),
             BlockError::UnsupportedG(Some(tenths)) => {
-                let (whole, tenth) = (tenths / 10, tenths % 10);
-                let why = match whole {
-                    17 | 19 if tenth == 0 => "plane not supported: a lathe cuts in G18 (ZX)",
-                    70..=76 if tenth == 0 => "canned cycles not supported",
+                let why = match tenths {
+                    170 | 190 => "plane not supported: a lathe cuts in G18 (ZX)",
+                    320 | 330 | 331 | 340 => "threading not supported",
                     _ => "not supported",
                 };
-                if tenth == 0 {
-                    write!(f, "G{whole:02} {why}")
-                } else {
-                    write!(f, "G{whole}.{tenth} {why}")
-                }
+                write!(f, "{} {why}", Code(b'G', tenths))
             }
+            BlockError::UnsupportedM(Some(tenths)) => {
+                let why = match tenths {
+                    980 | 990 => "subprograms are expanded by the host",
+                    _ => "not supported",
+                };
+                write!(f, "{} {why}", Code(b'M', tenths))
+            }
+            BlockError::OtherDialect(letter, tenths, dialect) => {
+                if letter == b'G' || letter == b'M' {
+                    write!(f, "{}", Code(letter, tenths))?;
+                } else {
+                    write!(f, "{}", char::from(letter))?;
+                }
+                let d = dialect.as_str();
+                write!(f, " belongs to the {d} dialect (OPT DIALECT={d})")
+            }
+            BlockError::Cycle(tenths) => {
+                write!(f, "{} canned cycles not supported", Code(b'G', tenths))
+            }
+            BlockError::Form(why) => f.write_str(why),
+            BlockError::Range(l, why) => write!(f, "{} {why}", char::from(l)),
             BlockError::NoYAxis => f.write_str("Y a lathe has no Y axis: only Y0"),
             BlockError::ProgramNumber => {
                 f.write_str("a program number stands alone at a line's start: O")
@@ -273,7 +454,24 @@ pub fn parse_block(line: &str) -> Result<Block, BlockError> {
 /// assert_eq!(b.x.unwrap().to_string(), "1.0000");
 /// ```
 pub fn parse_in(line: &str, units: Units) -> Result<Block, Located> {
-    parse_with(line, units_word(line).unwrap_or(units))
+    parse_with(line, Dialect::Iso, units)
+}
+
+/// Parses a block of `dialect` whose lengths are in `units` unless it says
+/// otherwise.
+///
+/// ```
+/// use core_nostd::gcode::{parse, Dialect, FeedMode, Units};
+/// let b = parse("G99 U-2. W.5 T0303", Dialect::Fanuc, Units::Mm).unwrap();
+/// assert_eq!(b.feed_mode, Some(FeedMode::PerRev));
+/// assert!(b.incremental_x && b.incremental_z);
+/// assert_eq!(b.x.unwrap().to_string(), "-2.0000");
+/// assert_eq!((b.tool.unwrap().tool, b.tool.unwrap().offset), (3, Some(3)));
+/// assert_eq!(parse("G04 P1500", Dialect::Fanuc, Units::Mm).unwrap().dwell, Some(1_500_000));
+/// assert_eq!(parse("G4 P1.5", Dialect::Iso, Units::Inch).unwrap().dwell, Some(1_500_000));
+/// ```
+pub fn parse(line: &str, dialect: Dialect, units: Units) -> Result<Block, Located> {
+    parse_with(line, dialect, units)
 }
 
 /// Parses a block; a refusal says where.
@@ -287,13 +485,20 @@ pub fn parse_located(line: &str) -> Result<Block, Located> {
     parse_in(line, Units::Mm)
 }
 
-/// The unit a line's own `G20`/`G21` sets, if it has one: the first such
-/// word outside comments and before any `;` (an unclosed comment ends the
-/// search; the parser refuses the line anyway).
-fn units_word(line: &str) -> Option<Units> {
+/// What a line says about itself before its words are read: its own
+/// `G20`/`G21` (the first outside comments and before any `;`) and whether
+/// it holds a `G04` (whose `P`, and Fanuc `X`/`U`, are times). An unclosed
+/// comment ends the scan; the parser refuses the line anyway.
+#[derive(Clone, Copy, Default)]
+struct Scan {
+    units: Option<Units>,
+    dwell: bool,
+}
+
+fn scan(line: &str) -> Scan {
     let bytes = line.as_bytes();
     let mut pos = 0;
-    let mut found = None;
+    let mut found = Scan::default();
     while let Some(&c) = bytes.get(pos) {
         match c {
             b';' => break,
@@ -304,14 +509,11 @@ fn units_word(line: &str) -> Option<Units> {
                 pos += close + 1;
             }
             b'G' | b'g' => {
-                let n = bytes
-                    .iter()
-                    .skip(pos + 1)
-                    .take_while(|b| b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.'))
-                    .count();
+                let n = number_len(bytes, pos + 1);
                 match line.get(pos + 1..pos + 1 + n).and_then(g_code) {
-                    Some(200) if found.is_none() => found = Some(Units::Inch),
-                    Some(210) if found.is_none() => found = Some(Units::Mm),
+                    Some(200) if found.units.is_none() => found.units = Some(Units::Inch),
+                    Some(210) if found.units.is_none() => found.units = Some(Units::Mm),
+                    Some(40) => found.dwell = true,
                     _ => {}
                 }
                 pos += 1 + n;
@@ -322,9 +524,43 @@ fn units_word(line: &str) -> Option<Units> {
     found
 }
 
-fn parse_with(line: &str, units: Units) -> Result<Block, Located> {
-    let mut block = Block::default();
-    let mut seen = [false; 26];
+/// The bytes of a word's number from `pos`: digits, signs and points.
+fn number_len(bytes: &[u8], pos: usize) -> usize {
+    bytes
+        .iter()
+        .skip(pos)
+        .take_while(|b| b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.'))
+        .count()
+}
+
+/// A block being read: the words so far and what the checks at its end
+/// need.
+struct Reading {
+    block: Block,
+    seen: [bool; 26],
+    dialect: Dialect,
+    units: Units,
+    dwell: bool,
+    /// The group-0 G code (G04, G50) and its column.
+    once: Option<(u16, usize)>,
+    /// The dwell time, µs.
+    time: Option<u64>,
+    /// ISO `D` (spindle speed limit with G96) and its column.
+    d: Option<(Length, usize)>,
+}
+
+fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Located> {
+    let scanned = scan(line);
+    let mut r = Reading {
+        block: Block::default(),
+        seen: [false; 26],
+        dialect,
+        units: scanned.units.unwrap_or(units),
+        dwell: scanned.dwell,
+        once: None,
+        time: None,
+        d: None,
+    };
     let bytes = line.as_bytes();
     let at = |error, pos: usize| Located {
         error,
@@ -337,19 +573,19 @@ fn parse_with(line: &str, units: Units) -> Result<Block, Located> {
     let start = pos;
     match bytes.get(pos..) {
         Some([b'%', ..]) => {
-            block.kind = LineKind::TapeMark;
+            r.block.kind = LineKind::TapeMark;
             pos += 1;
         }
         Some([b'/', ..]) => {
-            block.deleted = true;
+            r.block.deleted = true;
             pos += 1;
         }
         Some([b':', ..]) => {
-            block.kind = LineKind::Program;
+            r.block.kind = LineKind::Program;
             pos = program_number(bytes, pos + 1).ok_or(at(BlockError::NotAWord, pos))?;
         }
         Some([b'O' | b'o', b'<', ..]) => {
-            block.kind = LineKind::Program;
+            r.block.kind = LineKind::Program;
             let close = bytes
                 .iter()
                 .skip(pos)
@@ -366,7 +602,7 @@ fn parse_with(line: &str, units: Units) -> Result<Block, Located> {
             pos += close + 1;
         }
         Some([b'O' | b'o', d, ..]) if d.is_ascii_digit() => {
-            block.kind = LineKind::Program;
+            r.block.kind = LineKind::Program;
             pos = program_number(bytes, pos + 1).ok_or(at(BlockError::NotAWord, pos))?;
         }
         _ => {}
@@ -382,14 +618,14 @@ fn parse_with(line: &str, units: Units) -> Result<Block, Located> {
                     .ok_or(at(BlockError::Comment, pos))?;
                 pos += close + 1;
             }
-            _ if block.kind != LineKind::Words => {
+            _ if r.block.kind != LineKind::Words => {
                 // A tape mark or a program number stands alone.
-                let error = if block.kind == LineKind::Program
+                let error = if r.block.kind == LineKind::Program
                     && bytes.get(start + 1) == Some(&b'<')
                     && c.is_ascii_alphabetic()
                 {
                     BlockError::HostLanguage
-                } else if block.kind == LineKind::Program {
+                } else if r.block.kind == LineKind::Program {
                     BlockError::ProgramNumber
                 } else {
                     BlockError::NotAWord
@@ -398,25 +634,20 @@ fn parse_with(line: &str, units: Units) -> Result<Block, Located> {
             }
             _ if c.is_ascii_alphabetic() => {
                 let letter = c.to_ascii_uppercase();
-                let from = pos + 1;
-                let mut end = from;
-                while bytes
-                    .get(end)
-                    .is_some_and(|b| b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.'))
-                {
-                    end += 1;
-                }
-                let number = line.get(from..end).ok_or(at(BlockError::NotAWord, pos))?;
+                let end = pos + 1 + number_len(bytes, pos + 1);
+                let number = line
+                    .get(pos + 1..end)
+                    .ok_or(at(BlockError::NotAWord, pos))?;
                 if number.is_empty() {
                     return Err(at(BlockError::NotAWord, pos));
                 }
-                word(&mut block, &mut seen, letter, number, units).map_err(|e| at(e, pos))?;
+                r.word(letter, number, pos).map_err(|e| at(e, pos))?;
                 pos = end;
             }
             _ => return Err(at(BlockError::NotAWord, pos)),
         }
     }
-    Ok(block)
+    r.finish().map_err(|(e, pos)| at(e, pos))
 }
 
 /// The end of a program number's digits from `pos` (at least one).
@@ -429,56 +660,328 @@ fn program_number(bytes: &[u8], pos: usize) -> Option<usize> {
     (n > 0).then_some(pos + n)
 }
 
-fn word(
-    block: &mut Block,
-    seen: &mut [bool; 26],
-    letter: u8,
-    number: &str,
-    units: Units,
-) -> Result<(), BlockError> {
-    let length = || {
-        match units {
-            Units::Mm => Length::from_gcode_mm(number),
-            Units::Inch => Length::from_gcode_inch(number),
-        }
-        .map_err(|e| BlockError::Value(letter, e))
-    };
-    if letter == b'G' {
-        return g_word(block, number);
+/// A number without a unit times 10ᵉ, rounded once: 0 to 99 999.999999.
+fn unitless_scaled(letter: u8, number: &str, e: u32) -> Result<u64, BlockError> {
+    let range = BlockError::Range(letter, "must be 0 to 99999.999999");
+    match gcode_scaled(number, e) {
+        Ok(v) => u64::try_from(v).map_err(|_| range),
+        Err(LengthError::OutOfRange) => Err(range),
+        Err(LengthError::Malformed) => Err(BlockError::Range(letter, "not a number")),
+        Err(e) => Err(BlockError::Value(letter, e)),
     }
-    let slot = seen
-        .get_mut(usize::from(letter - b'A'))
-        .ok_or(BlockError::UnknownAddress(letter))?;
-    if *slot {
-        return Err(BlockError::Repeated(letter));
-    }
-    *slot = true;
-    match letter {
-        b'X' => block.x = Some(length()?),
-        b'Z' => block.z = Some(length()?),
-        b'I' => block.i = Some(length()?),
-        b'K' => block.k = Some(length()?),
-        b'R' => block.r = Some(length()?),
-        b'N' => {
-            Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e))?;
-            block.n = number.parse().ok();
+}
+
+/// A dwell time in µs from seconds (`e` = 6) or milliseconds (`e` = 3).
+fn dwell_us(letter: u8, number: &str, e: u32) -> Result<u64, BlockError> {
+    unitless_scaled(letter, number, e)
+}
+
+/// A number without a unit (S, D), held on the length grid (10⁻⁷).
+fn unitless(letter: u8, number: &str) -> Result<Length, BlockError> {
+    let v = unitless_scaled(letter, number, 7)?;
+    // At most 999 999 999 990: a length.
+    Ok(i64::try_from(v)
+        .ok()
+        .and_then(Length::from_angstrom)
+        .unwrap_or(Length::ZERO))
+}
+
+impl Reading {
+    fn word(&mut self, letter: u8, number: &str, pos: usize) -> Result<(), BlockError> {
+        let fanuc = self.dialect == Dialect::Fanuc;
+        match letter {
+            b'G' => return self.g_word(number, pos),
+            b'M' => return self.m_word(number),
+            _ => {}
         }
-        b'F' => block.f = Some(length()?),
-        b'Y' => {
-            // Only a written zero: `Y0`, `Y-0.000`.
-            length()?;
-            if number.bytes().any(|b| matches!(b, b'1'..=b'9')) {
-                return Err(BlockError::NoYAxis);
+        let slot = self
+            .seen
+            .get_mut(usize::from(letter - b'A'))
+            .ok_or(BlockError::UnknownAddress(letter))?;
+        if *slot {
+            return Err(BlockError::Repeated(letter));
+        }
+        *slot = true;
+        let units = self.units;
+        let length = || {
+            match units {
+                Units::Mm => Length::from_gcode_mm(number),
+                Units::Inch => Length::from_gcode_inch(number),
             }
+            .map_err(|e| BlockError::Value(letter, e))
+        };
+        let b = &mut self.block;
+        match letter {
+            // The Fanuc dwell's X and U are seconds.
+            b'X' | b'U' if fanuc && self.dwell => {
+                if self.time.is_some() {
+                    return Err(BlockError::Form("G04 takes one time: P, X or U"));
+                }
+                self.time = Some(dwell_us(letter, number, 6)?);
+            }
+            b'X' | b'U' => {
+                if letter == b'U' && !fanuc {
+                    return Err(BlockError::OtherDialect(b'U', 0, Dialect::Fanuc));
+                }
+                if b.x.is_some() {
+                    return Err(BlockError::Form("X and U in one block"));
+                }
+                b.x = Some(length()?);
+                b.incremental_x = letter == b'U';
+            }
+            b'Z' | b'W' => {
+                if letter == b'W' && !fanuc {
+                    return Err(BlockError::OtherDialect(b'W', 0, Dialect::Fanuc));
+                }
+                if b.z.is_some() {
+                    return Err(BlockError::Form("Z and W in one block"));
+                }
+                b.z = Some(length()?);
+                b.incremental_z = letter == b'W';
+            }
+            b'I' => b.i = Some(length()?),
+            b'K' => b.k = Some(length()?),
+            b'R' => b.r = Some(length()?),
+            b'F' => b.f = Some(length()?),
+            b'P' => {
+                if !self.dwell {
+                    return Err(BlockError::Form("P only with G04 (the dwell time)"));
+                }
+                if self.time.is_some() {
+                    return Err(BlockError::Form("G04 takes one time: P, X or U"));
+                }
+                // Fanuc's P counts milliseconds, ISO's seconds.
+                self.time = Some(dwell_us(letter, number, if fanuc { 3 } else { 6 })?);
+            }
+            b'S' => b.s = Some(unitless(letter, number)?),
+            b'D' if !fanuc => self.d = Some((unitless(letter, number)?, pos)),
+            b'T' => b.tool = Some(tool_word(number, self.dialect)?),
+            b'N' => {
+                Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e))?;
+                b.n = number.parse().ok();
+            }
+            b'Y' => {
+                // Only a written zero: `Y0`, `Y-0.000`.
+                length()?;
+                if number.bytes().any(|b| matches!(b, b'1'..=b'9')) {
+                    return Err(BlockError::NoYAxis);
+                }
+            }
+            b'O' => return Err(BlockError::ProgramNumber),
+            _ => return Err(BlockError::UnknownAddress(letter)),
         }
-        b'O' => return Err(BlockError::ProgramNumber),
-        // Accepted and checked as numbers, not acted on.
-        b'S' | b'T' | b'M' => {
-            Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e))?;
-        }
-        _ => return Err(BlockError::UnknownAddress(letter)),
+        Ok(())
     }
-    Ok(())
+
+    fn g_word(&mut self, number: &str, pos: usize) -> Result<(), BlockError> {
+        let tenths = g_code(number).ok_or(BlockError::UnsupportedG(None))?;
+        let fanuc = self.dialect == Dialect::Fanuc;
+        let b = &mut self.block;
+        let repeated = Err(BlockError::Repeated(b'G'));
+        let other = |d| Err(BlockError::OtherDialect(b'G', tenths, d));
+        fn set<T>(slot: &mut Option<T>, value: T) -> Result<(), BlockError> {
+            if slot.is_some() {
+                return Err(BlockError::Repeated(b'G'));
+            }
+            *slot = Some(value);
+            Ok(())
+        }
+        match tenths {
+            0 | 10 | 20 | 30 => set(
+                &mut b.motion,
+                match tenths {
+                    0 => Motion::Rapid,
+                    10 => Motion::Linear,
+                    20 => Motion::ArcCw,
+                    _ => Motion::ArcCcw,
+                },
+            ),
+            400 | 410 | 420 => set(
+                &mut b.compensation,
+                match tenths {
+                    400 => Compensation::Off,
+                    410 => Compensation::Left,
+                    _ => Compensation::Right,
+                },
+            ),
+            180 => {
+                if b.plane_zx {
+                    return repeated;
+                }
+                b.plane_zx = true;
+                Ok(())
+            }
+            200 | 210 => set(
+                &mut b.units,
+                if tenths == 200 {
+                    Units::Inch
+                } else {
+                    Units::Mm
+                },
+            ),
+            4500 | 4510 => set(
+                &mut b.corner,
+                if tenths == 4500 {
+                    Corner::Arc
+                } else {
+                    Corner::Intersection
+                },
+            ),
+            960 | 970 => set(
+                &mut b.spindle_mode,
+                if tenths == 960 {
+                    SpindleMode::Surface
+                } else {
+                    SpindleMode::Rpm
+                },
+            ),
+            40 => set(&mut self.once, (tenths, pos)),
+            700..=760 if tenths % 10 == 0 => Err(BlockError::Cycle(tenths)),
+            // Fanuc system A.
+            500 if fanuc => set(&mut self.once, (tenths, pos)),
+            980 | 990 if fanuc => set(
+                &mut b.feed_mode,
+                if tenths == 980 {
+                    FeedMode::PerMinute
+                } else {
+                    FeedMode::PerRev
+                },
+            ),
+            900 | 920 | 940 if fanuc => Err(BlockError::Cycle(tenths)),
+            70 | 80 | 910 | 901 | 911 | 950 if fanuc => other(Dialect::Iso),
+            // ISO.
+            900 | 910 => set(&mut b.incremental, tenths == 910),
+            901 | 911 => set(&mut b.arc_absolute, tenths == 901),
+            70 | 80 => set(&mut b.diameter, tenths == 70),
+            940 | 950 => set(
+                &mut b.feed_mode,
+                if tenths == 940 {
+                    FeedMode::PerMinute
+                } else {
+                    FeedMode::PerRev
+                },
+            ),
+            500 | 980 | 990 => other(Dialect::Fanuc),
+            _ => Err(BlockError::UnsupportedG(Some(tenths))),
+        }
+    }
+
+    fn m_word(&mut self, number: &str) -> Result<(), BlockError> {
+        let tenths = g_code(number).ok_or(BlockError::UnsupportedM(None))?;
+        let b = &mut self.block;
+        let group = |slot: bool| {
+            if slot {
+                Err(BlockError::Repeated(b'M'))
+            } else {
+                Ok(())
+            }
+        };
+        match tenths {
+            20 | 300 => {
+                group(b.stop.is_some())?;
+                b.stop = Some(Stop::End);
+            }
+            30 | 40 | 50 => {
+                group(b.spindle.is_some())?;
+                b.spindle = Some(match tenths {
+                    30 => Spindle::Cw,
+                    40 => Spindle::Ccw,
+                    _ => Spindle::Off,
+                });
+            }
+            70 | 80 | 90 => {
+                group(b.coolant.is_some())?;
+                b.coolant = Some(match tenths {
+                    70 => Coolant::Mist,
+                    80 => Coolant::Flood,
+                    _ => Coolant::Off,
+                });
+            }
+            _ => return Err(BlockError::UnsupportedM(Some(tenths))),
+        }
+        Ok(())
+    }
+
+    /// The checks that need the whole block.
+    fn finish(mut self) -> Result<Block, (BlockError, usize)> {
+        let b = &mut self.block;
+        let motion_words =
+            b.x.is_some() || b.z.is_some() || b.i.is_some() || b.k.is_some() || b.r.is_some();
+        let once_at = self.once.map_or(0, |(_, at)| at);
+        match self.once.map(|(code, _)| code) {
+            Some(40) => {
+                let Some(us) = self.time else {
+                    return Err((BlockError::Form("G04 needs its time: P"), once_at));
+                };
+                if motion_words {
+                    return Err((BlockError::Form("G04 takes no motion words"), once_at));
+                }
+                b.dwell = Some(us);
+            }
+            Some(_) => {
+                // Fanuc G50: the spindle speed limit.
+                if motion_words || b.s.is_none() {
+                    return Err((
+                        BlockError::Form(
+                            "G50 takes S (the spindle speed limit) alone: \
+                             G50 X Z coordinate setting is not supported",
+                        ),
+                        once_at,
+                    ));
+                }
+                b.clamp = b.s.take();
+            }
+            None => {}
+        }
+        if let Some((d, at)) = self.d {
+            if b.spindle_mode != Some(SpindleMode::Surface) {
+                return Err((
+                    BlockError::Form("D (the spindle speed limit) only with G96"),
+                    at,
+                ));
+            }
+            b.clamp = Some(d);
+        }
+        Ok(self.block)
+    }
+}
+
+/// A `T` word: a whole number; Fanuc's `T0101` is tool 01 with offset
+/// register 01, its `T5` tool 5 with register 5.
+fn tool_word(number: &str, dialect: Dialect) -> Result<ToolWord, BlockError> {
+    let digits = number.len();
+    if digits == 0 || !number.bytes().all(|b| b.is_ascii_digit()) {
+        return Err(BlockError::Range(b'T', "must be a whole number"));
+    }
+    let too_big = Err(BlockError::Range(
+        b'T',
+        match dialect {
+            Dialect::Iso => "names a tool 0 to 99",
+            Dialect::Fanuc => "is four digits at most: tool and offset register, T0101",
+        },
+    ));
+    let value = number.bytes().try_fold(0u32, |n, b| {
+        n.checked_mul(10)?.checked_add(u32::from(b - b'0'))
+    });
+    let Some(value) = value.filter(|&v| v <= 9999) else {
+        return too_big;
+    };
+    let byte = |v: u32| u8::try_from(v).unwrap_or(0);
+    match dialect {
+        Dialect::Fanuc if digits <= 2 => Ok(ToolWord {
+            tool: byte(value),
+            offset: Some(byte(value)),
+        }),
+        Dialect::Fanuc => Ok(ToolWord {
+            tool: byte(value / 100),
+            offset: Some(byte(value % 100)),
+        }),
+        Dialect::Iso if value <= 99 => Ok(ToolWord {
+            tool: byte(value),
+            offset: None,
+        }),
+        Dialect::Iso => too_big,
+    }
 }
 
 /// A G number as a code in tenths: `1`, `01`, `90.1`; `None` if it is no
@@ -496,72 +999,11 @@ fn g_code(number: &str) -> Option<u16> {
     Some(value(whole) * 10 + tenth.map_or(0, value))
 }
 
-fn g_word(block: &mut Block, number: &str) -> Result<(), BlockError> {
-    let tenths = g_code(number).ok_or(BlockError::UnsupportedG(None))?;
-    let unsupported = Err(BlockError::UnsupportedG(Some(tenths)));
-    if tenths % 10 != 0 {
-        return unsupported;
-    }
-    let code = tenths / 10;
-    let repeated = Err(BlockError::Repeated(b'G'));
-    match code {
-        0..=3 => {
-            if block.motion.is_some() {
-                return repeated;
-            }
-            block.motion = Some(match code {
-                0 => Motion::Rapid,
-                1 => Motion::Linear,
-                2 => Motion::ArcCw,
-                _ => Motion::ArcCcw,
-            });
-        }
-        40..=42 => {
-            if block.compensation.is_some() {
-                return repeated;
-            }
-            block.compensation = Some(match code {
-                40 => Compensation::Off,
-                41 => Compensation::Left,
-                _ => Compensation::Right,
-            });
-        }
-        90 | 91 => {
-            if block.incremental.is_some() {
-                return repeated;
-            }
-            block.incremental = Some(code == 91);
-        }
-        18 => {
-            if block.plane_zx {
-                return repeated;
-            }
-            block.plane_zx = true;
-        }
-        20 | 21 => {
-            if block.units.is_some() {
-                return repeated;
-            }
-            block.units = Some(if code == 20 { Units::Inch } else { Units::Mm });
-        }
-        450 | 451 => {
-            if block.corner.is_some() {
-                return repeated;
-            }
-            block.corner = Some(if code == 450 {
-                Corner::Arc
-            } else {
-                Corner::Intersection
-            });
-        }
-        _ => return unsupported,
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
+    use std::string::ToString;
 
     fn mm(s: &str) -> Option<Length> {
         Some(Length::from_mm_str(s).unwrap())
@@ -633,7 +1075,19 @@ mod tests {
         assert_eq!(at("G17 G00 X1"), (BlockError::UnsupportedG(Some(170)), 1));
         assert_eq!(at("G20 X1 G21"), (BlockError::Repeated(b'G'), 8));
         assert_eq!(at("G18 G00 G18"), (BlockError::Repeated(b'G'), 9));
-        assert_eq!(at("G90.1"), (BlockError::UnsupportedG(Some(901)), 1));
+        assert_eq!(at("G90.2"), (BlockError::UnsupportedG(Some(902)), 1));
+        assert_eq!(
+            at("G97 S200 D3000"),
+            (
+                BlockError::Form("D (the spindle speed limit) only with G96"),
+                10
+            )
+        );
+        assert_eq!(
+            at("G01 U1"),
+            (BlockError::OtherDialect(b'U', 0, Dialect::Fanuc), 5)
+        );
+        assert_eq!(at("G01 X1 G71"), (BlockError::Cycle(710), 8));
         assert_eq!(at("O1000 G00 X1"), (BlockError::ProgramNumber, 7));
         assert_eq!(at("G00 O1000"), (BlockError::ProgramNumber, 5));
         assert_eq!(at("o<sub> call"), (BlockError::HostLanguage, 8));
@@ -651,12 +1105,95 @@ mod tests {
     }
 
     #[test]
+    fn the_two_dialects() {
+        let fanuc = |line| parse(line, Dialect::Fanuc, Units::Mm);
+        let b = fanuc("G50 S2500").unwrap();
+        assert_eq!((b.clamp, b.s), (mm("2500"), None));
+        let b = fanuc("N20 G96 S180 M03 G99 F.2 M8").unwrap();
+        assert_eq!(b.spindle_mode, Some(SpindleMode::Surface));
+        assert_eq!((b.s, b.f), (mm("180"), mm("0.2")));
+        assert_eq!(
+            (b.spindle, b.coolant, b.feed_mode),
+            (
+                Some(Spindle::Cw),
+                Some(Coolant::Flood),
+                Some(FeedMode::PerRev)
+            )
+        );
+        let b = fanuc("G04 X1.5").unwrap();
+        assert_eq!((b.dwell, b.x), (Some(1_500_000), None));
+        assert_eq!(fanuc("G4U.25").unwrap().dwell, Some(250_000));
+        let b = fanuc("T0100").unwrap().tool.unwrap();
+        assert_eq!((b.tool, b.offset), (1, Some(0)));
+        assert_eq!(fanuc("M30").unwrap().stop, Some(Stop::End));
+        let refused = |line| fanuc(line).unwrap_err().error;
+        assert_eq!(refused("G90 X20 Z-5 F.2"), BlockError::Cycle(900));
+        assert_eq!(refused("G92 X20 Z-5 F1.5"), BlockError::Cycle(920));
+        assert_eq!(
+            refused("G91 X1"),
+            BlockError::OtherDialect(b'G', 910, Dialect::Iso)
+        );
+        assert_eq!(refused("X1 U2"), BlockError::Form("X and U in one block"));
+        assert_eq!(refused("W1 Z2"), BlockError::Form("Z and W in one block"));
+        assert!(matches!(refused("G50 X100 Z50"), BlockError::Form(_)));
+        assert_eq!(refused("G96 S100 D2000"), BlockError::UnknownAddress(b'D'));
+        let iso = |line| parse(line, Dialect::Iso, Units::Mm);
+        let b = iso("G7 G95 G90.1 G96 D2500 S200").unwrap();
+        assert_eq!((b.diameter, b.arc_absolute), (Some(true), Some(true)));
+        assert_eq!((b.clamp, b.s), (mm("2500"), mm("200")));
+        assert_eq!(b.feed_mode, Some(FeedMode::PerRev));
+        assert_eq!(iso("G8 G91.1").unwrap().arc_absolute, Some(false));
+        assert_eq!(
+            iso("G99").unwrap_err().error,
+            BlockError::OtherDialect(b'G', 990, Dialect::Fanuc)
+        );
+        assert_eq!(
+            iso("G50 S2000").unwrap_err().error.to_string(),
+            "G50 belongs to the FANUC dialect (OPT DIALECT=FANUC)"
+        );
+        assert_eq!(
+            fanuc("G71 U2 R.5").unwrap_err().error.to_string(),
+            "G71 canned cycles not supported"
+        );
+        assert_eq!(
+            iso("M98 P1000").unwrap_err().error.to_string(),
+            "M98 subprograms are expanded by the host"
+        );
+    }
+
+    #[test]
     fn refusals() {
         assert_eq!(parse_block("G01 X1 X2"), Err(BlockError::Repeated(b'X')));
         assert_eq!(parse_block("G01 G02"), Err(BlockError::Repeated(b'G')));
         assert_eq!(
             parse_block("G04 X1"),
-            Err(BlockError::UnsupportedG(Some(40)))
+            Err(BlockError::Form("G04 needs its time: P"))
+        );
+        assert_eq!(
+            parse_block("G04 P1 X1"),
+            Err(BlockError::Form("G04 takes no motion words"))
+        );
+        assert_eq!(
+            parse_block("P1"),
+            Err(BlockError::Form("P only with G04 (the dwell time)"))
+        );
+        assert_eq!(parse_block("M13"), Err(BlockError::UnsupportedM(Some(130))));
+        assert_eq!(parse_block("M3 M4"), Err(BlockError::Repeated(b'M')));
+        assert_eq!(
+            parse_block("T101").unwrap_err().to_string(),
+            "T names a tool 0 to 99"
+        );
+        assert_eq!(
+            parse_block("T1.5").unwrap_err().to_string(),
+            "T must be a whole number"
+        );
+        assert_eq!(
+            parse_block("S-5").unwrap_err().to_string(),
+            "S must be 0 to 99999.999999"
+        );
+        assert_eq!(
+            parse_block("G4 P.").unwrap_err().to_string(),
+            "P not a number"
         );
         assert_eq!(parse_block("G450 G451"), Err(BlockError::Repeated(b'G')));
         assert_eq!(parse_block("G1.5"), Err(BlockError::UnsupportedG(Some(15))));

@@ -287,6 +287,20 @@ impl fmt::Display for Length {
     }
 }
 
+/// A G-code number without a unit (the grammar of [`Length::from_gcode_mm`])
+/// times 10ᵉ, `e` ≤ 7, rounded once half away from zero: seconds or
+/// milliseconds as microseconds (`e` 6 or 3).
+///
+/// ```
+/// use core_nostd::length::gcode_scaled;
+/// assert_eq!(gcode_scaled("1.5", 6), Ok(1_500_000));
+/// assert_eq!(gcode_scaled("0.0000004999999", 6), Ok(0));
+/// assert_eq!(gcode_scaled("-2.0005", 3), Ok(-2_001));
+/// ```
+pub fn gcode_scaled(text: &str, e: u32) -> Result<i64, LengthError> {
+    from_gcode(text, 1, e.min(7)).map(Length::as_angstrom)
+}
+
 /// Writes a count of 0.0001 mm as `[-]int.dddd`.
 pub(crate) fn write_mm4<W: fmt::Write + ?Sized>(w: &mut W, tenth_um: i64) -> fmt::Result {
     let sign = if tenth_um < 0 { "-" } else { "" };

@@ -14,7 +14,10 @@
 //! - [`arc`]: arcs by chords with residual carry, and the direct
 //!   step-by-step circular interpolator of the ЭМ-907.
 //! - [`comp`]: tool nose radius compensation over G41/G42 contours.
-//! - [`gcode`]: G-code blocks parsed and checked before any motion.
+//! - [`gcode`]: G-code blocks parsed and checked before any motion, in the
+//!   ISO and the Fanuc dialect.
+//! - [`interp`]: the interpreter's state between blocks (modal codes, feed,
+//!   spindle, coolant, tool) and a block's feed and spindle speed.
 //! - [`cone`]: taper corrections for a tool nose radius (Krylenko, Nomura).
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
@@ -55,6 +58,7 @@ pub mod crc32;
 pub mod gcode;
 pub mod impulse;
 pub mod interleave;
+pub mod interp;
 pub mod length;
 pub mod machine;
 pub mod plan;

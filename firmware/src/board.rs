@@ -359,6 +359,10 @@ impl TickClock for StepTimer {
     }
 }
 
+/// Whether time is kept: on the board and in `qemu-paced`; a plain `qemu`
+/// build issues steps and passes dwells as fast as the core runs.
+pub const PACED: bool = cfg!(any(not(feature = "qemu"), feature = "qemu-paced"));
+
 /// Busy-wait delays counted in core cycles.
 pub struct CycleDelay;
 

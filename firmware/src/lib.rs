@@ -113,6 +113,18 @@ impl Io for Controller {
         answer_status(&mut self.serial, &self.view, self.queued);
     }
 
+    fn dwell(&mut self, us: u64) {
+        // On TIM2's microseconds, whose 32 bits wrap: summed step by step.
+        let mut left = if board::PACED { us } else { 0 };
+        let mut last = board::ticks();
+        while left > 0 {
+            self.pause();
+            let now = board::ticks();
+            left = left.saturating_sub(u64::from(now.wrapping_sub(last)));
+            last = now;
+        }
+    }
+
     fn timing(&mut self) -> Option<Timing> {
         self.asked.take().map(timing)
     }

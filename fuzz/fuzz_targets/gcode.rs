@@ -18,13 +18,14 @@
 #![no_main]
 
 use core_nostd::gcode::{
-    is_block, parse_block, Block, BlockError, Compensation, Corner, LineKind, Motion, Units,
+    is_block, parse, parse_block, Block, BlockError, Compensation, Coolant, Corner, Dialect,
+    FeedMode, LineKind, Motion, Spindle, SpindleMode, Stop, Units,
 };
 use core_nostd::length::LengthError;
 use core_nostd::protocol::Device;
 use fuzz_oracle::{
-    device_after, exact_gcode_mm, reference_block, reference_is_block, Checker, LengthRefusal,
-    RefBlock, RefBlockError, LIMIT_ANGSTROM, MAX_LINE,
+    device_after, exact_gcode_mm, reference_block, reference_block_in, reference_is_block, Checker,
+    LengthRefusal, RefBlock, RefBlockError, LIMIT_ANGSTROM, MAX_LINE,
 };
 use libfuzzer_sys::fuzz_target;
 use std::sync::OnceLock;
@@ -86,6 +87,35 @@ fn as_reference(b: &Block) -> RefBlock {
         }),
         xzikr: [a(b.x), a(b.z), a(b.i), a(b.k), a(b.r)],
         f: a(b.f),
+        diameter: b.diameter.map(|d| if d { 7 } else { 8 }),
+        arc_distance: b.arc_absolute.map(|a| if a { 901 } else { 911 }),
+        feed_mode: b.feed_mode.map(|m| match m {
+            FeedMode::PerMinute => 94,
+            FeedMode::PerRev => 95,
+        }),
+        spindle_mode: b.spindle_mode.map(|m| match m {
+            SpindleMode::Surface => 96,
+            SpindleMode::Rpm => 97,
+        }),
+        dwell_us: b.dwell,
+        s: a(b.s),
+        clamp: a(b.clamp),
+        tool: b.tool.map(|t| t.tool),
+        offset: b.tool.and_then(|t| t.offset),
+        from_u_w: [b.incremental_x, b.incremental_z],
+        m: [
+            b.stop.map(|Stop::End| 30),
+            b.spindle.map(|s| match s {
+                Spindle::Cw => 3,
+                Spindle::Ccw => 4,
+                Spindle::Off => 5,
+            }),
+            b.coolant.map(|c| match c {
+                Coolant::Mist => 7,
+                Coolant::Flood => 8,
+                Coolant::Off => 9,
+            }),
+        ],
     }
 }
 
@@ -96,6 +126,11 @@ fn as_reference_error(e: BlockError) -> RefBlockError {
         BlockError::NotAWord => RefBlockError::NotAWord,
         BlockError::Comment => RefBlockError::Comment,
         BlockError::UnsupportedG(_) => RefBlockError::UnsupportedG,
+        BlockError::UnsupportedM(_) => RefBlockError::UnsupportedM,
+        BlockError::Cycle(_) => RefBlockError::Cycle,
+        BlockError::OtherDialect(..) => RefBlockError::OtherDialect,
+        BlockError::Form(_) => RefBlockError::Form,
+        BlockError::Range(l, _) => RefBlockError::Range(l),
         BlockError::NoYAxis => RefBlockError::NoYAxis,
         BlockError::ProgramNumber => RefBlockError::ProgramNumber,
         BlockError::HostLanguage => RefBlockError::HostLanguage,
@@ -130,14 +165,42 @@ fn canonical(b: &RefBlock) -> String {
         _ => {}
     }
     let mut words = Vec::new();
-    for g in [b.motion, b.plane, b.units, b.compensation, b.distance]
-        .into_iter()
-        .flatten()
+    for g in [
+        b.motion,
+        b.plane,
+        b.units,
+        b.compensation,
+        b.distance,
+        b.diameter,
+        b.feed_mode,
+        b.spindle_mode,
+    ]
+    .into_iter()
+    .flatten()
     {
         words.push(format!("G{g:02}"));
     }
     if let Some(g) = b.corner {
         words.push(format!("G{g}"));
+    }
+    if let Some(g) = b.arc_distance {
+        words.push(format!("G{}.{}", g / 10, g % 10));
+    }
+    if let Some(us) = b.dwell_us {
+        words.push(format!("G04 P{}.{:06}", us / 1_000_000, us % 1_000_000));
+    }
+    // S and D are numbers without a unit, even under G20.
+    if let Some(v) = b.s {
+        words.push(format!("S{}", exact_gcode_mm(v)));
+    }
+    if let Some(v) = b.clamp {
+        words.push(format!("D{}", exact_gcode_mm(v)));
+    }
+    if let Some(t) = b.tool {
+        words.push(format!("T{t}"));
+    }
+    for m in b.m.into_iter().flatten() {
+        words.push(format!("M{m}"));
     }
     for (letter, v) in ['X', 'Z', 'I', 'K', 'R', 'F']
         .iter()
@@ -177,6 +240,16 @@ fuzz_target!(|text: &str| {
         _ => panic!("{text:?}: core {parsed:?}, reference {reference:?}"),
     }
     assert_eq!(is_block(text), reference_is_block(text), "{text:?}");
+    // The Fanuc dialect, in millimetres and in inches.
+    for units in [Units::Mm, Units::Inch] {
+        let fanuc = parse(text, Dialect::Fanuc, units).map_err(|l| l.error);
+        let reference = reference_block_in(text, true, units == Units::Inch);
+        match (&fanuc, &reference) {
+            (Ok(b), Ok(r)) => assert_eq!(as_reference(b), *r, "Fanuc {text:?}"),
+            (Err(e), Err(r)) => assert_eq!(as_reference_error(*e), *r, "Fanuc {text:?}"),
+            _ => panic!("Fanuc {text:?}: core {fanuc:?}, reference {reference:?}"),
+        }
+    }
 
     let line = text.split(['\r', '\n']).next().unwrap_or("");
     if !is_block(line) {
@@ -203,9 +276,13 @@ fuzz_target!(|text: &str| {
         match (&parsed, answer.err()) {
             (Err(e), code) => {
                 let want = match e {
-                    BlockError::Value(..) | BlockError::UnsupportedG(_) | BlockError::NoYAxis => {
-                        "VALUE"
-                    }
+                    BlockError::Value(..)
+                    | BlockError::UnsupportedG(_)
+                    | BlockError::UnsupportedM(_)
+                    | BlockError::Cycle(_)
+                    | BlockError::OtherDialect(..)
+                    | BlockError::Range(..)
+                    | BlockError::NoYAxis => "VALUE",
                     _ => "SYNTAX",
                 };
                 assert_eq!(code, Some(want), "{line:?} ({e:?}) -> {:?}", answer.lines);
@@ -230,7 +307,10 @@ fuzz_target!(|text: &str| {
                 // start-up block's motion waits for the next block.
                 let starting = b.compensation.is_some_and(|c| c != Compensation::Off);
                 let want = if moves && !starting {
-                    (end(b.x, x0, diam), end(b.z, z0, false))
+                    (
+                        end(b.x, x0, b.diameter.unwrap_or(diam)),
+                        end(b.z, z0, false),
+                    )
                 } else {
                     (x0, z0)
                 };

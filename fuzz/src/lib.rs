@@ -1089,6 +1089,28 @@ pub struct RefBlock {
     pub xzikr: [Option<i64>; 5],
     /// The F word (mm/min as a length, Å).
     pub f: Option<i64>,
+    /// G7 / G8.
+    pub diameter: Option<u8>,
+    /// G90.1 / G91.1, in tenths.
+    pub arc_distance: Option<u16>,
+    /// G94 / G95.
+    pub feed_mode: Option<u8>,
+    /// G96 / G97.
+    pub spindle_mode: Option<u8>,
+    /// G4: the dwell's P in whole microseconds.
+    pub dwell_us: Option<u64>,
+    /// S, the number ×10⁷.
+    pub s: Option<i64>,
+    /// D with G96, the number ×10⁷.
+    pub clamp: Option<i64>,
+    /// T, the tool number.
+    pub tool: Option<u8>,
+    /// M codes by group: stop (2, 30), spindle (3–5), coolant (7–9).
+    pub m: [Option<u8>; 3],
+    /// Fanuc: X came from a `U`, Z from a `W` (increments).
+    pub from_u_w: [bool; 2],
+    /// Fanuc: the offset register of the T word.
+    pub offset: Option<u8>,
 }
 
 /// Why the reference reading refuses a block.
@@ -1104,8 +1126,19 @@ pub enum RefBlockError {
     Comment,
     /// Bad number at an address.
     Value(u8, LengthRefusal),
-    /// A G code outside 00–03, 40–42, 90, 91, 450, 451.
+    /// A G code the control does not run.
     UnsupportedG,
+    /// An M code the control does not run.
+    UnsupportedM,
+    /// G70–G76.
+    Cycle,
+    /// A word of the Fanuc dialect.
+    OtherDialect,
+    /// Words that do not go together, or a missing dwell time.
+    Form,
+    /// A number without a unit (S, D, P, T) outside its range, or no
+    /// number.
+    Range(u8),
     /// `Y` other than zero.
     NoYAxis,
     /// A program number with other words, or an `O` word elsewhere.
@@ -1139,7 +1172,11 @@ pub fn parse_gcode_inch(text: &str) -> Result<i64, LengthRefusal> {
 
 /// The unit a line's own `G20`/`G21` sets (true: inch): the first such
 /// word outside comments, before any `;`.
-fn reference_units(line: &str) -> Option<bool> {
+/// The line's first `G20`/`G21` (true for inches), and whether it holds a
+/// `G4`, outside comments and before `;`.
+fn reference_scan(line: &str) -> (Option<bool>, bool) {
+    let mut units = None;
+    let mut dwell = false;
     let mut in_comment = false;
     let chars: Vec<char> = line.chars().collect();
     let mut i = 0;
@@ -1152,7 +1189,7 @@ fn reference_units(line: &str) -> Option<bool> {
         }
         match c {
             '(' => in_comment = true,
-            ';' => return None,
+            ';' => break,
             'G' | 'g' => {
                 let mut number = String::new();
                 while i < chars.len() && (chars[i].is_ascii_digit() || "+-.".contains(chars[i])) {
@@ -1166,8 +1203,9 @@ fn reference_units(line: &str) -> Option<bool> {
                     && tenth == "0";
                 if ok && number.matches('.').count() <= 1 {
                     match whole.parse::<u16>() {
-                        Ok(20) => return Some(true),
-                        Ok(21) => return Some(false),
+                        Ok(20) if units.is_none() => units = Some(true),
+                        Ok(21) if units.is_none() => units = Some(false),
+                        Ok(4) => dwell = true,
                         _ => {}
                     }
                 }
@@ -1175,13 +1213,20 @@ fn reference_units(line: &str) -> Option<bool> {
             _ => {}
         }
     }
-    None
+    (units, dwell)
 }
 
 /// A G-code number of millimetres: `[+-]` then `d+`, `d+.`, `d+.d+` or
 /// `.d+`, at most 15 decimals, as ångström rounded half away from zero,
 /// magnitude at most 99 999.999999 mm after rounding.
 pub fn parse_gcode_mm(text: &str) -> Result<i64, LengthRefusal> {
+    parse_gcode_scaled(text, 7)
+}
+
+/// A G-code number (the grammar of [`parse_gcode_mm`]) times 10^e, rounded
+/// half away from zero; at most 5 integer digits and 999 999 999 990 after
+/// rounding.
+pub fn parse_gcode_scaled(text: &str, e: u32) -> Result<i64, LengthRefusal> {
     let (negative, body) = match text.as_bytes().first() {
         Some(b'-') => (true, &text[1..]),
         Some(b'+') => (false, &text[1..]),
@@ -1201,7 +1246,7 @@ pub fn parse_gcode_mm(text: &str) -> Result<i64, LengthRefusal> {
     }
     // value = digits / 10^decimals mm; in ångström ×10^7, as a fraction.
     let digits: i128 = format!("{int}{frac}0").parse::<i128>().unwrap() / 10;
-    let num = digits * 10_000_000;
+    let num = digits * 10i128.pow(e);
     let den = 10i128.pow(frac.len() as u32);
     let (q, r) = (num / den, num % den);
     let a = if 2 * r >= den { q + 1 } else { q };
@@ -1214,15 +1259,41 @@ pub fn parse_gcode_mm(text: &str) -> Result<i64, LengthRefusal> {
 /// Reads a block per the `gcode` module docs: an optional line head (`%`,
 /// `/`, a program number `O123`, `O<name>`, `:123`), then address words (a
 /// letter and the run of `0-9 + - .` after it), spaces and tabs between
-/// words optional, `( … )` comments, `;` ends the block; `N F S T M X Y Z I
-/// K R` once each and numbers that must be G-code lengths, `Y` zero; `G`
-/// once per group (00–03, 18, 20–21, 40–42, 90–91, 450–451), 1–3 digits
-/// and at most one decimal; a `G20` anywhere in the line reads its lengths
-/// in inches.
+/// words optional, `( … )` comments, `;` ends the block; `N F X Y Z I K R`
+/// once each with numbers that must be G-code lengths, `Y` zero; `S`, `D`
+/// (only with G96) and `P` (only with G4, seconds) numbers of at least 0;
+/// `T` a tool of at most two digits; `G` once per group (00–03, 18, 20–21,
+/// 40–42, 90–91, 90.1–91.1, 7–8, 94–95, 96–97, 450–451; G4 a dwell that
+/// needs P and takes no X Z I K R; G70–G76 cycles; G50, G98, G99 the Fanuc
+/// dialect's), `M` once per group (2 30; 3 4 5; 7 8 9), codes of 1–3
+/// digits and at most one decimal; `U`, `W` the Fanuc dialect's; a `G20`
+/// anywhere in the line reads its lengths in inches.
 pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
+    reference_block_in(line, false, false)
+}
+
+/// [`reference_block`] in the ISO dialect, or in the Fanuc dialect
+/// (`docs/protocol.md`, Dialects): `U`/`W` increments (not with `X`/`Z`),
+/// `G98`/`G99` feed modes, `G50` with `S` alone (the limit), `G04` with one
+/// of `P` (ms), `X`, `U` (s), `T` of up to four digits (`T0101`: tool 01,
+/// register 01; one or two digits: both the number), `G90`/`G92`/`G94`
+/// cycles; `G7`, `G8`, `G91`, `G95`, `G90.1`, `G91.1` and `D` ISO's.
+/// Lengths in inches when the line says `G20`, or says neither `G20` nor
+/// `G21` and `modal_inch`.
+pub fn reference_block_in(
+    line: &str,
+    fanuc: bool,
+    modal_inch: bool,
+) -> Result<RefBlock, RefBlockError> {
     let mut b = RefBlock::default();
     let mut seen = [false; 26];
-    let inch = reference_units(line) == Some(true);
+    let (units, dwell) = reference_scan(line);
+    let inch = units.unwrap_or(modal_inch);
+    // G4 given, its time (µs), and D (×10⁷), for the checks at the end.
+    let mut g4 = false;
+    let mut g50 = false;
+    let mut time: Option<u64> = None;
+    let mut d: Option<i64> = None;
     let head = line.len() - line.trim_start_matches([' ', '\t']).len();
     let mut rest = &line[head..];
     let mut angle = false;
@@ -1292,39 +1363,75 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                 if number.is_empty() {
                     return Err(RefBlockError::NotAWord);
                 }
-                if letter == b'G' {
+                if letter == b'G' || letter == b'M' {
                     let (whole, tenth) = number.split_once('.').unwrap_or((number, ""));
                     let digits = |s: &str| !s.is_empty() && s.bytes().all(|d| d.is_ascii_digit());
+                    let not_code = if letter == b'G' {
+                        RefBlockError::UnsupportedG
+                    } else {
+                        RefBlockError::UnsupportedM
+                    };
                     if !digits(whole)
                         || whole.len() > 3
                         || (number.contains('.') && (tenth.len() != 1 || !digits(tenth)))
                     {
-                        return Err(RefBlockError::UnsupportedG);
+                        return Err(not_code);
                     }
-                    if tenth.bytes().any(|d| d != b'0') {
-                        return Err(RefBlockError::UnsupportedG);
-                    }
-                    let code: u16 = whole.parse().map_err(|_| RefBlockError::UnsupportedG)?;
-                    if matches!(code, 450 | 451) {
-                        if b.corner.is_some() {
-                            return Err(RefBlockError::Repeated(b'G'));
+                    let code: u16 = whole.parse().map_err(|_| not_code)?;
+                    let tenth: u16 = tenth.parse().unwrap_or(0);
+                    if letter == b'M' {
+                        let (group, value) = match (code, tenth) {
+                            // M02 and M30 both end the program.
+                            (2 | 30, 0) => (0, 30),
+                            (3..=5, 0) => (1, code as u8),
+                            (7..=9, 0) => (2, code as u8),
+                            _ => return Err(RefBlockError::UnsupportedM),
+                        };
+                        if b.m[group].is_some() {
+                            return Err(RefBlockError::Repeated(b'M'));
                         }
-                        b.corner = Some(code);
+                        b.m[group] = Some(value);
                         continue;
                     }
-                    let slot = match code {
-                        0..=3 => &mut b.motion,
-                        18 => &mut b.plane,
-                        20 | 21 => &mut b.units,
-                        40..=42 => &mut b.compensation,
-                        90 | 91 => &mut b.distance,
-                        _ => return Err(RefBlockError::UnsupportedG),
-                    };
-                    let code = code as u8;
-                    if slot.is_some() {
-                        return Err(RefBlockError::Repeated(b'G'));
+                    fn put<T>(slot: &mut Option<T>, v: T) -> Result<(), RefBlockError> {
+                        if slot.is_some() {
+                            return Err(RefBlockError::Repeated(b'G'));
+                        }
+                        *slot = Some(v);
+                        Ok(())
                     }
-                    *slot = Some(code);
+                    match (code, tenth) {
+                        (90 | 91, 1) if fanuc => return Err(RefBlockError::OtherDialect),
+                        (90 | 91, 1) => put(&mut b.arc_distance, code * 10 + 1)?,
+                        (_, 1..) => return Err(RefBlockError::UnsupportedG),
+                        (50, _) if fanuc => {
+                            if g4 || g50 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            g50 = true;
+                        }
+                        (98 | 99, _) if fanuc => put(&mut b.feed_mode, code as u8 - 4)?,
+                        (90 | 92 | 94, _) if fanuc => return Err(RefBlockError::Cycle),
+                        (7 | 8 | 91 | 95, _) if fanuc => return Err(RefBlockError::OtherDialect),
+                        (450 | 451, _) => put(&mut b.corner, code)?,
+                        (0..=3, _) => put(&mut b.motion, code as u8)?,
+                        (18, _) => put(&mut b.plane, 18)?,
+                        (20 | 21, _) => put(&mut b.units, code as u8)?,
+                        (40..=42, _) => put(&mut b.compensation, code as u8)?,
+                        (90 | 91, _) => put(&mut b.distance, code as u8)?,
+                        (7 | 8, _) => put(&mut b.diameter, code as u8)?,
+                        (94 | 95, _) => put(&mut b.feed_mode, code as u8)?,
+                        (96 | 97, _) => put(&mut b.spindle_mode, code as u8)?,
+                        (4, _) => {
+                            if g4 || g50 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            g4 = true;
+                        }
+                        (70..=76, _) => return Err(RefBlockError::Cycle),
+                        (50 | 98 | 99, _) => return Err(RefBlockError::OtherDialect),
+                        _ => return Err(RefBlockError::UnsupportedG),
+                    }
                     continue;
                 }
                 let idx = usize::from(letter - b'A');
@@ -1332,37 +1439,113 @@ pub fn reference_block(line: &str) -> Result<RefBlock, RefBlockError> {
                     return Err(RefBlockError::Repeated(letter));
                 }
                 seen[idx] = true;
-                let slot = match letter {
-                    b'X' => Some(0),
-                    b'Z' => Some(1),
-                    b'I' => Some(2),
-                    b'K' => Some(3),
-                    b'R' => Some(4),
-                    b'F' => Some(5),
-                    b'N' | b'S' | b'T' | b'M' | b'Y' => None,
+                let value =
+                    |v: Result<i64, LengthRefusal>| v.map_err(|e| RefBlockError::Value(letter, e));
+                let length = || {
+                    value(if inch {
+                        parse_gcode_inch(number)
+                    } else {
+                        parse_gcode_mm(number)
+                    })
+                };
+                // Numbers without a unit are 0 … 99 999.999999.
+                let unitless = |e: u32| match parse_gcode_scaled(number, e) {
+                    Ok(v) if v >= 0 => Ok(v),
+                    Ok(_) | Err(LengthRefusal::OutOfRange | LengthRefusal::Malformed) => {
+                        Err(RefBlockError::Range(letter))
+                    }
+                    Err(e) => Err(RefBlockError::Value(letter, e)),
+                };
+                match letter {
+                    // The Fanuc dwell's X and U are seconds.
+                    b'X' | b'U' if fanuc && dwell => {
+                        if time.is_some() {
+                            return Err(RefBlockError::Form);
+                        }
+                        time = Some(unitless(6)? as u64);
+                    }
+                    b'X' | b'U' | b'Z' | b'W' if fanuc => {
+                        let axis = usize::from(matches!(letter, b'Z' | b'W'));
+                        if b.xzikr[axis].is_some() {
+                            return Err(RefBlockError::Form);
+                        }
+                        b.xzikr[axis] = Some(length()?);
+                        b.from_u_w[axis] = matches!(letter, b'U' | b'W');
+                    }
+                    b'X' => b.xzikr[0] = Some(length()?),
+                    b'Z' => b.xzikr[1] = Some(length()?),
+                    b'I' => b.xzikr[2] = Some(length()?),
+                    b'K' => b.xzikr[3] = Some(length()?),
+                    b'R' => b.xzikr[4] = Some(length()?),
+                    b'F' => b.f = Some(length()?),
+                    b'Y' => {
+                        length()?;
+                        if number.contains(|c: char| ('1'..='9').contains(&c)) {
+                            return Err(RefBlockError::NoYAxis);
+                        }
+                    }
+                    b'N' => {
+                        value(parse_gcode_mm(number))?;
+                    }
+                    b'S' => b.s = Some(unitless(7)?),
+                    b'D' if !fanuc => d = Some(unitless(7)?),
+                    b'P' => {
+                        if !dwell || time.is_some() {
+                            return Err(RefBlockError::Form);
+                        }
+                        // Seconds (Fanuc: milliseconds), as microseconds.
+                        time = Some(unitless(if fanuc { 3 } else { 6 })? as u64);
+                    }
+                    b'T' if fanuc => {
+                        let n = number.trim_start_matches('0');
+                        if !number.bytes().all(|c| c.is_ascii_digit()) || n.len() > 4 {
+                            return Err(RefBlockError::Range(b'T'));
+                        }
+                        let v: u16 = n.parse().unwrap_or(0);
+                        let (tool, reg) = if number.len() <= 2 {
+                            (v, v)
+                        } else {
+                            (v / 100, v % 100)
+                        };
+                        b.tool = Some(tool as u8);
+                        b.offset = Some(reg as u8);
+                    }
+                    b'T' => {
+                        let n = number.trim_start_matches('0');
+                        if !number.bytes().all(|c| c.is_ascii_digit()) || n.len() > 2 {
+                            return Err(RefBlockError::Range(b'T'));
+                        }
+                        b.tool = Some(n.parse().unwrap_or(0));
+                    }
+                    b'U' | b'W' => return Err(RefBlockError::OtherDialect),
                     b'O' => return Err(RefBlockError::ProgramNumber),
                     _ => return Err(RefBlockError::UnknownAddress(letter)),
-                };
-                let length = matches!(letter, b'X' | b'Z' | b'I' | b'K' | b'R' | b'F' | b'Y');
-                let v = if inch && length {
-                    parse_gcode_inch(number)
-                } else {
-                    parse_gcode_mm(number)
-                }
-                .map_err(|e| RefBlockError::Value(letter, e))?;
-                match slot {
-                    Some(5) => b.f = Some(v),
-                    Some(s) => b.xzikr[s] = Some(v),
-                    None if letter == b'Y'
-                        && number.contains(|c: char| ('1'..='9').contains(&c)) =>
-                    {
-                        return Err(RefBlockError::NoYAxis)
-                    }
-                    None => {}
                 }
             }
             _ => return Err(RefBlockError::NotAWord),
         }
+    }
+    let motion_words = b.xzikr.iter().any(Option::is_some);
+    if g4 {
+        let Some(us) = time else {
+            return Err(RefBlockError::Form);
+        };
+        if motion_words {
+            return Err(RefBlockError::Form);
+        }
+        b.dwell_us = Some(us);
+    }
+    if g50 {
+        if motion_words || b.s.is_none() {
+            return Err(RefBlockError::Form);
+        }
+        b.clamp = b.s.take();
+    }
+    if let Some(d) = d {
+        if b.spindle_mode != Some(96) {
+            return Err(RefBlockError::Form);
+        }
+        b.clamp = Some(d);
     }
     Ok(b)
 }

@@ -8,7 +8,7 @@
 //! reader stops there); geometry (an arc whose radii differ, a move beyond
 //! the machine) is the device's to judge when it runs.
 
-use core_nostd::gcode::{is_block, parse_located};
+use core_nostd::gcode::{is_block, parse, Dialect, Units};
 use core_nostd::protocol::framing::MAX_LINE;
 
 /// One refused item.
@@ -22,9 +22,16 @@ pub struct Item {
     pub what: String,
 }
 
-/// The items of a program's text, in order.
+/// The items of a program's text in the ISO dialect, in order.
 pub fn check(text: &str) -> Vec<Item> {
+    check_in(text, Dialect::Iso)
+}
+
+/// The items of a program's text in `dialect`, in order; each line read in
+/// the unit (`G20`/`G21`) the lines before it left.
+pub fn check_in(text: &str, dialect: Dialect) -> Vec<Item> {
     let mut items = Vec::new();
+    let mut units = Units::Mm;
     for (i, raw) in text.split('\n').enumerate() {
         let line = raw.strip_suffix('\r').unwrap_or(raw);
         let item = |column, what: String| Item {
@@ -51,8 +58,9 @@ pub fn check(text: &str) -> Vec<Item> {
             items.push(item(at + 1, "not a G-code line".to_string()));
             continue;
         }
-        if let Err(e) = parse_located(line) {
-            items.push(item(e.column, e.error.to_string()));
+        match parse(line, dialect, units) {
+            Ok(b) => units = b.units.unwrap_or(units),
+            Err(e) => items.push(item(e.column, e.error.to_string())),
         }
     }
     items
@@ -88,24 +96,33 @@ mod tests {
     }
 
     #[test]
-    fn the_example_programs_hold_only_their_surface_speed_line_the_device_refuses() {
+    fn the_example_programs_are_read_whole_in_the_dialect_they_speak() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
         let mut seen = 0;
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "nc") {
                 let text = std::fs::read_to_string(&path).unwrap();
-                // `G96 S120 M03`: constant surface speed comes with the
-                // spindle's work; `compensate` passes the line through.
-                let want = Item {
-                    line: 4,
-                    column: 1,
-                    what: "G96 not supported".to_string(),
-                };
-                assert_eq!(check(&text), [want], "{}", path.display());
+                let (dialect, _) = crate::dialect::choose("auto", &text).unwrap();
+                assert_eq!(dialect, Dialect::Fanuc, "{}", path.display());
+                assert_eq!(check_in(&text, dialect), [], "{}", path.display());
+                // Read as ISO, the Fanuc words are named.
+                let iso = check_in(&text, Dialect::Iso);
+                assert!(
+                    iso.iter()
+                        .any(|i| i.what == "G99 belongs to the FANUC dialect (OPT DIALECT=FANUC)"),
+                    "{iso:?}"
+                );
                 seen += 1;
             }
         }
         assert!(seen >= 3);
+    }
+
+    #[test]
+    fn inch_lines_are_read_in_inches() {
+        // 3937.008 in is beyond the machine; in millimetres it is not.
+        assert_eq!(check("G20\nX3937.008\nG21 X3937.008\n").len(), 1);
+        assert_eq!(check("G20\nX3937.008\n")[0].line, 2);
     }
 }

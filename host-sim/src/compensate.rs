@@ -11,6 +11,7 @@
 use crate::device::LocalDevice;
 use core_nostd::arc::ArcDir;
 use core_nostd::comp::{MoveKind, Origin};
+use core_nostd::gcode::{is_block, parse, Dialect, Units};
 use std::fmt::Write as _;
 
 /// Tool and format of a compensation run.
@@ -20,8 +21,10 @@ pub struct Settings {
     pub rn: String,
     /// Tip code 0–9.
     pub tip: u8,
-    /// X words are diameters.
+    /// X words are diameters (at the start: `G7`/`G8` change it).
     pub diam: bool,
+    /// The program's dialect.
+    pub dialect: Dialect,
 }
 
 impl Default for Settings {
@@ -30,6 +33,7 @@ impl Default for Settings {
             rn: "0.4".into(),
             tip: 3,
             diam: true,
+            dialect: Dialect::Iso,
         }
     }
 }
@@ -122,12 +126,25 @@ fn words_of(line: &str) -> Option<(Vec<(char, String)>, String)> {
     Some((words, comment))
 }
 
-/// G codes the control interprets; a line with any other G code (or no
-/// motion, compensation or coordinate word at all) is passed through.
-fn is_control_g(number: &str) -> bool {
+/// A G word's code in tenths (`90.1` is 901), if it is one.
+fn g_tenths(number: &str) -> Option<u16> {
+    let (whole, tenth) = number.split_once('.').unwrap_or((number, "0"));
+    Some(whole.parse::<u16>().ok()? * 10 + tenth.parse::<u16>().ok().filter(|t| *t < 10)?)
+}
+
+/// G codes of the geometry: motion, compensation, distance modes, corners
+/// (which the printed blocks say in their own way), and the plane, unit and
+/// diameter modes (which stay in the output, as the device reads them too).
+fn is_geometry_g(tenths: u16) -> bool {
+    is_restated_g(tenths) || matches!(tenths, 70 | 80 | 180 | 200 | 210)
+}
+
+/// G codes the printed blocks restate: they are absolute, with their own
+/// motion code and arc centre from the start, and without compensation.
+fn is_restated_g(tenths: u16) -> bool {
     matches!(
-        number.parse::<u32>(),
-        Ok(0..=3 | 40..=42 | 90 | 91 | 450 | 451)
+        tenths,
+        0 | 10 | 20 | 30 | 400 | 410 | 420 | 900 | 910 | 901 | 911 | 4500 | 4510
     )
 }
 
@@ -135,39 +152,59 @@ fn is_control_g(number: &str) -> bool {
 enum Line {
     /// Passed through as written.
     Foreign,
-    /// Run by the device; the words kept on its output.
-    Block(Source),
+    /// Its geometry run by the device (the words given); the other words
+    /// kept on its output.
+    Block(Source, String),
 }
 
 fn classify(line: &str) -> Line {
     let Some((words, comment)) = words_of(line) else {
-        // Not words at all (`%`, a typo): the device decides.
-        return if line.trim().is_empty() || line.trim() == "%" {
-            Line::Foreign
-        } else {
-            Line::Block(Source::default())
-        };
+        // Not words at all (`%`, a program number): the reader has read it.
+        return Line::Foreign;
     };
-    let ours = words
-        .iter()
-        .any(|(l, n)| matches!(l, 'X' | 'Z' | 'I' | 'K' | 'R') || (*l == 'G' && is_control_g(n)));
-    let foreign_g = words.iter().any(|(l, n)| *l == 'G' && !is_control_g(n));
-    if !ours || (foreign_g && !words.iter().any(|(l, _)| matches!(l, 'X' | 'Z'))) {
+    let geometry = |(l, n): &(char, String)| match l {
+        'X' | 'Z' | 'U' | 'W' | 'I' | 'K' | 'R' | 'Y' => true,
+        'G' => g_tenths(n).is_some_and(is_geometry_g),
+        _ => false,
+    };
+    if !words.iter().any(|w| geometry(w) && w.0 != 'Y') {
         return Line::Foreign;
     }
     let mut src = Source {
         comment,
         ..Source::default()
     };
-    for (l, n) in words {
+    let mut device = Vec::new();
+    for w in &words {
+        let (l, n) = w;
+        if *l == 'N' {
+            src.n = Some(format!("N{n}"));
+            device.push(format!("N{n}"));
+            continue;
+        }
+        if geometry(w) {
+            device.push(format!("{l}{n}"));
+        }
         match l {
-            'N' => src.n = Some(format!("N{n}")),
-            'G' | 'X' | 'Z' | 'I' | 'K' => {}
             'R' => src.r_form = true,
+            'G' if g_tenths(n).is_some_and(is_restated_g) => {}
+            'X' | 'Z' | 'U' | 'W' | 'I' | 'K' | 'Y' => {}
             _ => src.words.push(format!("{l}{n}")),
         }
     }
-    Line::Block(src)
+    Line::Block(src, device.join(" "))
+}
+
+/// A length with 4 decimals, half away from zero, from ångström: in
+/// inches when `inch`.
+fn len4(a: i64, inch: bool) -> String {
+    if !inch {
+        return mm4(a);
+    }
+    // 0.0001 in = 25 400 Å.
+    let q = (a.unsigned_abs() + 12_700) / 25_400;
+    let sign = if a < 0 && q != 0 { "-" } else { "" };
+    format!("{sign}{}.{:04}", q / 10_000, q % 10_000)
 }
 
 /// Millimetres with 4 decimals, half away from zero, from ångström.
@@ -186,13 +223,18 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
         settings.tip,
         u8::from(settings.diam)
     );
-    let reply = dev.request(&cfg);
-    if let Some(err) = reply.iter().find(|l| l.starts_with("ERR")) {
-        return Err(CompensateError {
-            line: 0,
-            reason: strip_sum(err),
-        });
+    let opt = format!("OPT DIALECT={}", settings.dialect.as_str());
+    for request in [cfg, opt] {
+        let reply = dev.request(&request);
+        if let Some(err) = reply.iter().find(|l| l.starts_with("ERR")) {
+            return Err(CompensateError {
+                line: 0,
+                reason: strip_sum(err),
+            });
+        }
     }
+    // The unit lengths are read in, as the lines so far leave it.
+    let mut units = Units::Mm;
     // The device refuses a feed move before any F; the printed program is
     // geometry, which no feed changes, so a program without F words is
     // compensated all the same (its own F words take over where given).
@@ -206,7 +248,32 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
     for (i, raw) in lines.iter().enumerate().chain([(lines.len(), &"G40")]) {
         let end_of_program = i == lines.len();
         let line = raw.trim_end_matches('\r');
-        let src = match classify(line) {
+        // The unit and diameter mode of the output so far: a line's own
+        // G20/G21 or G7/G8 applies from its own block on.
+        let before = (units, dev.device().session().config().diam);
+        if !end_of_program && !line.trim().is_empty() {
+            // Every word is read as the device reads it, also those of the
+            // lines only passed through.
+            let refusal = |reason: String| CompensateError {
+                line: i + 1,
+                reason,
+            };
+            if !is_block(line) {
+                return Err(refusal("ERR SYNTAX not a G-code line".into()));
+            }
+            match parse(line, settings.dialect, units) {
+                Ok(b) => units = b.units.unwrap_or(units),
+                Err(e) => {
+                    let code = if e.error.is_value() {
+                        "VALUE"
+                    } else {
+                        "SYNTAX"
+                    };
+                    return Err(refusal(format!("ERR {code} {}", e.error)));
+                }
+            }
+        }
+        let (src, geometry) = match classify(line) {
             Line::Foreign => {
                 match &mut waiting {
                     Some((_, after)) => after.push(line.to_string()),
@@ -214,12 +281,12 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
                 }
                 continue;
             }
-            Line::Block(src) => src,
+            Line::Block(src, geometry) => (src, geometry),
         };
         if end_of_program && !dev.device().session().contour().active() {
             break;
         }
-        let reply = dev.request(line);
+        let reply = dev.request(&geometry);
         if let Some(err) = reply.iter().find(|l| l.starts_with("ERR")) {
             return Err(CompensateError {
                 line: i + 1,
@@ -245,7 +312,13 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
             if let Some(n) = own.and_then(|s| s.n.as_ref()) {
                 let _ = write!(text, "{n} ");
             }
-            let x = if settings.diam { 2 * m.to[0] } else { m.to[0] };
+            let (units, diam) = if m.origin == Origin::Current {
+                (units, dev.device().session().config().diam)
+            } else {
+                before
+            };
+            let inch = units == Units::Inch;
+            let x = if diam { 2 * m.to[0] } else { m.to[0] };
             let g = match m.kind {
                 MoveKind::Line { rapid: true } => "G00",
                 MoveKind::Line { rapid: false } => "G01",
@@ -256,15 +329,15 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
                     dir: ArcDir::Ccw, ..
                 } => "G03",
             };
-            let _ = write!(text, "{g} X{} Z{}", mm4(x), mm4(m.to[1]));
+            let _ = write!(text, "{g} X{} Z{}", len4(x, inch), len4(m.to[1], inch));
             if let MoveKind::Arc { centre, dir } = m.kind {
                 let (i, k) = (centre[0] - at[0], centre[1] - at[1]);
                 if own.is_some_and(|s| s.r_form) {
                     let r = ((i as f64).hypot(k as f64)).round() as i64;
                     let long = sweep_over_half(at, m.to, centre, dir);
-                    let _ = write!(text, " R{}", mm4(if long { -r } else { r }));
+                    let _ = write!(text, " R{}", len4(if long { -r } else { r }, inch));
                 } else {
-                    let _ = write!(text, " I{} K{}", mm4(i), mm4(k));
+                    let _ = write!(text, " I{} K{}", len4(i, inch), len4(k, inch));
                 }
             }
             if let Some(s) = own {
@@ -328,7 +401,7 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
 fn line_has_motion(line: &str) -> bool {
     words_of(line).is_some_and(|(w, _)| {
         w.iter()
-            .any(|(l, _)| matches!(l, 'X' | 'Z' | 'I' | 'K' | 'R'))
+            .any(|(l, _)| matches!(l, 'X' | 'Z' | 'U' | 'W' | 'I' | 'K' | 'R'))
     })
 }
 
@@ -369,6 +442,67 @@ fn strip_sum(line: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn numbers(text: &str) -> Vec<f64> {
+        text.lines()
+            .filter(|l| l.starts_with("G0"))
+            .flat_map(|l| l.split(' ').skip(1))
+            .filter_map(|w| w.get(1..)?.parse().ok())
+            .collect()
+    }
+
+    #[test]
+    fn fanuc_increments_become_absolute_words_and_other_words_stay() {
+        let program = "G21 G99\nG00 X20 Z2\nG42 G01 Z0 F.1\nU8.\nG96 S150 W-10.\nG40 G00 X40\n";
+        let fanuc = Settings {
+            dialect: Dialect::Fanuc,
+            ..Settings::default()
+        };
+        let out = compensate(program, &fanuc).unwrap();
+        assert!(
+            !out.text.contains('U') && !out.text.contains('W'),
+            "{}",
+            out.text
+        );
+        assert!(
+            out.text
+                .lines()
+                .any(|l| l.starts_with("G01 X28.0000 Z-10.") && l.ends_with(" G96 S150")),
+            "{}",
+            out.text
+        );
+        // The same program in ISO words.
+        let iso = "G21\nG00 X20 Z2\nG42 G01 Z0 F.1\nX28\nG96 S150 Z-10\nG40 G00 X40\n";
+        assert_eq!(
+            numbers(&out.text),
+            numbers(&compensate(iso, &Settings::default()).unwrap().text)
+        );
+        // Read as ISO, its first Fanuc word is named.
+        let e = compensate(program, &Settings::default()).unwrap_err();
+        assert_eq!(
+            (e.line, e.reason.as_str()),
+            (
+                1,
+                "ERR VALUE G99 belongs to the FANUC dialect (OPT DIALECT=FANUC)"
+            )
+        );
+    }
+
+    #[test]
+    fn inch_programs_print_inches() {
+        let inch =
+            "G20\nG00 X1. Z.1\nG42 G01 Z0 F5.\nX1.5\nG02 X2. Z-.25 R.25\nG01 Z-1.\nG40 G00 X2.5\n";
+        let mm = "G21\nG00 X25.4 Z2.54\nG42 G01 Z0 F127\nX38.1\nG02 X50.8 Z-6.35 R6.35\nG01 Z-25.4\nG40 G00 X63.5\n";
+        let a = compensate(inch, &Settings::default()).unwrap();
+        let b = compensate(mm, &Settings::default()).unwrap();
+        assert!(a.text.starts_with("G20\n"), "{}", a.text);
+        let (a, b) = (numbers(&a.text), numbers(&b.text));
+        assert_eq!(a.len(), b.len());
+        assert!(a.len() > 10);
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y / 25.4).abs() <= 0.00005 + 1e-9, "{x} in, {y} mm");
+        }
+    }
 
     #[test]
     fn mm4_rounds_half_away() {

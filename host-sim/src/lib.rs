@@ -22,6 +22,8 @@
 //!   tool-tip program the device runs;
 //! - [`check`]: `host-sim check`, every line of a G-code file the device
 //!   would refuse, with its line and column;
+//! - [`dialect`]: which dialect a program is written in, for `--dialect
+//!   auto`;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod check;
@@ -30,6 +32,7 @@ pub mod compensate;
 pub mod contour;
 mod dd;
 pub mod device;
+pub mod dialect;
 pub mod link;
 pub mod qemu;
 pub mod reference;

@@ -52,12 +52,20 @@ enum Command {
         /// X words are radii, not diameters.
         #[arg(long)]
         radius: bool,
+        /// The program's dialect: iso (LinuxCNC, grbl), fanuc (Fanuc/Haas
+        /// G-code system A), or auto (from its words).
+        #[arg(long, default_value = "auto")]
+        dialect: String,
     },
     /// List every line of a G-code file the device would refuse (line,
     /// column, what); exit status 1 if there is any.
     Check {
         /// The G-code program.
         file: std::path::PathBuf,
+        /// The program's dialect: iso (LinuxCNC, grbl), fanuc (Fanuc/Haas
+        /// G-code system A), or auto (from its words).
+        #[arg(long, default_value = "auto")]
+        dialect: String,
     },
     /// Serve the in-process device for a terminal or another program.
     Serve {
@@ -141,10 +149,21 @@ fn compensate(
     rn: String,
     tip: u8,
     diam: bool,
+    dialect: &str,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let program = std::fs::read_to_string(file)
         .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-    let settings = host_sim::compensate::Settings { rn, tip, diam };
+    let (dialect, note) = host_sim::dialect::choose(dialect, &program)
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+    if let Some(note) = note {
+        eprintln!("{}: {note}", file.display());
+    }
+    let settings = host_sim::compensate::Settings {
+        rn,
+        tip,
+        diam,
+        dialect,
+    };
     match host_sim::compensate::compensate(&program, &settings) {
         Ok(out) => {
             for w in &out.warnings {
@@ -160,9 +179,15 @@ fn compensate(
     }
 }
 
-fn check(file: &std::path::Path) -> Result<ExitCode, Box<dyn std::error::Error>> {
+fn check(file: &std::path::Path, dialect: &str) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let bytes = std::fs::read(file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-    let items = host_sim::check::check(&String::from_utf8_lossy(&bytes));
+    let text = String::from_utf8_lossy(&bytes);
+    let (dialect, note) = host_sim::dialect::choose(dialect, &text)
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+    if let Some(note) = note {
+        println!("{}: {note}", file.display());
+    }
+    let items = host_sim::check::check_in(&text, dialect);
     for i in &items {
         println!("{}:{}:{}: {}", file.display(), i.line, i.column, i.what);
     }
@@ -189,8 +214,9 @@ fn main() -> ExitCode {
             rn,
             tip,
             radius,
-        } => compensate(&file, rn, tip, !radius),
-        Command::Check { file } => check(&file),
+            dialect,
+        } => compensate(&file, rn, tip, !radius, &dialect),
+        Command::Check { file, dialect } => check(&file, &dialect),
         Command::Serve {
             stdio: _,
             pty: true,

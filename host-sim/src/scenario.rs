@@ -582,6 +582,36 @@ pub fn mixed_session() -> Vec<u8> {
     long.push_str(&"0".repeat(200));
     line(&long);
     line("POS");
+    // A Fanuc program (surface speed, feed per revolution, a dwell), then
+    // words of the other dialect.
+    for l in [
+        "CFG DIAM=1",
+        "OPT DIALECT=FANUC",
+        "%",
+        "O1000 (SHAFT)",
+        "G21 G18 G99",
+        "T0101",
+        "G50 S2500",
+        "G00 X30. Z2.",
+        "G96 S180 M03",
+        "M08",
+        "G01 Z-40. F.2",
+        "U2. W-1.",
+        "G04 P50",
+        "G00 X40. Z5.",
+        "AUX",
+        "M05 M09 M30",
+        "G91 X1",
+        "SYNC",
+        "OPT DIALECT=ISO",
+        "G99 F1",
+        "G95 G96 D3000 S200 M04",
+        "G01 X20 F.1",
+        "AUX",
+        "M5 M2",
+    ] {
+        line(l);
+    }
     let mut tail: Vec<u8> = b"\x00\xff\x1b[A\x7f\xfe\r\nPOS\rPOS\nPOS\r\n\n".to_vec();
     for l in ["CFG HX=0.005 DIAM=1", "MOVE X=0 Z=0", "ZERO", "POS"] {
         push(&mut tail, l);

@@ -142,3 +142,50 @@ fn compensate_prints_the_tool_tip_program_or_refuses_it() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
+    let dir = std::env::temp_dir().join(format!("host-sim-check-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let part = dir.join("part.nc");
+    std::fs::write(
+        &part,
+        "%\nO1000\nG21 G18 G99\nT0101\nG50 S2500\nG96 S180 M03\nG00 X30. Z2.\n\
+         G01 Z-40. F.2\nG54\nU2. W-1.\nG71 U1. R.5\nM30\n%\n",
+    )
+    .unwrap();
+    let run = |args: &[&str]| {
+        let out = Command::new(BIN).args(args).output().unwrap();
+        (out.status.code(), String::from_utf8(out.stdout).unwrap())
+    };
+    let p = part.to_str().unwrap();
+    let (code, text) = run(&["check", p]);
+    assert_eq!(code, Some(1));
+    assert_eq!(
+        text,
+        format!(
+            "{p}: dialect: FANUC (line 3 is one of its words)\n\
+             {p}:9:1: G54 not supported\n\
+             {p}:11:1: G71 canned cycles not supported\n\
+             {p}: 2 lines the device would refuse\n"
+        )
+    );
+    // Read as ISO, the Fanuc words are named where they stand.
+    let (code, text) = run(&["check", "--dialect", "iso", p]);
+    assert_eq!(code, Some(1));
+    assert!(
+        text.contains(&format!("{p}:10:1: U belongs to the FANUC dialect")),
+        "{text}"
+    );
+    let (code, text) = run(&["check", "--dialect", "haas", p]);
+    assert_eq!((code, text.as_str()), (Some(2), ""));
+    std::fs::write(&part, "G21 G99\nT0101\nG95\n").unwrap();
+    let out = Command::new(BIN).args(["check", p]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains("the program mixes dialects: line 1 is Fanuc's, line 3 ISO's"),
+        "{out:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

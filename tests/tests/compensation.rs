@@ -16,14 +16,12 @@ use proptest::prelude::*;
 /// The compensated blocks of a program through the device, as printed.
 fn device_blocks(program: &str, rn: &str, tip: u8) -> Vec<String> {
     let mut dev = LocalDevice::new();
-    let cfg = Transport::request(&mut dev, &format!("CFG RN={rn} TIP={tip}")).unwrap();
-    assert!(cfg.is_ok());
+    for setting in [format!("CFG RN={rn} TIP={tip}"), "OPT DIALECT=FANUC".into()] {
+        assert!(Transport::request(&mut dev, &setting).unwrap().is_ok());
+    }
     let mut out = Vec::new();
+    // Every line runs: the programs are Fanuc's, from `%` to `%`.
     for line in program.lines() {
-        // Lines the control does not interpret (T101, G96 S120 M03).
-        if !core_nostd::gcode::is_block(line) || core_nostd::gcode::parse_block(line).is_err() {
-            continue;
-        }
         let r = Transport::request(&mut dev, line).unwrap();
         assert!(r.is_ok(), "{line}: {}", r.last);
         out.extend(
@@ -157,7 +155,11 @@ fn fig_22_arcs_from_a_g42_contour() {
     );
     // `host-sim compensate` prints the same program with R words, the
     // corrected radii R2.4, R2.6 and R4.4 of the seed.
-    let out = compensate(&example("krylenko-fig22.nc"), &Settings::default()).unwrap();
+    let fanuc = Settings {
+        dialect: core_nostd::gcode::Dialect::Fanuc,
+        ..Settings::default()
+    };
+    let out = compensate(&example("krylenko-fig22.nc"), &fanuc).unwrap();
     for r in ["R2.4000", "R2.6000", "R4.4000"] {
         assert!(out.text.contains(r), "{r} in {}", out.text);
     }
@@ -167,7 +169,11 @@ fn fig_22_arcs_from_a_g42_contour() {
         "{}",
         out.text
     );
-    assert!(out.text.contains("T101\nG96 S120 M03\n"), "{}", out.text);
+    assert!(
+        out.text.contains("T0101\nG50 S2500\nG96 S120 M03\n"),
+        "{}",
+        out.text
+    );
     assert!(!out.text.contains("G42") && !out.text.contains("G40"));
 }
 
@@ -546,6 +552,7 @@ fn concave_arc_just_larger_than_the_nose_is_cut() {
             rn: rn.into(),
             tip: 2,
             diam: true,
+            ..Settings::default()
         };
         let out = compensate(program, &settings).unwrap_or_else(|e| panic!("RN {rn}: {e}"));
         let lines: Vec<&str> = out.text.lines().collect();
@@ -578,6 +585,7 @@ fn concave_arc_just_larger_than_the_nose_is_cut() {
             rn: "0.2".into(),
             tip: 2,
             diam: true,
+            ..Settings::default()
         },
     )
     .unwrap();
@@ -599,6 +607,7 @@ fn concave_arc_just_larger_than_the_nose_is_cut() {
             rn: "0.255".into(),
             tip: 2,
             diam: true,
+            ..Settings::default()
         },
     )
     .unwrap_err();

@@ -160,6 +160,13 @@ pub trait Io {
     /// a board answers a waiting status byte here and shows it is alive.
     fn pause(&mut self) {}
 
+    /// A `G04` dwell of `us` microseconds, the axes at rest: a board
+    /// waits (answering status bytes meanwhile); the virtual clock, whose
+    /// runs are timed each from its own start, has nothing to wait for.
+    fn dwell(&mut self, us: u64) {
+        let _ = us;
+    }
+
     /// For a `!STATUS` line: how the transport keeps time, where it
     /// measures it (a board); the line then ends with `LAT= LATE=`.
     fn timing(&mut self) -> Option<Timing> {

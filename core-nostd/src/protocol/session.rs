@@ -13,9 +13,13 @@ use crate::comp::{
 };
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
-use crate::gcode::{is_block, parse_in, BlockError, Motion, Units};
+use crate::gcode::{
+    is_block, parse, BlockError, Coolant, Dialect, FeedMode, Motion, Spindle, SpindleMode, Stop,
+    ToolWord,
+};
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
+use crate::interp::{path_feed, Aux, Modal};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
 use crate::machine::{Background, Machine, StepSink};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
@@ -112,6 +116,10 @@ pub struct Session {
     drive: DriveTiming,
     /// Modal G-code state.
     modal: Modal,
+    /// The spindle, the coolant, the tool named.
+    aux: Aux,
+    /// The dialect G-code lines are read in (`OPT DIALECT=`).
+    dialect: Dialect,
     /// The programmed contour point: where the last G-code block ended, as
     /// written. Equal to `cmd` except while nose compensation is on.
     prog: [Length; 2],
@@ -132,28 +140,6 @@ pub struct Session {
     /// The feed of the last element given to the contour engine (the one
     /// it holds while compensation is on); `None` for a rapid.
     element_feed: Option<Feed>,
-}
-
-/// The modal state of the G-code path (compensation lives in the contour
-/// engine).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Modal {
-    motion: Motion,
-    incremental: bool,
-    /// G20 / G21.
-    units: Units,
-    /// The programmed feed (mm/min), none after power-on.
-    feed: Option<Feed>,
-}
-
-impl Modal {
-    /// Power-on: G00, G90, G21, no feed.
-    const POWER_ON: Modal = Modal {
-        motion: Motion::Rapid,
-        incremental: false,
-        units: Units::Mm,
-        feed: None,
-    };
 }
 
 impl Default for Session {
@@ -216,6 +202,8 @@ impl Session {
             },
             drive: DriveTiming::DEFAULT,
             modal: Modal::POWER_ON,
+            aux: Aux::POWER_ON,
+            dialect: Dialect::Iso,
             prog: [Length::ZERO; 2],
             contour: Contour::new(),
             last_moves: Moves::new(),
@@ -365,13 +353,25 @@ impl Session {
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
         } else if command.eq_ignore_ascii_case("OPT") {
-            let [bdel] = parse_args(words, ["BDEL"])?;
-            if let Some(v) = bdel {
-                self.block_delete = parse_flag("BDEL", v)?;
-            }
+            let [bdel, dialect] = parse_args(words, ["BDEL", "DIALECT"])?;
+            let block_delete = match bdel {
+                Some(v) => parse_flag("BDEL", v)?,
+                None => self.block_delete,
+            };
+            let dialect = match dialect {
+                None => self.dialect,
+                Some(v) if v.eq_ignore_ascii_case("ISO") => Dialect::Iso,
+                Some(v) if v.eq_ignore_ascii_case("FANUC") => Dialect::Fanuc,
+                Some(_) => return Err(Refusal::Value("DIALECT", "must be ISO or FANUC")),
+            };
+            (self.block_delete, self.dialect) = (block_delete, dialect);
             send_ok(
                 io,
-                Some(format_args!("BDEL={}", u8::from(self.block_delete))),
+                Some(format_args!(
+                    "BDEL={} DIALECT={}",
+                    u8::from(self.block_delete),
+                    self.dialect.as_str()
+                )),
             );
             Ok(())
         } else if command.eq_ignore_ascii_case("LIMITS") {
@@ -402,8 +402,10 @@ impl Session {
             // The programmed feed stays, as on the controls machinists know.
             self.modal = Modal {
                 feed: self.modal.feed,
+                feed_mode: self.modal.feed_mode,
                 ..Modal::POWER_ON
             };
+            self.aux = self.aux.stopped();
             self.contour = Contour::new();
             self.last_moves = Moves::new();
             self.prog = self.cmd;
@@ -412,6 +414,10 @@ impl Session {
         } else if command.eq_ignore_ascii_case("POS") {
             no_args(words, "POS")?;
             self.pos_reply(io);
+            Ok(())
+        } else if command.eq_ignore_ascii_case("AUX") {
+            no_args(words, "AUX")?;
+            self.aux_reply(io);
             Ok(())
         } else {
             Err(Refusal::Unknown(command))
@@ -710,31 +716,42 @@ impl Session {
     /// Runs one G-code block in the session's modal state, through the
     /// contour engine (compensation off: the block itself).
     fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
-        let b = parse_in(text, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
+        let b = parse(text, self.dialect, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
         if b.deleted && self.block_delete {
             let none = MotionSummary::new(self.pos, self.pos, &Crc32::new());
             send_ok(io, Some(format_args!("{none} SKIP=BDEL")));
             return Ok(());
         }
-        let modal = Modal {
-            motion: b.motion.unwrap_or(self.modal.motion),
-            incremental: b.incremental.unwrap_or(self.modal.incremental),
-            units: b.units.unwrap_or(self.modal.units),
-            feed: match b.f {
-                Some(f) => Some(
-                    Feed::new(f)
-                        .ok_or(Refusal::Value("F", "must be 0.001 to 99999.999999 mm/min"))?,
+        let modal = self.modal.after(&b);
+        if let Some(f) = b.f {
+            let (ok, why) = match modal.feed_mode {
+                FeedMode::PerMinute => (
+                    Feed::new(f).is_some(),
+                    "must be 0.001 to 99999.999999 mm/min",
                 ),
-                None => self.modal.feed,
-            },
-        };
+                FeedMode::PerRev => (f.as_angstrom() > 0, "must be above 0 mm/rev"),
+            };
+            if !ok {
+                return Err(Refusal::Value("F", why));
+            }
+        }
+        let aux = self.aux.after(&b);
+        // The spindle speed where the block starts (the tool's X).
+        if aux.spindle.turning != Spindle::Off {
+            aux.spindle
+                .rpm(self.cmd[0], modal.units)
+                .map_err(|e| Refusal::Value("S", e.as_str()))?;
+        }
+        let diam = b.diameter.unwrap_or(self.cfg.diam);
         let mut target = self.prog;
         if let Some(x) = b.x {
-            let radius = self.x_word(x)?;
-            target[0] = self.target(0, radius, modal.incremental, "X beyond 99999.999999 mm")?;
+            let radius = x_radius(x, diam)?;
+            let inc = modal.incremental || b.incremental_x;
+            target[0] = self.target(0, radius, inc, "X beyond 99999.999999 mm")?;
         }
         if let Some(z) = b.z {
-            target[1] = self.target(1, z, modal.incremental, "Z beyond 99999.999999 mm")?;
+            let inc = modal.incremental || b.incremental_z;
+            target[1] = self.target(1, z, inc, "Z beyond 99999.999999 mm")?;
         }
         let has_end = b.x.is_some() || b.z.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
@@ -754,10 +771,15 @@ impl Session {
                 } else {
                     ArcDir::Ccw
                 };
-                let centre = match (b.i.is_some() || b.k.is_some(), b.r) {
+                let ik = b.i.is_some() || b.k.is_some();
+                let centre = match (ik, b.r) {
                     (true, Some(_)) => return Err(Refusal::Missing("give I and K or R, not both")),
                     (false, None) => return Err(Refusal::Missing("an arc needs I and K, or R")),
                     (false, Some(r)) => centre_from_radius(self.prog, target, r, dir)?,
+                    (true, None) if modal.arc_absolute => match (b.i, b.k) {
+                        (Some(i), Some(k)) => [i, k],
+                        _ => return Err(Refusal::Missing("G90.1: an arc centre needs I and K")),
+                    },
                     (true, None) => {
                         let beyond = "arc centre beyond 99999.999999 mm";
                         [
@@ -792,7 +814,12 @@ impl Session {
         let feeds = element.is_some_and(|e| !matches!(e.shape, Shape::Line { rapid: true }));
         // Output blocks of the element held back by compensation run at its
         // feed; this block's own and the corners between, at this one's.
-        let now = if feeds { modal.feed } else { None };
+        let now = if feeds {
+            path_feed(&modal, &aux.spindle, self.cmd[0])
+                .map_err(|e| Refusal::Value("F", e.as_str()))?
+        } else {
+            None
+        };
         let tool = Tool::new(self.cfg.rn, self.cfg.tip);
         let (contour, moves) = self
             .contour
@@ -803,6 +830,10 @@ impl Session {
                 "F",
                 "not programmed: a feed move needs F (mm/min)",
             ));
+        }
+        let end = b.stop == Some(Stop::End);
+        if end && contour.active() {
+            return Err(Refusal::Busy("M02/M30"));
         }
         // Plan and check every block before the first one moves.
         let mut planned = heapless::Vec::<Planned, MAX_MOVES>::new();
@@ -821,6 +852,17 @@ impl Session {
             // As many plans as moves: never full.
             let _ = planned.push(p);
         }
+        // The spindle and the coolant switch with the axes at rest, before
+        // the block's motion (as LinuxCNC orders a block); a dwell waits
+        // there too.
+        if self.aux.needs_rest(&aux) || b.dwell.is_some() {
+            self.machine.flush(&mut Sink::new(io, self.drive));
+        }
+        if let Some(us) = b.dwell {
+            io.dwell(us);
+        }
+        // The DATA lines write X as this block reads it.
+        self.cfg.diam = diam;
         let start = self.pos;
         let mut crc = Crc32::new();
         for p in &planned {
@@ -830,10 +872,23 @@ impl Session {
             self.prog = target;
         }
         self.modal = modal;
+        self.aux = aux;
         self.contour = contour;
         self.last_moves = moves;
         if element.is_some() {
             self.element_feed = now;
+        }
+        if end {
+            // The end of the program: at rest, spindle and coolant off, the
+            // modes of power-on but for the motion mode, the unit and F.
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            self.modal = Modal {
+                motion: self.modal.motion,
+                units: self.modal.units,
+                feed: self.modal.feed,
+                ..Modal::POWER_ON
+            };
+            self.aux = self.aux.stopped();
         }
         send_ok(
             io,
@@ -1028,12 +1083,7 @@ impl Session {
 
     /// An X word as a radius (halved when DIAM=1).
     fn x_word(&self, word: Length) -> Result<Length, Refusal<'static>> {
-        if self.cfg.diam {
-            word.exact_half()
-                .ok_or(Refusal::Value("X", "not an exact radius"))
-        } else {
-            Ok(word)
-        }
+        x_radius(word, self.cfg.diam)
     }
 
     fn drive_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
@@ -1261,6 +1311,7 @@ impl Session {
         self.prog = cmd;
         self.pos = issued;
         self.modal = Modal::POWER_ON;
+        self.aux = Aux::POWER_ON;
         self.contour = Contour::new();
         self.last_moves = Moves::new();
         self.element_feed = None;
@@ -1295,6 +1346,44 @@ impl Session {
         } else {
             Ok(word)
         }
+    }
+
+    /// `OK SPINDLE= S= SMODE= LIMIT= COOLANT= T=`: the auxiliary
+    /// functions as programmed; `S` the commanded rpm at the tool's X (0
+    /// while stopped), `LIMIT` 0 when none is set, `T` as written in the
+    /// dialect (`-` when none was named).
+    fn aux_reply<I: Io>(&self, io: &mut I) {
+        let a = &self.aux;
+        let spindle = match a.spindle.turning {
+            Spindle::Cw => "CW",
+            Spindle::Ccw => "CCW",
+            Spindle::Off => "OFF",
+        };
+        let mode = match a.spindle.mode {
+            SpindleMode::Rpm => "RPM",
+            SpindleMode::Surface => "CSS",
+        };
+        let coolant = match a.coolant {
+            Coolant::Mist => "MIST",
+            Coolant::Flood => "FLOOD",
+            Coolant::Off => "OFF",
+        };
+        let rpm = a.spindle.running_rpm(self.cmd[0], self.modal.units);
+        let limit = a.spindle.clamp.unwrap_or(Length::ZERO);
+        let mut line = ReplyLine::new();
+        let _ = write!(
+            line,
+            "OK SPINDLE={spindle} S={rpm} SMODE={mode} LIMIT={limit} COOLANT={coolant} T="
+        );
+        let _ = match a.tool {
+            None => line.write_str("-"),
+            Some(ToolWord {
+                tool,
+                offset: Some(o),
+            }) => write!(line, "{tool:02}{o:02}"),
+            Some(ToolWord { tool, offset: None }) => write!(line, "{tool}"),
+        };
+        io.send(line.finish());
     }
 
     fn pos_reply<I: Io>(&self, io: &mut I) {
@@ -1391,6 +1480,16 @@ impl fmt::Display for MotionSummary {
 }
 
 /// `centre − start` in ångström: the I and K words of an arc.
+/// An X word as a radius: halved when it is a diameter.
+fn x_radius(word: Length, diam: bool) -> Result<Length, Refusal<'static>> {
+    if diam {
+        word.exact_half()
+            .ok_or(Refusal::Value("X", "not an exact radius"))
+    } else {
+        Ok(word)
+    }
+}
+
 fn centre_minus(centre: [Length; 2], start: [Length; 2]) -> [i64; 2] {
     let d = |a: Length, b: Length| a.as_angstrom() - b.as_angstrom();
     [d(centre[0], start[0]), d(centre[1], start[1])]
@@ -1563,6 +1662,10 @@ impl<I: Io> Io for Suffixed<'_, I> {
 
     fn pause(&mut self) {
         self.inner.pause();
+    }
+
+    fn dwell(&mut self, us: u64) {
+        self.inner.dwell(us);
     }
 
     fn timing(&mut self) -> Option<super::Timing> {

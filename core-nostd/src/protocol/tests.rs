@@ -116,7 +116,10 @@ fn every_error_code_is_reached_and_changes_nothing() {
         ("ARC X=1 Z=1", "ERR SYNTAX"),
         ("G01 X1 X2", "ERR SYNTAX"),
         ("G01 Q5", "ERR SYNTAX"),
-        ("G04 X1", "ERR VALUE"),
+        ("G04 X1", "ERR SYNTAX G04 needs its time"),
+        ("G04 P-1", "ERR VALUE P"),
+        ("G99 F1", "ERR VALUE G99 belongs to the FANUC dialect"),
+        ("OPT DIALECT=HAAS", "ERR VALUE DIALECT"),
         ("G01 X1.1234567", "ERR VALUE X"),
         ("G01 X30 I1", "ERR SYNTAX"),
         ("G02 X30 Z-7", "ERR SYNTAX"),
@@ -331,7 +334,7 @@ fn gcode_blocks_run_in_modal_state() {
     assert!(ask(&mut dev, b"G91 G01 Z-1\n")[0].starts_with("DATA G01 X38.0000 Z-22.4000"));
     assert!(ask(&mut dev, b"G90 Z0\n")[0].starts_with("DATA G01 X38.0000 Z0.0000"));
     // A block with no motion words only changes the modal state.
-    assert!(ask1(&mut dev, "N100 G01 M03 S500 T0101").starts_with("OK NX=0 NZ=0 "));
+    assert!(ask1(&mut dev, "N100 G01 M03 S500 T01").starts_with("OK NX=0 NZ=0 "));
 }
 
 #[test]
@@ -935,8 +938,8 @@ fn a_posted_program_runs_line_by_line_and_names_what_it_cannot() {
     }
     assert!(ask1(&mut dev, "POS").starts_with("OK PX=50 PZ=-4000 "));
     // With the block delete switch on, `/` blocks are skipped, and say so.
-    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0");
-    assert_eq!(ask1(&mut dev, "OPT BDEL=1"), "OK BDEL=1");
+    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=ISO");
+    assert_eq!(ask1(&mut dev, "OPT BDEL=1"), "OK BDEL=1 DIALECT=ISO");
     let r = ask(&mut dev, b"/N50 X40.\n");
     assert_eq!(r.len(), 1);
     assert!(r[0].ends_with(" SEQ=00000000 SKIP=BDEL"), "{r:?}");
@@ -948,7 +951,7 @@ fn a_posted_program_runs_line_by_line_and_names_what_it_cannot() {
             "ERR VALUE G17 plane not supported: a lathe cuts in G18 (ZX)",
         ),
         ("G71 U1. R.5", "ERR VALUE G71 canned cycles not supported"),
-        ("G90.1", "ERR VALUE G90.1 not supported"),
+        ("G90.2", "ERR VALUE G90.2 not supported"),
         ("G00 X1 Y2", "ERR VALUE Y a lathe has no Y axis: only Y0"),
         (
             "O1000 G00 X1",
@@ -992,4 +995,152 @@ fn inch_programs_move_the_same_steps_as_their_millimetres() {
         last(&mut inch, "G20 X3937.008"),
         "ERR VALUE X beyond 99999.999999 mm"
     );
+}
+
+#[test]
+fn a_fanuc_program_moves_as_its_iso_equivalent() {
+    let run = |dev: &mut Device, program: &[&str]| {
+        for line in program {
+            let r = ask(dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+        }
+        (ask1(dev, "SYNC"), ask1(dev, "POS"), ask1(dev, "AUX"))
+    };
+    let mut fanuc = Device::new();
+    assert_eq!(
+        ask1(&mut fanuc, "OPT DIALECT=fanuc"),
+        "OK BDEL=0 DIALECT=FANUC"
+    );
+    // 180 m/min at Ø30: 1909.8593171 rpm (at Ø40, where it ends, 1432.3945); 0.2 mm/rev of it is
+    // 381.9718634 mm/min. The spindle and coolant switch at rest, the
+    // dwell waits at rest: the same runs in both.
+    let a = run(
+        &mut fanuc,
+        &[
+            "%",
+            "O1000 (SHAFT)",
+            "N10 G21 G18 G99",
+            "N20 T0101",
+            "N30 G50 S2500",
+            "N40 G00 X30. Z2.",
+            "N50 G96 S180 M03",
+            "N60 M08",
+            "N70 G01 Z-40. F.2",
+            "N80 U2. W-1.",
+            "N90 G04 P500",
+            "N100 G00 X40. Z5.",
+        ],
+    );
+    assert_eq!(
+        a.2,
+        "OK SPINDLE=CW S=1432.3945 SMODE=CSS LIMIT=2500.0000 COOLANT=FLOOD T=0101"
+    );
+    let mut iso = Device::new();
+    let b = run(
+        &mut iso,
+        &[
+            "G21 G18 G94 T1",
+            "G00 X30. Z2.",
+            "S1909.8593171 M03",
+            "M08",
+            "G01 Z-40. F381.9718634",
+            "X32. Z-41.",
+            "G4 P.5",
+            "G00 X40. Z5.",
+        ],
+    );
+    assert_eq!((&a.0, &a.1), (&b.0, &b.1));
+    // The end of the program stops the spindle and the coolant.
+    assert!(ask1(&mut fanuc, "N110 M05 M09 M30").starts_with("OK NX=0 NZ=0 "));
+    assert_eq!(
+        ask1(&mut fanuc, "AUX"),
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=2500.0000 COOLANT=OFF T=0101"
+    );
+}
+
+#[test]
+fn spindle_speeds_that_cannot_be_had_are_refused_and_change_nothing() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=FANUC");
+    let before = state(&mut dev);
+    for (line, want) in [
+        (
+            "G96 S180 M03",
+            "ERR VALUE S G96 surface speed at X0 needs a spindle speed limit (G50 S or G96 D)",
+        ),
+        (
+            "G99 G01 Z-1 F.1",
+            "ERR VALUE F per revolution needs the spindle turning (M03/M04 and S)",
+        ),
+        ("G99 G01 Z-1 F0", "ERR VALUE F must be above 0 mm/rev"),
+        ("U1 X2", "ERR SYNTAX X and U in one block"),
+        ("G01 X1 Y1 F1", "ERR VALUE Y a lathe has no Y axis: only Y0"),
+        (
+            "G91 X1",
+            "ERR VALUE G91 belongs to the ISO dialect (OPT DIALECT=ISO)",
+        ),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        assert_eq!(state(&mut dev), before, "{line}");
+    }
+    assert_eq!(
+        ask1(&mut dev, "AUX"),
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=-"
+    );
+    // S with M05: the feed per revolution still has no speed.
+    ask1(&mut dev, "G99 S1000 M05");
+    assert!(ask1(&mut dev, "G01 W-1. F.1").starts_with("ERR VALUE F per revolution"));
+    ask1(&mut dev, "M04");
+    let r = ask(&mut dev, b"G01 W-1. F.1\n");
+    assert!(r[1].starts_with("OK NX=0 NZ=-100 "), "{r:?}");
+}
+
+#[test]
+fn iso_modes_of_a_block_apply_to_its_own_words() {
+    let mut dev = Device::new();
+    // G8: X a radius from this block on, in its DATA line too.
+    let r = ask(&mut dev, b"G8 G00 X10 Z1\n");
+    assert_eq!(r[0], "DATA G00 X10.0000 Z1.0000");
+    assert!(ask1(&mut dev, "CFG").contains(" DIAM=0 "));
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=2000 PZ=100 "));
+    let r = ask(&mut dev, b"G7 X10\n");
+    assert_eq!(r[0], "DATA G00 X10.0000 Z1.0000");
+    assert!(ask1(&mut dev, "POS").starts_with("OK PX=1000 PZ=100 "));
+    // G90.1: I and K are the centre, both needed; G91.1 from the start.
+    assert_eq!(
+        ask1(&mut dev, "G90.1 G02 X10 Z-4 I5"),
+        "ERR SYNTAX G90.1: an arc centre needs I and K"
+    );
+    let a = ask(&mut dev, b"G90.1 G02 X10 Z-4 I5 K-1.5 F100\n");
+    let mut other = Device::new();
+    ask(&mut other, b"G00 X10 Z1\n");
+    let b = ask(&mut other, b"G02 X10 Z-4 I0 K-2.5 F100\n");
+    assert_eq!(a, b);
+}
+
+#[test]
+fn reset_stops_the_spindle_and_coolant_and_ctrl_x_forgets_them() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=FANUC");
+    ask(
+        &mut dev,
+        b"G00 X50 Z5\nG50 S2000\nG99 G96 S100 M04 M07 T0303 F.1\n",
+    );
+    assert_eq!(
+        ask1(&mut dev, "AUX"),
+        "OK SPINDLE=CCW S=636.6198 SMODE=CSS LIMIT=2000.0000 COOLANT=MIST T=0303"
+    );
+    ask1(&mut dev, "RESET");
+    assert_eq!(
+        ask1(&mut dev, "AUX"),
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=2000.0000 COOLANT=OFF T=0303"
+    );
+    // The feed per revolution stays with its F, and needs the spindle.
+    assert!(ask1(&mut dev, "G01 W-1.").starts_with("ERR VALUE F per revolution"));
+    ask(&mut dev, b"\x18");
+    assert_eq!(
+        ask1(&mut dev, "AUX"),
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=-"
+    );
+    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=FANUC");
 }

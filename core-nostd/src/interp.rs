@@ -1,0 +1,343 @@
+//! The interpreter's state between blocks: the modal G codes, the feed as
+//! written, the spindle and the coolant; and what a block's feed and
+//! spindle speed come to.
+//!
+//! The feed per revolution and the constant surface speed are open loop
+//! until the spindle has an encoder: `G95`/`G99` move at `F·S` mm/min from
+//! the commanded spindle speed, and `G96` sets that speed from the surface
+//! speed at the tool's X where the block starts.
+
+use crate::gcode::{Block, Coolant, FeedMode, Motion, Spindle, SpindleMode, ToolWord, Units};
+use crate::length::{Length, LENGTH_LIMIT};
+use crate::plan::Feed;
+use crate::trig::PI_Q61;
+use crate::wide::mul_div;
+
+/// The modal state of the G-code path (compensation lives in the contour
+/// engine, the diameter mode in the configuration's `DIAM`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Modal {
+    /// G00–G03.
+    pub motion: Motion,
+    /// G91 (ISO).
+    pub incremental: bool,
+    /// G90.1: arc centres absolute (ISO); G91.1 (power-on): from the start.
+    pub arc_absolute: bool,
+    /// G20 / G21.
+    pub units: Units,
+    /// G94/G98 or G95/G99.
+    pub feed_mode: FeedMode,
+    /// The feed as written (read in the block's unit): mm/min or mm/rev;
+    /// none after power-on.
+    pub feed: Option<Length>,
+}
+
+impl Modal {
+    /// Power-on: G00, G90, G91.1, G21, feed per minute, no feed.
+    pub const POWER_ON: Modal = Modal {
+        motion: Motion::Rapid,
+        incremental: false,
+        arc_absolute: false,
+        units: Units::Mm,
+        feed_mode: FeedMode::PerMinute,
+        feed: None,
+    };
+
+    /// The state after `b`'s words.
+    pub fn after(&self, b: &Block) -> Modal {
+        Modal {
+            motion: b.motion.unwrap_or(self.motion),
+            incremental: b.incremental.unwrap_or(self.incremental),
+            arc_absolute: b.arc_absolute.unwrap_or(self.arc_absolute),
+            units: b.units.unwrap_or(self.units),
+            feed_mode: b.feed_mode.unwrap_or(self.feed_mode),
+            feed: b.f.or(self.feed),
+        }
+    }
+}
+
+/// The spindle as programmed: direction, speed word and limit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SpindleState {
+    /// M03/M04/M05.
+    pub turning: Spindle,
+    /// G96/G97.
+    pub mode: SpindleMode,
+    /// The last `S`: rpm under G97, the surface speed under G96 (m/min, or
+    /// ft/min under G20); none after power-on.
+    pub s: Option<Length>,
+    /// The speed limit (Fanuc `G50 S`, ISO `G96 D`), rpm.
+    pub clamp: Option<Length>,
+}
+
+/// Why a spindle speed or a feed cannot be had.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpeedError {
+    /// Constant surface speed at X = 0 with no speed limit.
+    SurfaceAtCentre,
+    /// A feed per revolution while the spindle stands or has no speed.
+    NotTurning,
+    /// The feed outside 0.001 … 99 999.999999 mm/min (or none programmed).
+    Feed,
+}
+
+impl SpeedError {
+    /// What a refusal says.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            SpeedError::SurfaceAtCentre => {
+                "G96 surface speed at X0 needs a spindle speed limit (G50 S or G96 D)"
+            }
+            SpeedError::NotTurning => "per revolution needs the spindle turning (M03/M04 and S)",
+            SpeedError::Feed => "must come to 0.001 to 99999.999999 mm/min",
+        }
+    }
+}
+
+impl SpindleState {
+    /// Power-on: stopped, G97, no speed, no limit.
+    pub const POWER_ON: SpindleState = SpindleState {
+        turning: Spindle::Off,
+        mode: SpindleMode::Rpm,
+        s: None,
+        clamp: None,
+    };
+
+    /// The state after `b`'s words.
+    pub fn after(&self, b: &Block) -> SpindleState {
+        SpindleState {
+            turning: b.spindle.unwrap_or(self.turning),
+            mode: b.spindle_mode.unwrap_or(self.mode),
+            s: b.s.or(self.s),
+            clamp: b.clamp.or(self.clamp),
+        }
+    }
+
+    /// The commanded speed in rpm with the tool at `radius` (X on the
+    /// radius), whether or not the spindle turns: `S` under G97, the
+    /// surface speed's rpm under G96 (`units` that of `S`), each within
+    /// the limit. `None` without an `S`.
+    pub fn rpm(&self, radius: Length, units: Units) -> Result<Option<Length>, SpeedError> {
+        let Some(s) = self.s else {
+            return Ok(None);
+        };
+        let rpm = match self.mode {
+            SpindleMode::Rpm => s,
+            SpindleMode::Surface => match surface_rpm(s, units, radius) {
+                Some(rpm) => rpm,
+                None => return self.clamp.map(Some).ok_or(SpeedError::SurfaceAtCentre),
+            },
+        };
+        Ok(Some(match self.clamp {
+            Some(c) if c.as_angstrom() < rpm.as_angstrom() => c,
+            _ => rpm,
+        }))
+    }
+
+    /// The rpm while the spindle turns, else 0.
+    pub fn running_rpm(&self, radius: Length, units: Units) -> Length {
+        match (self.turning, self.rpm(radius, units)) {
+            (Spindle::Off, _) | (_, Err(_) | Ok(None)) => Length::ZERO,
+            (_, Ok(Some(rpm))) => rpm,
+        }
+    }
+}
+
+/// Revolutions per minute for surface speed `v` (m/min, ft/min under
+/// `Inch`) at `radius`: `1000·v/(π·D)`, `D = 2·|radius|` in mm, rounded
+/// half away from zero to 10⁻⁷ rpm; capped at 99 999.999999 (the largest
+/// length). `None` at radius 0.
+///
+/// ```
+/// use core_nostd::{gcode::Units, interp::surface_rpm, length::Length};
+/// let l = |s| Length::from_mm_str(s).unwrap();
+/// // 180 m/min on a 30 mm diameter: 1909.8593171… rpm.
+/// assert_eq!(surface_rpm(l("180"), Units::Mm, l("15")).unwrap().as_angstrom(), 19_098_593_171);
+/// assert_eq!(surface_rpm(l("180"), Units::Mm, Length::ZERO), None);
+/// ```
+pub fn surface_rpm(v: Length, units: Units, radius: Length) -> Option<Length> {
+    let d = 2 * u128::from(radius.as_angstrom().unsigned_abs());
+    if d == 0 {
+        return None;
+    }
+    // m/min from ft/min: 0.3048 = 3048/10⁴.
+    let per_10k: u128 = match units {
+        Units::Mm => 10_000,
+        Units::Inch => 3_048,
+    };
+    // rpm·10⁷ = 1000·v·10⁷·(per_10k/10⁴) / (π·D·10⁻⁷·10⁷), π = PI_Q61/2⁶¹;
+    // twice the quotient, then halved with rounding.
+    let num = 2 * 1_000 * 10_000_000 * u128::from(v.as_angstrom().unsigned_abs()) * per_10k;
+    let den = PI_Q61 * d * 10_000;
+    let twice = mul_div(num, 1 << 61, den);
+    let cap = LENGTH_LIMIT.as_angstrom();
+    let rpm = i64::try_from(twice.div_ceil(2)).map_or(cap, |r| r.min(cap));
+    Length::from_angstrom(rpm)
+}
+
+/// The feed along the path of a block: `F` per minute, or `F·rpm` per
+/// revolution (rounded half away from zero to 10⁻⁷ mm/min).
+pub fn path_feed(
+    modal: &Modal,
+    spindle: &SpindleState,
+    radius: Length,
+) -> Result<Option<Feed>, SpeedError> {
+    let Some(f) = modal.feed else {
+        return Ok(None);
+    };
+    let per_min = match modal.feed_mode {
+        FeedMode::PerMinute => f,
+        FeedMode::PerRev => {
+            let rpm = spindle.running_rpm(radius, modal.units).as_angstrom();
+            if rpm == 0 {
+                return Err(SpeedError::NotTurning);
+            }
+            let product = i128::from(f.as_angstrom()) * i128::from(rpm);
+            let q = (product.unsigned_abs() + 5_000_000) / 10_000_000;
+            i64::try_from(q)
+                .ok()
+                .and_then(Length::from_angstrom)
+                .ok_or(SpeedError::Feed)?
+        }
+    };
+    Feed::new(per_min).map(Some).ok_or(SpeedError::Feed)
+}
+
+/// The auxiliary functions: the spindle, the coolant, the tool named.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Aux {
+    /// The spindle.
+    pub spindle: SpindleState,
+    /// M07/M08/M09.
+    pub coolant: Coolant,
+    /// The last `T` word.
+    pub tool: Option<ToolWord>,
+}
+
+impl Aux {
+    /// Power-on: spindle stopped, coolant off, no tool named.
+    pub const POWER_ON: Aux = Aux {
+        spindle: SpindleState::POWER_ON,
+        coolant: Coolant::Off,
+        tool: None,
+    };
+
+    /// The state after `b`'s words.
+    pub fn after(&self, b: &Block) -> Aux {
+        Aux {
+            spindle: self.spindle.after(b),
+            coolant: b.coolant.unwrap_or(self.coolant),
+            tool: b.tool.or(self.tool),
+        }
+    }
+
+    /// What `RESET` and the end of a program leave: the spindle stopped
+    /// and back to G97 (its `S` and limit kept), the coolant off, the tool
+    /// kept.
+    pub const fn stopped(&self) -> Aux {
+        Aux {
+            spindle: SpindleState {
+                turning: Spindle::Off,
+                mode: SpindleMode::Rpm,
+                ..self.spindle
+            },
+            coolant: Coolant::Off,
+            tool: self.tool,
+        }
+    }
+
+    /// Whether going from `self` to `next` asks the axes to be at rest
+    /// first: the spindle starts, stops, reverses, or changes its rpm
+    /// under G97 while turning; the coolant switches. Under G96 the rpm
+    /// follows X block by block without a stop.
+    pub fn needs_rest(&self, next: &Aux) -> bool {
+        let (a, b) = (&self.spindle, &next.spindle);
+        let speed =
+            a.mode != b.mode || (b.mode == SpindleMode::Rpm && (a.s != b.s || a.clamp != b.clamp));
+        let spindle = a.turning != b.turning || (b.turning != Spindle::Off && speed);
+        spindle || self.coolant != next.coolant
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::{parse, Dialect};
+
+    fn l(s: &str) -> Length {
+        Length::from_mm_str(s).unwrap()
+    }
+
+    fn block(line: &str) -> Block {
+        parse(line, Dialect::Fanuc, Units::Mm).unwrap()
+    }
+
+    #[test]
+    fn surface_speed_to_rpm() {
+        // 1000·v/(π·D), against f64 well away from rounding ties.
+        for (v, r) in [
+            ("180", "15"),
+            ("250", "0.5"),
+            ("30", "400"),
+            ("99999", "0.001"),
+        ] {
+            let want = 1000.0 * v.parse::<f64>().unwrap()
+                / (core::f64::consts::PI * 2.0 * r.parse::<f64>().unwrap());
+            let got = surface_rpm(l(v), Units::Mm, l(r)).unwrap().as_angstrom() as f64 / 1e7;
+            assert!((got - want.min(99_999.999999)).abs() < 1e-7, "{v} {r}");
+        }
+        // 500 ft/min on a 2 in diameter: 954.93 rpm.
+        let rpm = surface_rpm(l("500"), Units::Inch, l("25.4")).unwrap();
+        assert_eq!(rpm.as_angstrom() / 100_000, 95_492);
+    }
+
+    #[test]
+    fn clamp_and_centre() {
+        let s = SpindleState::POWER_ON.after(&block("G96 S200 M03"));
+        assert_eq!(
+            s.rpm(Length::ZERO, Units::Mm),
+            Err(SpeedError::SurfaceAtCentre)
+        );
+        let s = s.after(&block("G50 S2500"));
+        assert_eq!(s.rpm(Length::ZERO, Units::Mm), Ok(Some(l("2500"))));
+        assert_eq!(
+            s.rpm(l("100"), Units::Mm).unwrap().unwrap().as_angstrom(),
+            3_183_098_862
+        );
+        let s = s.after(&block("G97 S3000"));
+        assert_eq!(s.rpm(l("100"), Units::Mm), Ok(Some(l("2500"))));
+    }
+
+    #[test]
+    fn feed_per_revolution() {
+        let m = Modal::POWER_ON.after(&block("G99 F0.25"));
+        let s = SpindleState::POWER_ON.after(&block("S1200"));
+        assert_eq!(path_feed(&m, &s, l("10")), Err(SpeedError::NotTurning));
+        let s = s.after(&block("M04"));
+        assert_eq!(
+            path_feed(&m, &s, l("10")).unwrap().unwrap().mm_per_min(),
+            l("300")
+        );
+        let m = m.after(&block("G98 F150"));
+        assert_eq!(
+            path_feed(&m, &s, l("10")).unwrap().unwrap().mm_per_min(),
+            l("150")
+        );
+        let m = m.after(&block("G99 F99"));
+        assert_eq!(path_feed(&m, &s, l("10")), Err(SpeedError::Feed));
+    }
+
+    #[test]
+    fn what_asks_for_rest() {
+        let m = Aux::POWER_ON;
+        let on = m.after(&block("G97 S500 M03"));
+        assert!(m.needs_rest(&on));
+        assert!(on.needs_rest(&on.after(&block("S600"))));
+        assert!(!on.needs_rest(&on.after(&block("S500 T0202"))));
+        let css = on.after(&block("G96 S180"));
+        assert!(on.needs_rest(&css));
+        assert!(!css.needs_rest(&css.after(&block("S200"))));
+        assert!(css.needs_rest(&css.after(&block("M08"))));
+        assert!(!m.needs_rest(&m.after(&block("S900"))));
+    }
+}
