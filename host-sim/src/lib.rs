@@ -24,6 +24,9 @@
 //!   would refuse, with its line and column;
 //! - [`dialect`]: which dialect a program is written in, for `--dialect
 //!   auto`;
+//! - [`program`]: `host-sim run FILE`, a whole program through the
+//!   in-process device in virtual time (cycle time, travel, tools,
+//!   refusals, the path);
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod check;
@@ -34,6 +37,7 @@ mod dd;
 pub mod device;
 pub mod dialect;
 pub mod link;
+pub mod program;
 pub mod qemu;
 pub mod reference;
 pub mod reference_arc;

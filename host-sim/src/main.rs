@@ -26,7 +26,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Compare the device with the f64 reference, bit for bit (the default).
+    /// Compare the device with the f64 reference, bit for bit (the default);
+    /// with a FILE, run that G-code program through the in-process device
+    /// in virtual time and report its cycle time, travel, tool changes and
+    /// refusals.
     Run(RunArgs),
     /// Boot the firmware in QEMU and compare it with the f64 reference over
     /// its serial link.
@@ -90,21 +93,38 @@ struct ScenarioArgs {
 
 #[derive(clap::Args, Clone)]
 struct RunArgs {
+    /// A G-code program to run (without it: the comparison).
+    file: Option<std::path::PathBuf>,
     #[command(flatten)]
     scenario: ScenarioArgs,
     /// How the host reaches the device.
     #[arg(long, value_enum, default_value_t = LinkKind::Pty)]
     link: LinkKind,
+    /// The program's dialect: iso (LinuxCNC, grbl), fanuc (Fanuc/Haas
+    /// G-code system A), or auto (from its words).
+    #[arg(long, default_value = "auto", requires = "file")]
+    dialect: String,
+    /// X words are radii at the start (as LinuxCNC's G8), not diameters.
+    #[arg(long, requires = "file")]
+    radius: bool,
+    /// Print every motion block the device ran, one per line, as G-code in
+    /// machine coordinates (X a diameter, I/K from the block's start).
+    #[arg(long, requires = "file")]
+    trace: bool,
 }
 
 impl Default for RunArgs {
     fn default() -> Self {
         RunArgs {
+            file: None,
             scenario: ScenarioArgs {
                 seed: 1977,
                 blocks: 10_000,
             },
             link: LinkKind::Pty,
+            dialect: "auto".into(),
+            radius: false,
+            trace: false,
         }
     }
 }
@@ -256,7 +276,80 @@ fn serve_pty() -> Result<ExitCode, Box<dyn std::error::Error>> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `host-sim run FILE`: the report on stdout (the trace first, when asked),
+/// exit 1 when the device refused a line.
+fn run_program(
+    file: &std::path::Path,
+    args: &RunArgs,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    use host_sim::program::minutes;
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let (dialect, note) = host_sim::dialect::choose(&args.dialect, &text)
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+    let f = file.display();
+    if let Some(note) = note {
+        eprintln!("{f}: {note}");
+    }
+    let options = host_sim::program::Options {
+        dialect,
+        radius: args.radius,
+    };
+    let r = host_sim::program::run(&text, options);
+    if args.trace {
+        for block in &r.trace {
+            println!("{block}");
+        }
+    }
+    for refused in &r.refused {
+        eprintln!("{f}:{}: {}", refused.line, refused.reply);
+    }
+    let report = |s: String| {
+        if args.trace {
+            eprintln!("{s}");
+        } else {
+            println!("{s}");
+        }
+    };
+    report(format!(
+        "{f}: {} blocks run, {} refused",
+        r.blocks,
+        r.refused.len()
+    ));
+    report(format!(
+        "cycle time {} (motion {}, dwells {})",
+        minutes(r.cycle_us()),
+        minutes(r.motion_us),
+        minutes(r.dwell_us)
+    ));
+    report(format!(
+        "travel: {:.3} mm at feed, {:.3} mm rapid; {} step events",
+        r.feed_mm, r.rapid_mm, r.events
+    ));
+    let tools: Vec<String> = r
+        .tools
+        .iter()
+        .map(|(line, t)| format!("{t} (line {line})"))
+        .collect();
+    report(format!(
+        "tools: {}",
+        if tools.is_empty() {
+            "none named".to_string()
+        } else {
+            tools.join(", ")
+        }
+    ));
+    Ok(if r.refused.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
 fn run(args: &RunArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    if let Some(file) = &args.file {
+        return run_program(file, args);
+    }
     println!("Lathe retrofit controller: device against the f64 reference, bit for bit");
     match args.link {
         LinkKind::Pty => {

@@ -189,3 +189,36 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn run_reports_a_program_and_traces_its_path() {
+    for fig in ["12", "17", "22"] {
+        let example = format!(
+            "{}/../examples/krylenko-fig{fig}.nc",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let out = Command::new(BIN).args(["run", &example]).output().unwrap();
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert_eq!(out.status.code(), Some(0), "{text}");
+        assert!(text.contains(" 0 refused\n"), "{text}");
+        assert!(text.contains("\ncycle time "), "{text}");
+        let tool = if fig == "17" { "T0202" } else { "T0101" };
+        assert!(text.contains(&format!("tools: {tool} (line 6)")), "{text}");
+    }
+    // The trace: one block per line on stdout, the report on stderr.
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/krylenko-fig12.nc");
+    let out = Command::new(BIN)
+        .args(["run", example, "--trace"])
+        .output()
+        .unwrap();
+    let trace = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        trace.starts_with("G00 X30.0000 Z10.0000\nG00 X20.0000 Z2.0000\n"),
+        "{trace}"
+    );
+    assert!(trace.contains("\nG01 X27.5314 Z0.0000\n"), "{trace}");
+    assert!(trace.lines().all(|l| l.starts_with("G0")), "{trace}");
+    // Options that need a program are refused without one.
+    let out = Command::new(BIN).args(["run", "--trace"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

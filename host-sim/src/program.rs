@@ -1,0 +1,305 @@
+//! `host-sim run FILE`: a whole program through the in-process device in
+//! virtual time, with what a person asks of it before cutting: the cycle
+//! time, the travel, the tool changes, every block the device refused, and
+//! on request the path as the device ran it.
+
+use core_nostd::comp::MoveKind;
+use core_nostd::gcode::{is_block, parse, Dialect, Units};
+use core_nostd::interleave::StepEvent;
+use core_nostd::protocol::{Device, Io};
+use core_nostd::stepdir::DriveTiming;
+
+/// How to run a program.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// The program's dialect.
+    pub dialect: Dialect,
+    /// X words are radii at the start (`G8`), not diameters.
+    pub radius: bool,
+}
+
+/// A line the device refused.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Refused {
+    /// Line, from 1.
+    pub line: usize,
+    /// The device's `ERR …` reply (without its checksum).
+    pub reply: String,
+}
+
+/// What running a program came to.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// G-code lines the device ran.
+    pub blocks: usize,
+    /// The lines it refused.
+    pub refused: Vec<Refused>,
+    /// Time in motion, µs (the runs' ticks at the 1 MHz step clock).
+    pub motion_us: u64,
+    /// Time dwelling (`G04`), µs.
+    pub dwell_us: u64,
+    /// Step events issued.
+    pub events: u64,
+    /// Path length at feed and at the rapid rate, mm (X on the radius).
+    pub feed_mm: f64,
+    /// See `feed_mm`.
+    pub rapid_mm: f64,
+    /// Each tool change: the line and the `T` word as written.
+    pub tools: Vec<(usize, String)>,
+    /// Every motion block the device ran, as G-code in machine coordinates
+    /// (X a diameter, I/K radius values from the block's start).
+    pub trace: Vec<String>,
+    /// The same blocks exactly: the end point and, for an arc, the centre
+    /// (X on the radius, ångström), with the G code.
+    pub path: Vec<Traced>,
+}
+
+/// One motion block the device ran, exactly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Traced {
+    /// 0 to 3: `G00` … `G03`.
+    pub g: u8,
+    /// The end point, X on the radius, Å.
+    pub to: [i64; 2],
+    /// An arc's centre, Å.
+    pub centre: Option<[i64; 2]>,
+}
+
+impl Report {
+    /// The cycle time, µs.
+    pub const fn cycle_us(&self) -> u64 {
+        self.motion_us + self.dwell_us
+    }
+}
+
+/// Sums what the device reports through its transport.
+#[derive(Default)]
+struct Tally {
+    out: Vec<u8>,
+    run_ticks: u64,
+    dwell_us: u64,
+    events: u64,
+}
+
+impl Io for Tally {
+    fn send(&mut self, line: &[u8]) {
+        self.out.extend_from_slice(line);
+    }
+    fn step(&mut self, _: StepEvent, _: u64, _: &DriveTiming) {
+        self.events += 1;
+    }
+    fn run_end(&mut self, ticks: u64) {
+        self.run_ticks += ticks;
+    }
+    fn dwell(&mut self, us: u64) {
+        self.dwell_us += us;
+    }
+}
+
+/// Sends one request; the final reply line without its checksum.
+fn request(dev: &mut Device, io: &mut Tally, line: &str) -> String {
+    io.out.clear();
+    dev.receive_bytes(line.as_bytes(), io);
+    dev.receive_bytes(b"\n", io);
+    let text = String::from_utf8_lossy(&io.out);
+    let last = text.lines().last().unwrap_or("");
+    last.rsplit_once('*').map_or(last, |(b, _)| b).to_string()
+}
+
+/// Ångström as mm with 4 decimals, half away from zero.
+fn mm4(a: i64) -> String {
+    let q = (a.unsigned_abs() + 500) / 1000;
+    let sign = if a < 0 && q != 0 { "-" } else { "" };
+    format!("{sign}{}.{:04}", q / 10_000, q % 10_000)
+}
+
+/// Runs a program's text.
+pub fn run(text: &str, options: Options) -> Report {
+    run_with(text, options, &[])
+}
+
+/// Runs a program's text after `setup` requests (`CFG RN=0.8 TIP=2`); a
+/// setup request the device refuses is reported as refused at line 0.
+pub fn run_with(text: &str, options: Options, setup: &[&str]) -> Report {
+    let mut dev = Device::new();
+    let mut io = Tally::default();
+    let mut report = Report::default();
+    let settings = [
+        format!("OPT DIALECT={}", options.dialect.as_str()),
+        format!("CFG DIAM={}", u8::from(!options.radius)),
+    ];
+    for setting in settings
+        .iter()
+        .map(String::as_str)
+        .chain(setup.iter().copied())
+    {
+        let reply = request(&mut dev, &mut io, setting);
+        if !reply.starts_with("OK") {
+            report.refused.push(Refused { line: 0, reply });
+        }
+    }
+    let mut units = Units::Mm;
+    let mut tool = None;
+    let mut at = [0i64; 2];
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim_end_matches('\r');
+        if line.trim().is_empty() {
+            continue;
+        }
+        let refuse = |reply: String| Refused { line: i + 1, reply };
+        if !is_block(line) {
+            report
+                .refused
+                .push(refuse("ERR SYNTAX not a G-code line".into()));
+            continue;
+        }
+        let reply = request(&mut dev, &mut io, line);
+        if !reply.starts_with("OK") {
+            report.refused.push(refuse(reply));
+            continue;
+        }
+        report.blocks += 1;
+        // What the device read: the tool word and the unit.
+        if let Ok(b) = parse(line, options.dialect, units) {
+            units = b.units.unwrap_or(units);
+            if let Some(t) = b.tool {
+                if tool != Some(t.tool) {
+                    tool = Some(t.tool);
+                    let word = match t.offset {
+                        Some(o) => format!("T{:02}{o:02}", t.tool),
+                        None => format!("T{}", t.tool),
+                    };
+                    report.tools.push((i + 1, word));
+                }
+            }
+        }
+        if reply.contains("SKIP=BDEL") {
+            continue;
+        }
+        // The blocks this request sent (none for a block without motion,
+        // or one whose motion waits for the next block).
+        let moves = dev.session().last_moves().clone();
+        for m in &moves {
+            let (dx, dz) = ((m.to[0] - at[0]) as f64, (m.to[1] - at[1]) as f64);
+            let mut block = String::new();
+            let x = mm4(2 * m.to[0]);
+            let z = mm4(m.to[1]);
+            match m.kind {
+                MoveKind::Line { rapid } => {
+                    let l = dx.hypot(dz) / 1e7;
+                    if rapid {
+                        report.rapid_mm += l;
+                    } else {
+                        report.feed_mm += l;
+                    }
+                    let g = if rapid { "G00" } else { "G01" };
+                    block.push_str(&format!("{g} X{x} Z{z}"));
+                    report.path.push(Traced {
+                        g: u8::from(!rapid),
+                        to: m.to,
+                        centre: None,
+                    });
+                }
+                MoveKind::Arc { centre, dir } => {
+                    let (i, k) = (centre[0] - at[0], centre[1] - at[1]);
+                    let r = (i as f64).hypot(k as f64);
+                    let a0 = (-(i as f64)).atan2(-(k as f64));
+                    let a1 = ((m.to[0] - centre[0]) as f64).atan2((m.to[1] - centre[1]) as f64);
+                    let ccw = matches!(dir, core_nostd::arc::ArcDir::Ccw);
+                    let mut sweep = if ccw { a1 - a0 } else { a0 - a1 };
+                    sweep = sweep.rem_euclid(std::f64::consts::TAU);
+                    if sweep == 0.0 {
+                        sweep = std::f64::consts::TAU;
+                    }
+                    report.feed_mm += r * sweep / 1e7;
+                    let g = if ccw { "G03" } else { "G02" };
+                    block.push_str(&format!("{g} X{x} Z{z} I{} K{}", mm4(i), mm4(k)));
+                    report.path.push(Traced {
+                        g: if ccw { 3 } else { 2 },
+                        to: m.to,
+                        centre: Some(centre),
+                    });
+                }
+            }
+            report.trace.push(block);
+            at = m.to;
+        }
+    }
+    // The end: everything queued runs.
+    let reply = request(&mut dev, &mut io, "SYNC");
+    debug_assert!(reply.starts_with("OK"), "SYNC: {reply}");
+    report.motion_us = io.run_ticks;
+    report.dwell_us = io.dwell_us;
+    report.events = io.events;
+    report
+}
+
+/// Microseconds as `m:ss.sss`.
+pub fn minutes(us: u64) -> String {
+    let ms = us.div_ceil(1000);
+    format!("{}:{:02}.{:03}", ms / 60_000, ms / 1000 % 60, ms % 1000)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FANUC: Options = Options {
+        dialect: Dialect::Fanuc,
+        radius: false,
+    };
+
+    #[test]
+    fn a_program_reports_its_time_travel_and_tools() {
+        let program = "%\nO1000\nG21 G18 G98\nT0101\nG00 X20. Z2.\nG01 Z-30. F300.\n\
+                       G04 P1500\nT0202\nG00 X40.\nG02 X40. Z-30. I-10. K0\nM30\n%\n";
+        let r = run(program, FANUC);
+        assert!(r.refused.is_empty(), "{:?}", r.refused);
+        assert_eq!(r.tools, [(4, "T0101".into()), (8, "T0202".into())]);
+        // 32 mm at 300 mm/min take 6.4 s, the circle at its feed 12.6 s,
+        // the ramps and the rapids a little more; the dwell 1.5 s.
+        assert_eq!(r.dwell_us, 1_500_000);
+        assert!(
+            r.motion_us > 19_000_000 && r.motion_us < 20_500_000,
+            "{}",
+            r.motion_us
+        );
+        assert!(
+            (r.feed_mm - 32.0 - 20.0 * std::f64::consts::PI).abs() < 1e-6,
+            "{}",
+            r.feed_mm
+        );
+        let rapid = 10f64.hypot(2.0) + 10.0;
+        assert!((r.rapid_mm - rapid).abs() < 1e-6, "{}", r.rapid_mm);
+        assert_eq!(
+            r.trace,
+            [
+                "G00 X20.0000 Z2.0000",
+                "G01 X20.0000 Z-30.0000",
+                "G00 X40.0000 Z-30.0000",
+                "G02 X40.0000 Z-30.0000 I-10.0000 K0.0000"
+            ]
+        );
+        assert_eq!(r.cycle_us(), r.motion_us + 1_500_000);
+        assert_eq!(minutes(61_234_001), "1:01.235");
+    }
+
+    #[test]
+    fn refusals_are_listed_and_the_rest_runs() {
+        let r = run("G00 X10\nG54\nMOVE X=1\nG00 X20\n", FANUC);
+        assert_eq!(
+            r.refused,
+            [
+                Refused {
+                    line: 2,
+                    reply: "ERR VALUE G54 not supported".into()
+                },
+                Refused {
+                    line: 3,
+                    reply: "ERR SYNTAX not a G-code line".into()
+                }
+            ]
+        );
+        assert_eq!(r.trace, ["G00 X10.0000 Z0.0000", "G00 X20.0000 Z0.0000"]);
+    }
+}

@@ -1,0 +1,244 @@
+//! The ISO dialect against LinuxCNC's standalone interpreter `rs274`
+//! (Debian `linuxcnc-uspace`): for programs without cycles, the device's
+//! path (`host-sim run --trace`: block end points and arc centres) equals
+//! LinuxCNC's canonical moves (`STRAIGHT_TRAVERSE`, `STRAIGHT_FEED`,
+//! `ARC_FEED`) to 0.0001 mm (0.0001 in for inch programs, the digits
+//! `rs274` prints).
+//!
+//! With nose compensation the two differ by design at one place, the
+//! entry move: LinuxCNC ends it with the imaginary tip on the programmed
+//! point, the device with the nose touching the first element square to
+//! its start (`docs/compensation.md`); those moves are compared by kind
+//! only. LinuxCNC's orientation codes are the device's tip codes mirrored
+//! in X (its `Q2` is `TIP=3`, its `Q3` `TIP=2`); outside corners are
+//! compared under `G450` (LinuxCNC always rounds them with an arc).
+//!
+//! Skipped with a message where `rs274` is missing, except under CI (`CI`
+//! set), where a missing `rs274` fails.
+
+use core_nostd::gcode::Dialect;
+use host_sim::program::Options;
+use std::process::Command;
+
+/// One canonical move: its G code, X on the radius and Z (mm), the arc
+/// centre.
+#[derive(Clone, Debug, PartialEq)]
+struct Move {
+    g: u8,
+    x: f64,
+    z: f64,
+    centre: Option<(f64, f64)>,
+}
+
+/// A program for both, and what differs.
+struct Peer {
+    name: &'static str,
+    /// The program as both read it (after the header).
+    body: &'static str,
+    /// Nose compensation: the device's tip code, LinuxCNC's orientation,
+    /// and the index of the entry move.
+    comp: Option<(u8, u8, usize)>,
+    /// Inch: compare to 0.0001 in.
+    inch: bool,
+}
+
+const PEERS: &[Peer] = &[
+    Peer {
+        name: "tapers and arcs (I/K and R, more than 180°)",
+        body: "G18 G21 G7 G90\nG00 X30 Z5\nG01 Z0 F100\nX40 Z-10\nZ-20\n\
+               G03 X50 Z-25 I0 K-5\nG02 X60 Z-30 R5\nG01 X70 Z-40\n\
+               G02 X70 Z-50 R-5.5\nG01 Z-60\nX80 Z-61.25\nG00 X100 Z10\nM2\n",
+        comp: None,
+        inch: false,
+    },
+    Peer {
+        name: "incremental words (G91)",
+        body: "G18 G21 G7 G90\nG00 X20 Z2\nG91 G01 Z-12 F80\nX10 Z-5\n\
+               G02 X8 Z-4 I0 K-4\nG03 X-4 Z-6 I-1 K-3\nG01 Z-3.333\nG90 G00 X60 Z5\nM2\n",
+        comp: None,
+        inch: false,
+    },
+    Peer {
+        name: "inch (G20)",
+        body: "G18 G20 G7 G90\nG00 X1. Z.1\nG01 Z-1.5 F5.\nG02 X1.5 Z-1.75 R.25\n\
+               G01 X1.8125 Z-2.0625\nG03 X2.2125 Z-2.2625 I0 K-.2\nG00 X3. Z.5\nM2\n",
+        comp: None,
+        inch: true,
+    },
+    Peer {
+        name: "radius words (G8), arc centres absolute (G90.1)",
+        body: "G18 G21 G8 G90\nG00 X10 Z1\nG90.1 G02 X10 Z-4 I5 K-1.5 F100\n\
+               G91.1 G03 X14 Z-8 I0 K-4\nG01 X15.5 Z-9.25\nG00 X25 Z5\nM2\n",
+        comp: None,
+        inch: false,
+    },
+    Peer {
+        name: "G42 external contour, r 0.4 (tip 3 / Q2)",
+        body: "G18 G21 G7 G90 G40\nG00 X20 Z5\nG42 G01 Z0 F100\nX28\nX48 Z-10\n\
+               Z-46\nX68 Z-56\nX94\nG03 X104 Z-61 R5\nG01 Z-70\nG02 X114 Z-75 I5 K0\n\
+               G01 X120\nG40 G00 X130 Z-70\nM2\n",
+        comp: Some((3, 2, 1)),
+        inch: false,
+    },
+    Peer {
+        name: "G41 bore, r 0.4 (tip 2 / Q3)",
+        body: "G18 G21 G7 G90 G40\nG00 X90 Z5\nG41 G01 Z0 F80\nX78\nX50 Z-14\nZ-34\n\
+               X28 Z-45\nX12\nZ-60\nG40 G00 X10 Z-55\nM2\n",
+        comp: Some((2, 3, 1)),
+        inch: false,
+    },
+];
+
+fn rs274_available() -> bool {
+    let found = Command::new("rs274").arg("-h").output().is_ok();
+    if !found {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs rs274 (apt-get install linuxcnc-uspace)"
+        );
+        eprintln!("rs274 not found: the LinuxCNC comparison is skipped");
+    }
+    found
+}
+
+/// The numbers inside `NAME(…)`.
+fn args(line: &str) -> Vec<f64> {
+    let inner = line.split_once('(').unwrap().1.trim_end_matches(')');
+    inner
+        .split(',')
+        .map(|a| a.trim().parse().unwrap())
+        .collect()
+}
+
+/// LinuxCNC's canonical moves of a program, in mm.
+fn linuxcnc(name: &str, program: &str, tool: Option<u8>) -> Vec<Move> {
+    let dir = std::env::temp_dir().join(format!("linuxcnc-peer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ngc = dir.join("part.ngc");
+    let tbl = dir.join("tool.tbl");
+    // The standalone interpreter's tool table is in inches: r 0.4 mm.
+    let q = tool.unwrap_or(0);
+    std::fs::write(&tbl, format!("T1 P1 X0 Z0 D0.031496062992126 Q{q}\n")).unwrap();
+    let header = if tool.is_some() { "T1 M6\n" } else { "" };
+    std::fs::write(&ngc, format!("{header}{program}")).unwrap();
+    let out = Command::new("rs274")
+        .args(["-g", "-t"])
+        .arg(&tbl)
+        .arg(&ngc)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        text.contains("PROGRAM_END"),
+        "{name}: rs274 stopped:\n{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut scale = 1.0;
+    let mut moves = Vec::new();
+    for line in text.lines() {
+        let Some(call) = line.split("N..... ").nth(1) else {
+            continue;
+        };
+        if call.starts_with("USE_LENGTH_UNITS") {
+            scale = if call.contains("INCHES") { 25.4 } else { 1.0 };
+        } else if call.starts_with("STRAIGHT_TRAVERSE") || call.starts_with("STRAIGHT_FEED") {
+            let a = args(call);
+            moves.push(Move {
+                g: u8::from(call.starts_with("STRAIGHT_FEED")),
+                x: a[0] * scale,
+                z: a[2] * scale,
+                centre: None,
+            });
+        } else if call.starts_with("ARC_FEED") {
+            // XZ plane: Z end, X end, Z centre, X centre, turn (+1 G03).
+            let a = args(call);
+            moves.push(Move {
+                g: if a[4] > 0.0 { 3 } else { 2 },
+                x: a[1] * scale,
+                z: a[0] * scale,
+                centre: Some((a[3] * scale, a[2] * scale)),
+            });
+        }
+    }
+    moves
+}
+
+/// The device's path of the same program (its trace), in mm.
+fn device(name: &str, program: &str, tip: Option<u8>) -> Vec<Move> {
+    let header = match tip {
+        // The device's T names the tool; the tip and radius are its CFG.
+        Some(_) => "G450\n",
+        None => "",
+    };
+    let text = format!("{header}{program}");
+    let options = Options {
+        dialect: Dialect::Iso,
+        radius: false,
+    };
+    let setup = tip.map(|t| format!("CFG RN=0.4 TIP={t}"));
+    let report = host_sim::program::run_with(
+        &text,
+        options,
+        &setup.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    assert!(report.refused.is_empty(), "{name}: {:?}", report.refused);
+    let mm = |a: i64| a as f64 / 1e7;
+    report
+        .path
+        .iter()
+        .map(|t| Move {
+            g: t.g,
+            x: mm(t.to[0]),
+            z: mm(t.to[1]),
+            centre: t.centre.map(|c| (mm(c[0]), mm(c[1]))),
+        })
+        .collect()
+}
+
+#[test]
+fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
+    if !rs274_available() {
+        return;
+    }
+    let (mut agreed, mut moves) = (0, 0);
+    for peer in PEERS {
+        let theirs = linuxcnc(peer.name, peer.body, peer.comp.map(|c| c.1));
+        let ours = device(peer.name, peer.body, peer.comp.map(|c| c.0));
+        assert_eq!(
+            ours.len(),
+            theirs.len(),
+            "{}:\n device {ours:#?}\n LinuxCNC {theirs:#?}",
+            peer.name
+        );
+        let tol = if peer.inch { 0.0001 * 25.4 } else { 0.0001 } + 1e-9;
+        let entry = peer.comp.map(|c| c.2);
+        for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
+            let what = format!("{} move {i}: device {a:?}, LinuxCNC {b:?}", peer.name);
+            assert_eq!(a.g, b.g, "{what}");
+            if Some(i) == entry {
+                continue;
+            }
+            assert!(
+                (a.x - b.x).abs() <= tol && (a.z - b.z).abs() <= tol,
+                "{what}"
+            );
+            match (a.centre, b.centre) {
+                (Some(c), Some(d)) => {
+                    assert!(
+                        (c.0 - d.0).abs() <= tol && (c.1 - d.1).abs() <= tol,
+                        "{what}"
+                    )
+                }
+                (None, None) => {}
+                _ => panic!("{what}"),
+            }
+        }
+        agreed += 1;
+        moves += ours.len();
+    }
+    eprintln!(
+        "LinuxCNC rs274 and the device agree on {agreed} of {} programs ({moves} moves)",
+        PEERS.len()
+    );
+}
