@@ -24,8 +24,8 @@
 //! | address | meaning | value |
 //! |---|---|---|
 //! | `N` | sequence number | kept to name the block in refusals |
-//! | `G` both | 00 01 02 03 (motion), 04 (dwell), 18 (ZX plane), 20 21 (inch, millimetres), 40 41 42 (nose compensation), 96 97 (surface speed, rpm), 450 451 (outside corners: transition arc, intersection) | code |
-//! | `G` ISO | 7 8 (diameter, radius), 90 91 (absolute, incremental), 90.1 91.1 (arc centres absolute, from the start), 94 95 (feed per minute, per revolution) | code |
+//! | `G` both | 00 01 02 03 (motion), 04 (dwell), 10 with L2 or L20 (a work offset), 18 (ZX plane), 20 21 (inch, millimetres), 40 41 42 (nose compensation), 96 97 (surface speed, rpm), 54 … 59 (work offsets), 450 451 (outside corners: transition arc, intersection) | code |
+//! | `G` ISO | 7 8 (diameter, radius), 90 91 (absolute, incremental), 90.1 91.1 (arc centres absolute, from the start), 94 95 (feed per minute, per revolution), 43 49 (tool offsets on, off) | code |
 //! | `G` Fanuc | 50 (with `S`: the spindle speed limit), 98 99 (feed per minute, per revolution) | code |
 //! | `X` | X end point: a diameter when `DIAM=1`; in a Fanuc `G04`, seconds | length |
 //! | `Z` | Z end point | length |
@@ -38,7 +38,9 @@
 //! | `D` | ISO, with G96: the spindle speed limit, rpm | 0 … 99 999.999999 |
 //! | `P` | with G04: the dwell, seconds (ISO) or milliseconds (Fanuc) | 0 … 99 999.999999 |
 //! | `T` | ISO: the tool, 0 … 99; Fanuc: tool and offset register, `T0101` | whole number |
-//! | `M` | 02 30 (end of program), 03 04 05 (spindle cw, ccw, stop), 07 08 09 (mist, flood, off) | code |
+//! | `M` | 02 30 (end of program), 03 04 05 (spindle cw, ccw, stop), 06 (ISO: tool change), 07 08 09 (mist, flood, off) | code |
+//! | `P`, `L` | with G10: the work offset 1 … 6 and L2 or L20 | whole number |
+//! | `H` | ISO, with G43: the offset register | whole number |
 
 use crate::length::{gcode_scaled, Length, LengthError};
 use core::fmt;
@@ -204,6 +206,27 @@ pub struct ToolWord {
     pub offset: Option<u8>,
 }
 
+/// `G10 L2`/`L20`: a work offset register set from the block's `X`/`Z`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SetWork {
+    /// 1 … 6: `G54` … `G59`.
+    pub register: u8,
+    /// `L20`: so that the current point has the coordinates `X`/`Z`;
+    /// `L2`: to them.
+    pub here: bool,
+}
+
+/// ISO `G43`/`G49`: the tool offsets on or off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ToolOffset {
+    /// `G43`, from register `H` or (`None`) the loaded tool's.
+    On(Option<u8>),
+    /// `G49`.
+    Off,
+}
+
 /// One parsed block.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Block {
@@ -266,6 +289,14 @@ pub struct Block {
     pub coolant: Option<Coolant>,
     /// M02/M30.
     pub stop: Option<Stop>,
+    /// G54–G59 if given: 0 … 5.
+    pub wcs: Option<u8>,
+    /// G10 L2/L20: the block's `X`/`Z` are an offset's, not an end point.
+    pub set_work: Option<SetWork>,
+    /// ISO G43/G49.
+    pub tool_offset: Option<ToolOffset>,
+    /// ISO M06: the tool named by `T` is put in.
+    pub tool_change: bool,
 }
 
 /// Why a block was refused.
@@ -419,7 +450,7 @@ pub struct Located {
 /// assert!(!is_block("MOVE X=1"));
 /// ```
 pub fn is_block(line: &str) -> bool {
-    let b = line.trim_start().as_bytes();
+    let b = line.trim_start_matches([' ', '\t']).as_bytes();
     match b {
         [b'%' | b'/' | b'(' | b';' | b':', ..] => true,
         [b'O' | b'o', b'<', ..] => true,
@@ -545,6 +576,10 @@ struct Reading {
     once: Option<(u16, usize)>,
     /// The dwell time, µs.
     time: Option<u64>,
+    /// `P` (not a time), `L`, `H`: whole numbers, and their columns.
+    p: Option<(u32, usize)>,
+    l: Option<(u32, usize)>,
+    h: Option<(u32, usize)>,
     /// ISO `D` (spindle speed limit with G96) and its column.
     d: Option<(Length, usize)>,
 }
@@ -559,6 +594,9 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
         dwell: scanned.dwell,
         once: None,
         time: None,
+        p: None,
+        l: None,
+        h: None,
         d: None,
     };
     let bytes = line.as_bytes();
@@ -671,6 +709,15 @@ fn unitless_scaled(letter: u8, number: &str, e: u32) -> Result<u64, BlockError> 
     }
 }
 
+/// A whole number of at most four digits (`P`, `L`, `H`).
+fn whole(letter: u8, number: &str) -> Result<u32, BlockError> {
+    let digits = number.trim_start_matches('0');
+    if !number.bytes().all(|b| b.is_ascii_digit()) || digits.len() > 4 {
+        return Err(BlockError::Range(letter, "must be a whole number"));
+    }
+    Ok(digits.bytes().fold(0, |n, b| n * 10 + u32::from(b - b'0')))
+}
+
 /// A dwell time in µs from seconds (`e` = 6) or milliseconds (`e` = 3).
 fn dwell_us(letter: u8, number: &str, e: u32) -> Result<u64, BlockError> {
     unitless_scaled(letter, number, e)
@@ -743,16 +790,16 @@ impl Reading {
             b'K' => b.k = Some(length()?),
             b'R' => b.r = Some(length()?),
             b'F' => b.f = Some(length()?),
-            b'P' => {
-                if !self.dwell {
-                    return Err(BlockError::Form("P only with G04 (the dwell time)"));
-                }
+            b'P' if self.dwell => {
                 if self.time.is_some() {
                     return Err(BlockError::Form("G04 takes one time: P, X or U"));
                 }
                 // Fanuc's P counts milliseconds, ISO's seconds.
                 self.time = Some(dwell_us(letter, number, if fanuc { 3 } else { 6 })?);
             }
+            b'P' => self.p = Some((whole(letter, number)?, pos)),
+            b'L' => self.l = Some((whole(letter, number)?, pos)),
+            b'H' if !fanuc => self.h = Some((whole(letter, number)?, pos)),
             b'S' => b.s = Some(unitless(letter, number)?),
             b'D' if !fanuc => self.d = Some((unitless(letter, number)?, pos)),
             b'T' => b.tool = Some(tool_word(number, self.dialect)?),
@@ -835,7 +882,8 @@ impl Reading {
                     SpindleMode::Rpm
                 },
             ),
-            40 => set(&mut self.once, (tenths, pos)),
+            40 | 100 => set(&mut self.once, (tenths, pos)),
+            540..=590 if tenths % 10 == 0 => set(&mut b.wcs, ((tenths - 540) / 10) as u8),
             700..=760 if tenths % 10 == 0 => Err(BlockError::Cycle(tenths)),
             // Fanuc system A.
             500 if fanuc => set(&mut self.once, (tenths, pos)),
@@ -848,7 +896,9 @@ impl Reading {
                 },
             ),
             900 | 920 | 940 if fanuc => Err(BlockError::Cycle(tenths)),
-            70 | 80 | 910 | 901 | 911 | 950 if fanuc => other(Dialect::Iso),
+            70 | 80 | 910 | 901 | 911 | 950 | 430 | 490 if fanuc => other(Dialect::Iso),
+            430 => set(&mut b.tool_offset, ToolOffset::On(None)),
+            490 => set(&mut b.tool_offset, ToolOffset::Off),
             // ISO.
             900 | 910 => set(&mut b.incremental, tenths == 910),
             901 | 911 => set(&mut b.arc_absolute, tenths == 901),
@@ -897,6 +947,13 @@ impl Reading {
                     _ => Coolant::Off,
                 });
             }
+            60 if self.dialect == Dialect::Fanuc => {
+                return Err(BlockError::OtherDialect(b'M', 60, Dialect::Iso))
+            }
+            60 => {
+                group(b.tool_change)?;
+                b.tool_change = true;
+            }
             _ => return Err(BlockError::UnsupportedM(Some(tenths))),
         }
         Ok(())
@@ -918,6 +975,30 @@ impl Reading {
                 }
                 b.dwell = Some(us);
             }
+            Some(100) => {
+                let form = |why| Err((BlockError::Form(why), once_at));
+                let here = match self.l.map(|(l, _)| l) {
+                    Some(2) => false,
+                    Some(20) => true,
+                    _ => return form("G10 needs L2 or L20 (a work offset)"),
+                };
+                let register = match self.p {
+                    Some((p @ 1..=6, _)) => p as u8,
+                    Some((_, at)) => {
+                        return Err((BlockError::Range(b'P', "names G54 to G59: 1 to 6"), at))
+                    }
+                    None => return form("G10 needs P, the work offset: 1 to 6 (G54 to G59)"),
+                };
+                if b.i.is_some() || b.k.is_some() || b.r.is_some() {
+                    return form("G10 takes X and Z");
+                }
+                if b.incremental_x || b.incremental_z {
+                    return form("G10 takes X and Z, not U and W");
+                }
+                b.set_work = Some(SetWork { register, here });
+                self.p = None;
+                self.l = None;
+            }
             Some(_) => {
                 // Fanuc G50: the spindle speed limit.
                 if motion_words || b.s.is_none() {
@@ -932,6 +1013,22 @@ impl Reading {
                 b.clamp = b.s.take();
             }
             None => {}
+        }
+        if let Some((_, at)) = self.p {
+            return Err((
+                BlockError::Form("P only with G04 (the dwell time) or G10 (the register)"),
+                at,
+            ));
+        }
+        if let Some((_, at)) = self.l {
+            return Err((BlockError::Form("L only with G10"), at));
+        }
+        match (self.h, b.tool_offset) {
+            (Some((h, _)), Some(ToolOffset::On(_))) => {
+                b.tool_offset = Some(ToolOffset::On(Some(h.min(255) as u8)))
+            }
+            (Some((_, at)), _) => return Err((BlockError::Form("H only with G43"), at)),
+            _ => {}
         }
         if let Some((d, at)) = self.d {
             if b.spindle_mode != Some(SpindleMode::Surface) {
@@ -1175,7 +1272,9 @@ mod tests {
         );
         assert_eq!(
             parse_block("P1"),
-            Err(BlockError::Form("P only with G04 (the dwell time)"))
+            Err(BlockError::Form(
+                "P only with G04 (the dwell time) or G10 (the register)"
+            ))
         );
         assert_eq!(parse_block("M13"), Err(BlockError::UnsupportedM(Some(130))));
         assert_eq!(parse_block("M3 M4"), Err(BlockError::Repeated(b'M')));

@@ -192,9 +192,10 @@ pub fn path_feed(
             if rpm == 0 {
                 return Err(SpeedError::NotTurning);
             }
-            let product = i128::from(f.as_angstrom()) * i128::from(rpm);
-            let q = (product.unsigned_abs() + 5_000_000) / 10_000_000;
-            i64::try_from(q)
+            // ⌊2·F·rpm/10⁷⌋, then halved rounding up: half away from zero.
+            let f = u128::from(f.as_angstrom().unsigned_abs());
+            let twice = mul_div(f, u128::from(rpm.unsigned_abs()), 5_000_000);
+            i64::try_from(twice.div_ceil(2))
                 .ok()
                 .and_then(Length::from_angstrom)
                 .ok_or(SpeedError::Feed)?
@@ -257,6 +258,99 @@ impl Aux {
         let spindle = a.turning != b.turning || (b.turning != Spindle::Off && speed);
         spindle || self.coolant != next.coolant
     }
+}
+
+/// Offset registers in the tool table (Fanuc's 01 … 32; `T0100` cancels).
+pub const TOOL_REGISTERS: usize = 32;
+/// Work coordinate systems: `G54` … `G59`.
+pub const WORK_SYSTEMS: usize = 6;
+
+/// One offset register of the tool table (Fanuc layout; lecture 13's
+/// offset registers): lengths on the radius for X.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ToolEntry {
+    /// Geometry offset, X and Z.
+    pub geometry: [Length; 2],
+    /// Wear offset, X and Z.
+    pub wear: [Length; 2],
+    /// The nose radius and tip code (0 … 9), once set; without them nose
+    /// compensation uses the configured ones.
+    pub nose: Option<(Length, u8)>,
+}
+
+impl ToolEntry {
+    /// Geometry plus wear, if within the length range.
+    pub fn offset(&self) -> Option<[Length; 2]> {
+        Some([
+            self.geometry[0].checked_add(self.wear[0])?,
+            self.geometry[1].checked_add(self.wear[1])?,
+        ])
+    }
+}
+
+/// The work offsets and the tool table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Offsets {
+    /// `G54` … `G59`: where each system's zero lies in machine coordinates.
+    pub work: [[Length; 2]; WORK_SYSTEMS],
+    /// Registers 01 … 32.
+    pub tools: [ToolEntry; TOOL_REGISTERS],
+}
+
+impl Offsets {
+    /// All zero, no nose set.
+    pub const ZERO: Offsets = Offsets {
+        work: [[Length::ZERO; 2]; WORK_SYSTEMS],
+        tools: [ToolEntry {
+            geometry: [Length::ZERO; 2],
+            wear: [Length::ZERO; 2],
+            nose: None,
+        }; TOOL_REGISTERS],
+    };
+
+    /// A register (1 … 32); `None` for 0 or beyond the table.
+    pub fn register(&self, n: u8) -> Option<&ToolEntry> {
+        self.tools.get(usize::from(n).checked_sub(1)?)
+    }
+
+    /// The tool's offset in effect: its register's geometry plus wear (zero
+    /// without a register).
+    pub fn tool_offset(&self, sel: &Selection) -> Option<[Length; 2]> {
+        match self.register(sel.register) {
+            Some(t) => t.offset(),
+            None => Some([Length::ZERO; 2]),
+        }
+    }
+
+    /// The machine coordinates of work zero with the tool's offset: machine
+    /// = work + this, if within the length range.
+    pub fn vector(&self, sel: &Selection) -> Option<[Length; 2]> {
+        let work = self.work.get(usize::from(sel.wcs))?;
+        let tool = self.tool_offset(sel)?;
+        Some([work[0].checked_add(tool[0])?, work[1].checked_add(tool[1])?])
+    }
+}
+
+/// Which offsets are in effect.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Selection {
+    /// 0 … 5: `G54` … `G59`.
+    pub wcs: u8,
+    /// The offset register in effect (0: none): Fanuc's `T0101`, ISO's
+    /// `G43 H`.
+    pub register: u8,
+    /// The tool in the turret's working station: Fanuc's `T01..`, ISO's
+    /// `T1 M06` (its register holds its nose).
+    pub loaded: u8,
+}
+
+impl Selection {
+    /// Power-on: `G54`, no offset register, no tool.
+    pub const POWER_ON: Selection = Selection {
+        wcs: 0,
+        register: 0,
+        loaded: 0,
+    };
 }
 
 #[cfg(test)]
@@ -325,6 +419,28 @@ mod tests {
         );
         let m = m.after(&block("G99 F99"));
         assert_eq!(path_feed(&m, &s, l("10")), Err(SpeedError::Feed));
+    }
+
+    #[test]
+    fn offsets_add_up() {
+        let mut o = Offsets::ZERO;
+        o.work[1] = [l("10"), l("-200")];
+        o.tools[2].geometry = [l("1.5"), l("-3")];
+        o.tools[2].wear = [l("-0.01"), l("0.002")];
+        let sel = Selection {
+            wcs: 1,
+            register: 3,
+            loaded: 3,
+        };
+        assert_eq!(o.vector(&sel), Some([l("11.49"), l("-202.998")]));
+        assert_eq!(
+            o.vector(&Selection { register: 0, ..sel }),
+            Some([l("10"), l("-200")])
+        );
+        assert_eq!(o.vector(&Selection { wcs: 6, ..sel }), None);
+        o.work[1][0] = l("99999");
+        o.tools[2].geometry[0] = l("99999");
+        assert_eq!(o.vector(&sel), None);
     }
 
     #[test]

@@ -19,7 +19,7 @@
 
 use core_nostd::gcode::{
     is_block, parse, parse_block, Block, BlockError, Compensation, Coolant, Corner, Dialect,
-    FeedMode, LineKind, Motion, Spindle, SpindleMode, Stop, Units,
+    FeedMode, LineKind, Motion, Spindle, SpindleMode, Stop, ToolOffset, Units,
 };
 use core_nostd::length::LengthError;
 use core_nostd::protocol::Device;
@@ -103,6 +103,13 @@ fn as_reference(b: &Block) -> RefBlock {
         tool: b.tool.map(|t| t.tool),
         offset: b.tool.and_then(|t| t.offset),
         from_u_w: [b.incremental_x, b.incremental_z],
+        wcs: b.wcs,
+        set_work: b.set_work.map(|w| (w.register, w.here)),
+        tool_offset: b.tool_offset.map(|t| match t {
+            ToolOffset::On(h) => (true, h),
+            ToolOffset::Off => (false, None),
+        }),
+        tool_change: b.tool_change,
         m: [
             b.stop.map(|Stop::End| 30),
             b.spindle.map(|s| match s {
@@ -202,6 +209,21 @@ fn canonical(b: &RefBlock) -> String {
     for m in b.m.into_iter().flatten() {
         words.push(format!("M{m}"));
     }
+    if b.tool_change {
+        words.push("M6".into());
+    }
+    if let Some(w) = b.wcs {
+        words.push(format!("G{}", 54 + w));
+    }
+    if let Some((p, here)) = b.set_work {
+        words.push(format!("G10 L{} P{p}", if here { 20 } else { 2 }));
+    }
+    match b.tool_offset {
+        Some((true, Some(h))) => words.push(format!("G43 H{h}")),
+        Some((true, None)) => words.push("G43".into()),
+        Some((false, _)) => words.push("G49".into()),
+        None => {}
+    }
     for (letter, v) in ['X', 'Z', 'I', 'K', 'R', 'F']
         .iter()
         .zip(b.xzikr.iter().chain([&b.f]))
@@ -290,7 +312,8 @@ fuzz_target!(|text: &str| {
             (Ok(b), None) => {
                 let inc = b.incremental.unwrap_or(*incremental);
                 let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
-                let moves = b.x.is_some() || b.z.is_some() || arc_words;
+                // G10's X and Z are an offset's.
+                let moves = (b.x.is_some() || b.z.is_some() || arc_words) && b.set_work.is_none();
                 let end = |word: Option<core_nostd::length::Length>, now: i64, half: bool| {
                     word.map_or(now, |w| {
                         let w = w.as_angstrom();

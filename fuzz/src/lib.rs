@@ -719,15 +719,27 @@ pub fn check_position(s: &Session) {
     assert_eq!(i128::from(px), q(x.into(), hx.into()), "PX vs Q(X/hx)");
     assert_eq!(i128::from(pz), q(z.into(), hz.into()), "PZ vs Q(Z/hz)");
     let factor = if c.diam { 2 } else { 1 };
-    let want = format!(
-        "OK PX={px} PZ={pz} X={} Z={}",
+    let machine = format!(
+        "X={} Z={}",
         mm4_of(i128::from(x) * factor),
         mm4_of(z.into())
     );
     let mut copy = s.clone();
     let mut io = Collect::default();
     copy.handle_line(b"POS", &mut io);
-    assert_eq!(io.lines, [want], "POS");
+    assert_eq!(io.lines.len(), 1, "POS");
+    // With offsets in effect, X and Z are work coordinates and MX, MZ the
+    // machine's.
+    match io.lines[0].split_once(" MX=") {
+        None => assert_eq!(io.lines[0], format!("OK PX={px} PZ={pz} {machine}"), "POS"),
+        Some((head, tail)) => {
+            assert!(
+                head.starts_with(&format!("OK PX={px} PZ={pz} X=")),
+                "POS {head}"
+            );
+            assert_eq!(format!("X={tail}").replace("MZ=", "Z="), machine, "POS");
+        }
+    }
 }
 
 /// The outcome of one request.
@@ -1111,6 +1123,14 @@ pub struct RefBlock {
     pub from_u_w: [bool; 2],
     /// Fanuc: the offset register of the T word.
     pub offset: Option<u8>,
+    /// G54 … G59 as 0 … 5.
+    pub wcs: Option<u8>,
+    /// G10 L2/L20 P: the register and whether L20.
+    pub set_work: Option<(u8, bool)>,
+    /// ISO G43 (true, with its H) / G49 (false).
+    pub tool_offset: Option<(bool, Option<u8>)>,
+    /// ISO M6.
+    pub tool_change: bool,
 }
 
 /// Why the reference reading refuses a block.
@@ -1292,6 +1312,9 @@ pub fn reference_block_in(
     // G4 given, its time (µs), and D (×10⁷), for the checks at the end.
     let mut g4 = false;
     let mut g50 = false;
+    let mut g10 = false;
+    // P (not a time), L, H: whole numbers.
+    let (mut p, mut l, mut h) = (None::<u32>, None::<u32>, None::<u32>);
     let mut time: Option<u64> = None;
     let mut d: Option<i64> = None;
     let head = line.len() - line.trim_start_matches([' ', '\t']).len();
@@ -1385,6 +1408,14 @@ pub fn reference_block_in(
                             (2 | 30, 0) => (0, 30),
                             (3..=5, 0) => (1, code as u8),
                             (7..=9, 0) => (2, code as u8),
+                            (6, 0) if fanuc => return Err(RefBlockError::OtherDialect),
+                            (6, 0) => {
+                                if b.tool_change {
+                                    return Err(RefBlockError::Repeated(b'M'));
+                                }
+                                b.tool_change = true;
+                                continue;
+                            }
                             _ => return Err(RefBlockError::UnsupportedM),
                         };
                         if b.m[group].is_some() {
@@ -1405,11 +1436,20 @@ pub fn reference_block_in(
                         (90 | 91, 1) => put(&mut b.arc_distance, code * 10 + 1)?,
                         (_, 1..) => return Err(RefBlockError::UnsupportedG),
                         (50, _) if fanuc => {
-                            if g4 || g50 {
+                            if g4 || g50 || g10 {
                                 return Err(RefBlockError::Repeated(b'G'));
                             }
                             g50 = true;
                         }
+                        (10, _) => {
+                            if g4 || g50 || g10 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            g10 = true;
+                        }
+                        (54..=59, _) => put(&mut b.wcs, code as u8 - 54)?,
+                        (43 | 49, _) if fanuc => return Err(RefBlockError::OtherDialect),
+                        (43 | 49, _) => put(&mut b.tool_offset, (code == 43, None))?,
                         (98 | 99, _) if fanuc => put(&mut b.feed_mode, code as u8 - 4)?,
                         (90 | 92 | 94, _) if fanuc => return Err(RefBlockError::Cycle),
                         (7 | 8 | 91 | 95, _) if fanuc => return Err(RefBlockError::OtherDialect),
@@ -1423,7 +1463,7 @@ pub fn reference_block_in(
                         (94 | 95, _) => put(&mut b.feed_mode, code as u8)?,
                         (96 | 97, _) => put(&mut b.spindle_mode, code as u8)?,
                         (4, _) => {
-                            if g4 || g50 {
+                            if g4 || g50 || g10 {
                                 return Err(RefBlockError::Repeated(b'G'));
                             }
                             g4 = true;
@@ -1489,12 +1529,24 @@ pub fn reference_block_in(
                     }
                     b'S' => b.s = Some(unitless(7)?),
                     b'D' if !fanuc => d = Some(unitless(7)?),
-                    b'P' => {
-                        if !dwell || time.is_some() {
+                    b'P' if dwell => {
+                        if time.is_some() {
                             return Err(RefBlockError::Form);
                         }
                         // Seconds (Fanuc: milliseconds), as microseconds.
                         time = Some(unitless(if fanuc { 3 } else { 6 })? as u64);
+                    }
+                    b'P' | b'L' | b'H' if !(fanuc && letter == b'H') => {
+                        let n = number.trim_start_matches('0');
+                        if !number.bytes().all(|c| c.is_ascii_digit()) || n.len() > 4 {
+                            return Err(RefBlockError::Range(letter));
+                        }
+                        let v = Some(n.parse().unwrap_or(0));
+                        match letter {
+                            b'P' => p = v,
+                            b'L' => l = v,
+                            _ => h = v,
+                        }
                     }
                     b'T' if fanuc => {
                         let n = number.trim_start_matches('0');
@@ -1535,11 +1587,33 @@ pub fn reference_block_in(
         }
         b.dwell_us = Some(us);
     }
+    if g10 {
+        if !matches!(l, Some(2 | 20)) {
+            return Err(RefBlockError::Form);
+        }
+        match p {
+            Some(r @ 1..=6) => b.set_work = Some((r as u8, l == Some(20))),
+            Some(_) => return Err(RefBlockError::Range(b'P')),
+            None => return Err(RefBlockError::Form),
+        }
+        if b.xzikr[2..].iter().any(Option::is_some) || b.from_u_w.contains(&true) {
+            return Err(RefBlockError::Form);
+        }
+        (p, l) = (None, None);
+    }
     if g50 {
         if motion_words || b.s.is_none() {
             return Err(RefBlockError::Form);
         }
         b.clamp = b.s.take();
+    }
+    if p.is_some() || l.is_some() {
+        return Err(RefBlockError::Form);
+    }
+    match (h, b.tool_offset) {
+        (Some(h), Some((true, _))) => b.tool_offset = Some((true, Some(h.min(255) as u8))),
+        (Some(_), _) => return Err(RefBlockError::Form),
+        _ => {}
     }
     if let Some(d) = d {
         if b.spindle_mode != Some(96) {
@@ -1553,7 +1627,7 @@ pub fn reference_block_in(
 /// Whether a request line is a G-code block: its first word is an address
 /// letter directly followed by a digit, sign or point.
 pub fn reference_is_block(line: &str) -> bool {
-    let t = line.trim_start();
+    let t = line.trim_start_matches([' ', '\t']);
     let mut c = t.chars();
     match (c.next(), c.next()) {
         (Some('%' | '/' | '(' | ';' | ':'), _) => true,

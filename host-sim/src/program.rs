@@ -286,13 +286,13 @@ mod tests {
 
     #[test]
     fn refusals_are_listed_and_the_rest_runs() {
-        let r = run("G00 X10\nG54\nMOVE X=1\nG00 X20\n", FANUC);
+        let r = run("G00 X10\nG28\nMOVE X=1\nG00 X20\n", FANUC);
         assert_eq!(
             r.refused,
             [
                 Refused {
                     line: 2,
-                    reply: "ERR VALUE G54 not supported".into()
+                    reply: "ERR VALUE G28 not supported".into()
                 },
                 Refused {
                     line: 3,

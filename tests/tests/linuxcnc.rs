@@ -2,8 +2,9 @@
 //! (Debian `linuxcnc-uspace`): for programs without cycles, the device's
 //! path (`host-sim run --trace`: block end points and arc centres) equals
 //! LinuxCNC's canonical moves (`STRAIGHT_TRAVERSE`, `STRAIGHT_FEED`,
-//! `ARC_FEED`) to 0.0001 mm (0.0001 in for inch programs, the digits
-//! `rs274` prints).
+//! `ARC_FEED`, plus the work and tool offsets it reports beside them) to
+//! 0.0001 mm (0.0001 in for inch programs, the digits `rs274` prints), in
+//! machine coordinates.
 //!
 //! With nose compensation the two differ by design at one place, the
 //! entry move: LinuxCNC ends it with the imaginary tip on the programmed
@@ -33,14 +34,20 @@ struct Move {
 /// A program for both, and what differs.
 struct Peer {
     name: &'static str,
-    /// The program as both read it (after the header).
+    /// The program as both read it.
     body: &'static str,
-    /// Nose compensation: the device's tip code, LinuxCNC's orientation,
-    /// and the index of the entry move.
-    comp: Option<(u8, u8, usize)>,
+    /// Tool 1 for LinuxCNC's table: X and Z offsets (inches: the standalone
+    /// interpreter's table unit), orientation; and the same tool for the
+    /// device's `TOOL N=1` (X a diameter, mm), with the device's tip code.
+    tool: Option<(&'static str, &'static str)>,
+    /// The index of the compensated entry move, if any.
+    entry: Option<usize>,
     /// Inch: compare to 0.0001 in.
     inch: bool,
 }
+
+/// r 0.4 mm = 0.8 mm across, in inches.
+const D: &str = "D0.031496062992126";
 
 const PEERS: &[Peer] = &[
     Peer {
@@ -48,43 +55,68 @@ const PEERS: &[Peer] = &[
         body: "G18 G21 G7 G90\nG00 X30 Z5\nG01 Z0 F100\nX40 Z-10\nZ-20\n\
                G03 X50 Z-25 I0 K-5\nG02 X60 Z-30 R5\nG01 X70 Z-40\n\
                G02 X70 Z-50 R-5.5\nG01 Z-60\nX80 Z-61.25\nG00 X100 Z10\nM2\n",
-        comp: None,
+        tool: None,
+        entry: None,
         inch: false,
     },
     Peer {
         name: "incremental words (G91)",
         body: "G18 G21 G7 G90\nG00 X20 Z2\nG91 G01 Z-12 F80\nX10 Z-5\n\
                G02 X8 Z-4 I0 K-4\nG03 X-4 Z-6 I-1 K-3\nG01 Z-3.333\nG90 G00 X60 Z5\nM2\n",
-        comp: None,
+        tool: None,
+        entry: None,
         inch: false,
     },
     Peer {
         name: "inch (G20)",
         body: "G18 G20 G7 G90\nG00 X1. Z.1\nG01 Z-1.5 F5.\nG02 X1.5 Z-1.75 R.25\n\
                G01 X1.8125 Z-2.0625\nG03 X2.2125 Z-2.2625 I0 K-.2\nG00 X3. Z.5\nM2\n",
-        comp: None,
+        tool: None,
+        entry: None,
         inch: true,
     },
     Peer {
         name: "radius words (G8), arc centres absolute (G90.1)",
         body: "G18 G21 G8 G90\nG00 X10 Z1\nG90.1 G02 X10 Z-4 I5 K-1.5 F100\n\
                G91.1 G03 X14 Z-8 I0 K-4\nG01 X15.5 Z-9.25\nG00 X25 Z5\nM2\n",
-        comp: None,
+        tool: None,
+        entry: None,
         inch: false,
     },
     Peer {
         name: "G42 external contour, r 0.4 (tip 3 / Q2)",
-        body: "G18 G21 G7 G90 G40\nG00 X20 Z5\nG42 G01 Z0 F100\nX28\nX48 Z-10\n\
+        body: "G18 G21 G7 G90 G40\nT1 M6\nG00 X20 Z5\nG42 G01 Z0 F100\nX28\nX48 Z-10\n\
                Z-46\nX68 Z-56\nX94\nG03 X104 Z-61 R5\nG01 Z-70\nG02 X114 Z-75 I5 K0\n\
                G01 X120\nG40 G00 X130 Z-70\nM2\n",
-        comp: Some((3, 2, 1)),
+        tool: Some(("X0 Z0 Q2", "X=0 Z=0 R=0.4 T=3")),
+        entry: Some(1),
         inch: false,
     },
     Peer {
         name: "G41 bore, r 0.4 (tip 2 / Q3)",
-        body: "G18 G21 G7 G90 G40\nG00 X90 Z5\nG41 G01 Z0 F80\nX78\nX50 Z-14\nZ-34\n\
+        body: "G18 G21 G7 G90 G40\nT1 M6\nG00 X90 Z5\nG41 G01 Z0 F80\nX78\nX50 Z-14\nZ-34\n\
                X28 Z-45\nX12\nZ-60\nG40 G00 X10 Z-55\nM2\n",
-        comp: Some((2, 3, 1)),
+        tool: Some(("X0 Z0 Q3", "X=0 Z=0 R=0.4 T=2")),
+        entry: Some(1),
+        inch: false,
+    },
+    Peer {
+        name: "work offsets (G10 L2, L20; G54, G55) and tool offsets (G43, G49)",
+        body: "G18 G21 G7 G90 G40\nG10 L2 P1 X0 Z-20\nG10 L2 P2 X2 Z-60\nT1 M6 G43\n\
+               G00 X30 Z5\nG01 Z-10 F100\nG02 X40 Z-15 R5\nG01 X50\nG55 G00 X50 Z5\n\
+               G01 Z-5\nG03 X40 Z-10 R5\nG49 G00 X60 Z10\nG10 L20 P2 X30 Z10\n\
+               G00 X30 Z0\nG54 G43 G00 X20 Z2\nM2\n",
+        tool: Some(("X0.05 Z-0.1 Q2", "X=2.54 Z=-2.54 R=0.4 T=3")),
+        entry: None,
+        inch: false,
+    },
+    Peer {
+        name: "G42 with work and tool offsets",
+        body: "G18 G21 G7 G90 G40\nG10 L2 P1 X-1 Z-30\nT1 M6 G43\nG00 X20 Z5\n\
+               G42 G01 Z0 F100\nX28\nX48 Z-10\nG02 X56 Z-14 R4\nG01 Z-30\n\
+               G40 G00 X70 Z-25\nM2\n",
+        tool: Some(("X0.05 Z-0.1 Q2", "X=2.54 Z=-2.54 R=0.4 T=3")),
+        entry: Some(1),
         inch: false,
     },
 ];
@@ -110,17 +142,24 @@ fn args(line: &str) -> Vec<f64> {
         .collect()
 }
 
-/// LinuxCNC's canonical moves of a program, in mm.
-fn linuxcnc(name: &str, program: &str, tool: Option<u8>) -> Vec<Move> {
+/// The numbers of a triple `a b c` inside a call's arguments.
+fn triple(text: &str) -> Vec<f64> {
+    text.split_whitespace()
+        .map(|a| a.parse().unwrap())
+        .collect()
+}
+
+/// LinuxCNC's canonical moves of a program, in mm and machine coordinates:
+/// its positions plus the work offset (`SET_G5X_OFFSET`) and the tool
+/// offset (`USE_TOOL_LENGTH_OFFSET`) in effect.
+fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
     let dir = std::env::temp_dir().join(format!("linuxcnc-peer-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let ngc = dir.join("part.ngc");
     let tbl = dir.join("tool.tbl");
-    // The standalone interpreter's tool table is in inches: r 0.4 mm.
-    let q = tool.unwrap_or(0);
-    std::fs::write(&tbl, format!("T1 P1 X0 Z0 D0.031496062992126 Q{q}\n")).unwrap();
-    let header = if tool.is_some() { "T1 M6\n" } else { "" };
-    std::fs::write(&ngc, format!("{header}{program}")).unwrap();
+    let tool = tool.unwrap_or("X0 Z0 Q0");
+    std::fs::write(&tbl, format!("T1 P1 {tool} {D}\n")).unwrap();
+    std::fs::write(&ngc, program).unwrap();
     let out = Command::new("rs274")
         .args(["-g", "-t"])
         .arg(&tbl)
@@ -135,53 +174,64 @@ fn linuxcnc(name: &str, program: &str, tool: Option<u8>) -> Vec<Move> {
         String::from_utf8_lossy(&out.stderr)
     );
     let mut scale = 1.0;
+    let (mut work, mut offset) = ([0.0; 2], [0.0; 2]);
     let mut moves = Vec::new();
     for line in text.lines() {
         let Some(call) = line.split("N..... ").nth(1) else {
             continue;
         };
+        let at = |x: f64, z: f64| {
+            (
+                x * scale + work[0] + offset[0],
+                z * scale + work[1] + offset[1],
+            )
+        };
         if call.starts_with("USE_LENGTH_UNITS") {
             scale = if call.contains("INCHES") { 25.4 } else { 1.0 };
+        } else if call.starts_with("SET_G5X_OFFSET") {
+            let a = args(call);
+            work = [a[1] * scale, a[3] * scale];
+        } else if call.starts_with("USE_TOOL_LENGTH_OFFSET") {
+            let inner = call.split_once('(').unwrap().1;
+            let xyz = triple(inner.split(',').next().unwrap());
+            offset = [xyz[0] * scale, xyz[2] * scale];
         } else if call.starts_with("STRAIGHT_TRAVERSE") || call.starts_with("STRAIGHT_FEED") {
             let a = args(call);
+            let (x, z) = at(a[0], a[2]);
             moves.push(Move {
                 g: u8::from(call.starts_with("STRAIGHT_FEED")),
-                x: a[0] * scale,
-                z: a[2] * scale,
+                x,
+                z,
                 centre: None,
             });
         } else if call.starts_with("ARC_FEED") {
             // XZ plane: Z end, X end, Z centre, X centre, turn (+1 G03).
             let a = args(call);
+            let (x, z) = at(a[1], a[0]);
+            let centre = at(a[3], a[2]);
             moves.push(Move {
                 g: if a[4] > 0.0 { 3 } else { 2 },
-                x: a[1] * scale,
-                z: a[0] * scale,
-                centre: Some((a[3] * scale, a[2] * scale)),
+                x,
+                z,
+                centre: Some(centre),
             });
         }
     }
     moves
 }
 
-/// The device's path of the same program (its trace), in mm.
-fn device(name: &str, program: &str, tip: Option<u8>) -> Vec<Move> {
-    let header = match tip {
-        // The device's T names the tool; the tip and radius are its CFG.
-        Some(_) => "G450\n",
-        None => "",
-    };
-    let text = format!("{header}{program}");
+/// The device's path of the same program, exactly, in mm and machine
+/// coordinates.
+fn device(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
+    // LinuxCNC rounds outside corners with arcs.
+    let text = format!("G450\n{program}");
     let options = Options {
         dialect: Dialect::Iso,
         radius: false,
     };
-    let setup = tip.map(|t| format!("CFG RN=0.4 TIP={t}"));
-    let report = host_sim::program::run_with(
-        &text,
-        options,
-        &setup.iter().map(String::as_str).collect::<Vec<_>>(),
-    );
+    let setup = tool.map(|t| format!("TOOL N=1 {t}"));
+    let setup: Vec<&str> = setup.iter().map(String::as_str).collect();
+    let report = host_sim::program::run_with(&text, options, &setup);
     assert!(report.refused.is_empty(), "{name}: {:?}", report.refused);
     let mm = |a: i64| a as f64 / 1e7;
     report
@@ -203,8 +253,8 @@ fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
     }
     let (mut agreed, mut moves) = (0, 0);
     for peer in PEERS {
-        let theirs = linuxcnc(peer.name, peer.body, peer.comp.map(|c| c.1));
-        let ours = device(peer.name, peer.body, peer.comp.map(|c| c.0));
+        let theirs = linuxcnc(peer.name, peer.body, peer.tool.map(|t| t.0));
+        let ours = device(peer.name, peer.body, peer.tool.map(|t| t.1));
         assert_eq!(
             ours.len(),
             theirs.len(),
@@ -212,7 +262,7 @@ fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
             peer.name
         );
         let tol = if peer.inch { 0.0001 * 25.4 } else { 0.0001 } + 1e-9;
-        let entry = peer.comp.map(|c| c.2);
+        let entry = peer.entry;
         for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
             let what = format!("{} move {i}: device {a:?}, LinuxCNC {b:?}", peer.name);
             assert_eq!(a.g, b.g, "{what}");

@@ -15,11 +15,11 @@ use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{
     is_block, parse, BlockError, Coolant, Dialect, FeedMode, Motion, Spindle, SpindleMode, Stop,
-    ToolWord,
+    ToolOffset, ToolWord,
 };
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
-use crate::interp::{path_feed, Aux, Modal};
+use crate::interp::{path_feed, Aux, Modal, Offsets, Selection, TOOL_REGISTERS};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
 use crate::machine::{Background, Machine, StepSink};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
@@ -108,7 +108,8 @@ impl Default for Config {
 #[derive(Clone, Debug)]
 pub struct Session {
     cfg: Config,
-    /// Exact commanded X (radius) and Z since the program zero.
+    /// Exact commanded X (radius) and Z in machine coordinates (since the
+    /// machine zero: power-on or `ZERO`).
     cmd: [Length; 2],
     /// Position registers; always `Q(cmd / price)` per axis.
     pos: ImpulsePoint,
@@ -120,8 +121,14 @@ pub struct Session {
     aux: Aux,
     /// The dialect G-code lines are read in (`OPT DIALECT=`).
     dialect: Dialect,
-    /// The programmed contour point: where the last G-code block ended, as
-    /// written. Equal to `cmd` except while nose compensation is on.
+    /// Work offsets and the tool table.
+    offsets: Offsets,
+    /// Which of them are in effect.
+    sel: Selection,
+    /// The programmed contour point in work coordinates: where the last
+    /// G-code block ended, as written. `cmd` less the offsets in effect,
+    /// except while nose compensation is on or until the next move after an
+    /// offset change.
     prog: [Length; 2],
     /// Nose radius compensation.
     contour: Contour,
@@ -204,6 +211,8 @@ impl Session {
             modal: Modal::POWER_ON,
             aux: Aux::POWER_ON,
             dialect: Dialect::Iso,
+            offsets: Offsets::ZERO,
+            sel: Selection::POWER_ON,
             prog: [Length::ZERO; 2],
             contour: Contour::new(),
             last_moves: Moves::new(),
@@ -247,7 +256,8 @@ impl Session {
         &self.contour
     }
 
-    /// Exact commanded coordinates `(X radius, Z)` since the program zero.
+    /// Exact commanded coordinates `(X radius, Z)` in machine coordinates
+    /// (since power-on or `ZERO`; the offsets in effect included).
     pub const fn commanded(&self) -> (Length, Length) {
         (self.cmd[0], self.cmd[1])
     }
@@ -408,13 +418,17 @@ impl Session {
             self.aux = self.aux.stopped();
             self.contour = Contour::new();
             self.last_moves = Moves::new();
-            self.prog = self.cmd;
+            self.prog = self.work_point(self.cmd);
             send_ok(io, None);
             Ok(())
         } else if command.eq_ignore_ascii_case("POS") {
             no_args(words, "POS")?;
             self.pos_reply(io);
             Ok(())
+        } else if command.eq_ignore_ascii_case("TOOL") {
+            self.tool_command(words, io)
+        } else if command.eq_ignore_ascii_case("WORK") {
+            self.work_command(words, io)
         } else if command.eq_ignore_ascii_case("AUX") {
             no_args(words, "AUX")?;
             self.aux_reply(io);
@@ -426,10 +440,11 @@ impl Session {
 
     /// `ZERO [X=] [Z=]`: the current point becomes X, Z (0 when omitted) in
     /// program coordinates; nothing moves.
+    #[inline(never)]
     fn zero_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [x, z] = parse_args(words, ["X", "Z"])?;
         self.not_compensating("ZERO")?;
-        let cmd = [
+        let work = [
             match x {
                 Some(v) => self.x_word(parse_length("X", v)?)?,
                 None => Length::ZERO,
@@ -439,6 +454,7 @@ impl Session {
                 None => Length::ZERO,
             },
         ];
+        let cmd = to_machine(work, self.offset())?;
         let pos = ImpulsePoint {
             x: quantize(cmd[0], self.cfg.hx).map_err(|_| Refusal::Range(RANGE_POS_X))?,
             z: quantize(cmd[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
@@ -448,12 +464,13 @@ impl Session {
         self.machine.clear_record(&mut sink);
         self.machine.set_position(point_q32(cmd), pos, &mut sink);
         self.cmd = cmd;
-        self.prog = cmd;
+        self.prog = work;
         self.pos = pos;
         send_ok(io, None);
         Ok(())
     }
 
+    #[inline(never)]
     fn cfg_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [hx, hz, diam, rn, tip, tol, pass] =
             parse_args(words, ["HX", "HZ", "DIAM", "RN", "TIP", "TOL", "PASS"])?;
@@ -529,6 +546,7 @@ impl Session {
 
     /// `CONE A= [RN=]`: Krylenko's Xc, Zc, Xc on the diameter and Nomura's
     /// A, B, C; `NEAR=` names any value within 10⁻⁹ mm of a printing tie.
+    #[inline(never)]
     fn cone_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [a, rn] = parse_args(words, ["A", "RN"])?;
         let a = a.ok_or(Refusal::Missing("CONE needs A"))?;
@@ -572,6 +590,7 @@ impl Session {
         Ok(())
     }
 
+    #[inline(never)]
     fn arc_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [x, z, i, k, dir, tol, pass, mode, feed] = parse_args(
             words,
@@ -606,8 +625,10 @@ impl Session {
             None => None,
             Some(v) => Some(parse_feed(v)?),
         };
-        let end_x = self.x_word(parse_length("X", x)?)?;
-        let end_z = parse_length("Z", z)?;
+        let end = to_machine(
+            [self.x_word(parse_length("X", x)?)?, parse_length("Z", z)?],
+            self.offset(),
+        )?;
         let (di, dk) = (parse_length("I", i)?, parse_length("K", k)?);
         let beyond = Refusal::Range("arc centre beyond 99999.999999 mm");
         let centre = [
@@ -618,7 +639,7 @@ impl Session {
         ];
         let points = ArcPoints {
             start: self.cmd,
-            end: [end_x, end_z],
+            end,
             centre,
         };
         if direct {
@@ -675,7 +696,7 @@ impl Session {
         }
         let start = self.pos;
         self.cmd = points.end;
-        self.prog = points.end;
+        self.prog = self.work_point(points.end);
         self.pos = arc.to();
         let rate = self.drive.rate_hz();
         self.machine.fixed_rate(
@@ -715,6 +736,7 @@ impl Session {
 
     /// Runs one G-code block in the session's modal state, through the
     /// contour engine (compensation off: the block itself).
+    #[inline(never)]
     fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
         let b = parse(text, self.dialect, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
         if b.deleted && self.block_delete {
@@ -743,17 +765,31 @@ impl Session {
                 .map_err(|e| Refusal::Value("S", e.as_str()))?;
         }
         let diam = b.diameter.unwrap_or(self.cfg.diam);
+        let (sel, offsets) = self.offsets_after(&b, &aux, diam)?;
+        let off = offsets.vector(&sel).ok_or(Refusal::Range(
+            "the offsets in effect add beyond 99999.999999 mm",
+        ))?;
+        if (sel != self.sel || b.set_work.is_some()) && self.contour.active() {
+            return Err(Refusal::Busy("a work or tool offset change"));
+        }
+        // Words are work coordinates; increments add to the programmed point.
         let mut target = self.prog;
-        if let Some(x) = b.x {
+        let words = if b.set_work.is_some() {
+            // G10's X and Z are an offset's.
+            (None, None)
+        } else {
+            (b.x, b.z)
+        };
+        if let Some(x) = words.0 {
             let radius = x_radius(x, diam)?;
             let inc = modal.incremental || b.incremental_x;
-            target[0] = self.target(0, radius, inc, "X beyond 99999.999999 mm")?;
+            target[0] = step(self.prog[0], radius, inc, "X beyond 99999.999999 mm")?;
         }
-        if let Some(z) = b.z {
+        if let Some(z) = words.1 {
             let inc = modal.incremental || b.incremental_z;
-            target[1] = self.target(1, z, inc, "Z beyond 99999.999999 mm")?;
+            target[1] = step(self.prog[1], z, inc, "Z beyond 99999.999999 mm")?;
         }
-        let has_end = b.x.is_some() || b.z.is_some();
+        let has_end = words.0.is_some() || words.1.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
         let a = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
         let shape = match modal.motion {
@@ -766,6 +802,13 @@ impl Session {
                 })
             }
             Motion::ArcCw | Motion::ArcCcw if has_end || arc_words => {
+                // An arc starts where the tool is: it cannot take up a new
+                // offset on the way.
+                if !self.contour.active() && to_machine(self.prog, off)? != self.cmd {
+                    return Err(Refusal::Geometry(
+                        "an arc cannot take up an offset change: move in a line first",
+                    ));
+                }
                 let dir = if modal.motion == Motion::ArcCw {
                     ArcDir::Cw
                 } else {
@@ -820,11 +863,19 @@ impl Session {
         } else {
             None
         };
-        let tool = Tool::new(self.cfg.rn, self.cfg.tip);
+        let tool = self.nose(&offsets, &sel);
         let (contour, moves) = self
             .contour
             .block(&tool, b.compensation, b.corner, element)
             .map_err(Refusal::Contour)?;
+        // The blocks in machine coordinates: the tip's path plus the offsets.
+        let mut moves = moves;
+        for m in moves.iter_mut() {
+            m.to = shifted(m.to, off)?;
+            if let MoveKind::Arc { centre, .. } = &mut m.kind {
+                *centre = shifted(*centre, off)?;
+            }
+        }
         if feeds && modal.feed.is_none() {
             return Err(Refusal::Value(
                 "F",
@@ -855,7 +906,7 @@ impl Session {
         // The spindle and the coolant switch with the axes at rest, before
         // the block's motion (as LinuxCNC orders a block); a dwell waits
         // there too.
-        if self.aux.needs_rest(&aux) || b.dwell.is_some() {
+        if self.aux.needs_rest(&aux) || b.dwell.is_some() || b.tool_change {
             self.machine.flush(&mut Sink::new(io, self.drive));
         }
         if let Some(us) = b.dwell {
@@ -873,6 +924,8 @@ impl Session {
         }
         self.modal = modal;
         self.aux = aux;
+        self.sel = sel;
+        self.offsets = offsets;
         self.contour = contour;
         self.last_moves = moves;
         if element.is_some() {
@@ -898,6 +951,90 @@ impl Session {
             )),
         );
         Ok(())
+    }
+
+    /// The tool selection and the offsets after a block's `G54`–`G59`,
+    /// `T`, `M06`, `G43`/`G49` and `G10` words.
+    #[inline(never)]
+    fn offsets_after(
+        &self,
+        b: &crate::gcode::Block,
+        aux: &Aux,
+        diam: bool,
+    ) -> Result<(Selection, Offsets), Refusal<'static>> {
+        let mut sel = self.sel;
+        if let Some(w) = b.wcs {
+            sel.wcs = w;
+        }
+        let beyond = "offset register beyond the table's 32";
+        match self.dialect {
+            Dialect::Fanuc => {
+                if let Some(t) = b.tool {
+                    sel.loaded = t.tool;
+                    sel.register = t.offset.unwrap_or(0);
+                    if usize::from(sel.register) > TOOL_REGISTERS {
+                        return Err(Refusal::Value("T", beyond));
+                    }
+                }
+            }
+            Dialect::Iso => {
+                if b.tool_change {
+                    sel.loaded = aux
+                        .tool
+                        .map(|t| t.tool)
+                        .ok_or(Refusal::Missing("M06 needs the tool: T"))?;
+                }
+                match b.tool_offset {
+                    Some(ToolOffset::On(h)) => {
+                        sel.register = h.unwrap_or(sel.loaded);
+                        if usize::from(sel.register) > TOOL_REGISTERS {
+                            return Err(Refusal::Value("H", beyond));
+                        }
+                    }
+                    Some(ToolOffset::Off) => sel.register = 0,
+                    None => {}
+                }
+            }
+        }
+        let mut offsets = self.offsets;
+        if let Some(set) = b.set_work {
+            // The tool's offset with the selection of this block.
+            let tool = offsets
+                .tool_offset(&sel)
+                .ok_or(Refusal::Range(RANGE_OFFSET))?;
+            let values = [b.x.map(|x| x_radius(x, diam)).transpose()?, b.z];
+            let register = usize::from(set.register).saturating_sub(1);
+            let work = offsets
+                .work
+                .get_mut(register)
+                .ok_or(Refusal::Value("P", "names G54 to G59: 1 to 6"))?;
+            for (((w, v), at), off) in work.iter_mut().zip(values).zip(self.cmd).zip(tool) {
+                let Some(v) = v else { continue };
+                *w = if set.here {
+                    // So that the tool's point has coordinate v.
+                    at.checked_sub(off)
+                        .and_then(|p| p.checked_sub(v))
+                        .ok_or(Refusal::Range(RANGE_OFFSET))?
+                } else {
+                    v
+                };
+            }
+        }
+        Ok((sel, offsets))
+    }
+
+    /// The nose compensation uses: the register of the tool in effect
+    /// (Fanuc: the offset register; ISO: the loaded tool's) when its nose
+    /// is set, else the configured `RN` and `TIP`.
+    fn nose(&self, offsets: &Offsets, sel: &Selection) -> Tool {
+        let register = match self.dialect {
+            Dialect::Fanuc => sel.register,
+            Dialect::Iso => sel.loaded,
+        };
+        match offsets.register(register).and_then(|t| t.nose) {
+            Some((r, tip)) => Tool::new(r, TipCode::new(tip).unwrap_or(self.cfg.tip)),
+            None => Tool::new(self.cfg.rn, self.cfg.tip),
+        }
     }
 
     /// Plans one move from the commanded point `cmd` and registers `pos`,
@@ -1086,6 +1223,7 @@ impl Session {
         x_radius(word, self.cfg.diam)
     }
 
+    #[inline(never)]
     fn drive_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [rate, pulse, setup] = parse_args(words, ["RATE", "PULSE", "SETUP"])?;
         let d = self.drive;
@@ -1125,6 +1263,7 @@ impl Session {
         Ok(())
     }
 
+    #[inline(never)]
     fn move_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let [x, z, inc, feed] = parse_args(words, ["X", "Z", "INC", "F"])?;
         self.not_compensating("MOVE")?;
@@ -1136,25 +1275,24 @@ impl Session {
             None => false,
             Some(v) => parse_flag("INC", v)?,
         };
+        // Absolute words are work coordinates; increments add to where the
+        // tool is.
+        let off = self.offset();
         let mut target = self.cmd;
         if let Some(v) = x {
-            let word = parse_length("X", v)?;
-            let radius = if self.cfg.diam {
-                word.exact_half()
-                    .ok_or(Refusal::Value("X", "not an exact radius"))?
-            } else {
-                word
-            };
-            target[0] = self.target(0, radius, inc, "X beyond 99999.999999 mm")?;
+            let radius = self.x_word(parse_length("X", v)?)?;
+            let from = if inc { self.cmd[0] } else { off[0] };
+            target[0] = step(from, radius, true, "X beyond 99999.999999 mm")?;
         }
         if let Some(v) = z {
             let word = parse_length("Z", v)?;
-            target[1] = self.target(1, word, inc, "Z beyond 99999.999999 mm")?;
+            let from = if inc { self.cmd[1] } else { off[1] };
+            target[1] = step(from, word, true, "Z beyond 99999.999999 mm")?;
         }
         let block = self.linear_block(target)?;
         let crc = block_crc(&block, Crc32::new());
         self.cmd = target;
-        self.prog = target;
+        self.prog = self.work_point(target);
         self.pos = block.to();
         let h = [self.cfg.hx, self.cfg.hz];
         self.machine.queue(
@@ -1176,6 +1314,7 @@ impl Session {
 
     /// `LIMITS [VX=] [VZ=] [AX=] [AZ=] [JD=]`: the motion limits, applied
     /// whole at rest, or reported.
+    #[inline(never)]
     fn limits_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
         let keys = ["VX", "VZ", "AX", "AZ", "JD"];
         let values = parse_args(words, keys)?;
@@ -1308,7 +1447,8 @@ impl Session {
         ];
         self.machine.set_point(point_q32(cmd));
         self.cmd = cmd;
-        self.prog = cmd;
+        self.sel = Selection::POWER_ON;
+        self.prog = self.work_point(cmd);
         self.pos = issued;
         self.modal = Modal::POWER_ON;
         self.aux = Aux::POWER_ON;
@@ -1331,27 +1471,26 @@ impl Session {
         self.share_view(io);
     }
 
-    /// The commanded coordinate of `axis` after a word: absolute, or added
-    /// to the current one.
-    fn target(
-        &self,
-        axis: usize,
-        word: Length,
-        inc: bool,
-        beyond: &'static str,
-    ) -> Result<Length, Refusal<'static>> {
-        if inc {
-            let now = self.cmd.get(axis).copied().unwrap_or(Length::ZERO);
-            now.checked_add(word).ok_or(Refusal::Range(beyond))
-        } else {
-            Ok(word)
-        }
+    /// The offsets in effect (machine = work + this); always within range,
+    /// as every change of them is checked.
+    fn offset(&self) -> [Length; 2] {
+        self.offsets.vector(&self.sel).unwrap_or([Length::ZERO; 2])
+    }
+
+    /// A machine point in work coordinates, as far as the range allows.
+    fn work_point(&self, machine: [Length; 2]) -> [Length; 2] {
+        let off = self.offset();
+        [
+            machine[0].checked_sub(off[0]).unwrap_or(machine[0]),
+            machine[1].checked_sub(off[1]).unwrap_or(machine[1]),
+        ]
     }
 
     /// `OK SPINDLE= S= SMODE= LIMIT= COOLANT= T=`: the auxiliary
     /// functions as programmed; `S` the commanded rpm at the tool's X (0
     /// while stopped), `LIMIT` 0 when none is set, `T` as written in the
     /// dialect (`-` when none was named).
+    #[inline(never)]
     fn aux_reply<I: Io>(&self, io: &mut I) {
         let a = &self.aux;
         let spindle = match a.spindle.turning {
@@ -1386,10 +1525,12 @@ impl Session {
         io.send(line.finish());
     }
 
+    /// `OK PX= PZ= X= Z= [MX= MZ=]`: the registers, the commanded point in
+    /// work coordinates, and while offsets are in effect in machine
+    /// coordinates too (X a diameter when `DIAM=1`).
+    #[inline(never)]
     fn pos_reply<I: Io>(&self, io: &mut I) {
-        let factor = if self.cfg.diam { 2 } else { 1 };
-        // |cmd| < 10¹² Å: doubling cannot overflow.
-        let x = div_round_half_away(self.cmd[0].as_angstrom() * factor, 1_000);
+        let work = self.work_point(self.cmd);
         let mut line = ReplyLine::new();
         let _ = write!(
             line,
@@ -1397,9 +1538,131 @@ impl Session {
             self.pos.x.get(),
             self.pos.z.get()
         );
-        let _ = write_mm4(&mut line, x);
-        let _ = write!(line, " Z={}", self.cmd[1]);
+        let _ = self.write_x(&mut line, work[0]);
+        let _ = write!(line, " Z={}", work[1]);
+        if work != self.cmd {
+            let _ = line.write_str(" MX=");
+            let _ = self.write_x(&mut line, self.cmd[0]);
+            let _ = write!(line, " MZ={}", self.cmd[1]);
+        }
         io.send(line.finish());
+    }
+
+    /// An X value as the words read it: a diameter when `DIAM=1`.
+    fn write_x(&self, line: &mut ReplyLine, x: Length) -> fmt::Result {
+        let factor = if self.cfg.diam { 2 } else { 1 };
+        // |x| < 10¹² Å: doubling cannot overflow.
+        write_mm4(line, div_round_half_away(x.as_angstrom() * factor, 1_000))
+    }
+
+    /// `TOOL N= [X=] [Z=] [WX=] [WZ=] [R=] [T=]`: an offset register of the
+    /// tool table, set or reported: geometry and wear (X a diameter when
+    /// `DIAM=1`), nose radius and tip code (`R=- T=-` until set).
+    #[inline(never)]
+    fn tool_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [n, x, z, wx, wz, r, t] = parse_args(words, ["N", "X", "Z", "WX", "WZ", "R", "T"])?;
+        if n.is_none() {
+            return Err(Refusal::Missing("TOOL needs N, the register: 1 to 32"));
+        }
+        let n = match parse_count("N", n, 0)? {
+            n @ 1..=32 => n as u8,
+            _ => return Err(Refusal::Value("N", "must be 1 to 32")),
+        };
+        let mut offsets = self.offsets;
+        let entry = offsets
+            .tools
+            .get_mut(usize::from(n) - 1)
+            .ok_or(Refusal::Value("N", "must be 1 to 32"))?;
+        if let Some(v) = x {
+            entry.geometry[0] = self.x_word(parse_length("X", v)?)?;
+        }
+        if let Some(v) = z {
+            entry.geometry[1] = parse_length("Z", v)?;
+        }
+        if let Some(v) = wx {
+            entry.wear[0] = self.x_word(parse_length("WX", v)?)?;
+        }
+        if let Some(v) = wz {
+            entry.wear[1] = parse_length("WZ", v)?;
+        }
+        if r.is_some() || t.is_some() {
+            let (r0, t0) = entry.nose.unwrap_or((self.cfg.rn, self.cfg.tip.get()));
+            let r = match r {
+                Some(v) => parse_bounded("R", v, 0, MAX_NOSE_RADIUS_UM, "must be 0 to 25 mm")?,
+                None => r0,
+            };
+            let t = match parse_count("T", t, u32::from(t0))? {
+                t @ 0..=9 => t as u8,
+                _ => return Err(Refusal::Value("T", "must be 0 to 9")),
+            };
+            entry.nose = Some((r, t));
+        }
+        let entry = *entry;
+        let setting = x.is_some() || z.is_some() || wx.is_some() || wz.is_some();
+        if setting || r.is_some() || t.is_some() {
+            if offsets.vector(&self.sel).is_none() {
+                return Err(Refusal::Range(RANGE_OFFSET));
+            }
+            let in_effect = n == self.sel.register || n == self.sel.loaded;
+            if self.contour.active() && in_effect {
+                return Err(Refusal::Busy("TOOL of the register in effect"));
+            }
+        }
+        self.offsets = offsets;
+        let mut line = ReplyLine::new();
+        let _ = write!(line, "OK N={n} X=");
+        let _ = self.write_x(&mut line, entry.geometry[0]);
+        let _ = write!(line, " Z={} WX=", entry.geometry[1]);
+        let _ = self.write_x(&mut line, entry.wear[0]);
+        let _ = write!(line, " WZ={}", entry.wear[1]);
+        let _ = match entry.nose {
+            Some((r, t)) => write!(line, " R={r} T={t}"),
+            None => line.write_str(" R=- T=-"),
+        };
+        io.send(line.finish());
+        Ok(())
+    }
+
+    /// `WORK G=54…59 [X=] [Z=]`: a work offset, set or reported: where
+    /// that system's zero lies in machine coordinates (X a diameter when
+    /// `DIAM=1`).
+    #[inline(never)]
+    fn work_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [g, x, z] = parse_args(words, ["G", "X", "Z"])?;
+        if g.is_none() {
+            return Err(Refusal::Missing("WORK needs G, the system: 54 to 59"));
+        }
+        let g = match parse_count("G", g, 0)? {
+            g @ 54..=59 => g as u8,
+            _ => return Err(Refusal::Value("G", "must be 54 to 59")),
+        };
+        let mut offsets = self.offsets;
+        let work = offsets
+            .work
+            .get_mut(usize::from(g) - 54)
+            .ok_or(Refusal::Value("G", "must be 54 to 59"))?;
+        if let Some(v) = x {
+            work[0] = self.x_word(parse_length("X", v)?)?;
+        }
+        if let Some(v) = z {
+            work[1] = parse_length("Z", v)?;
+        }
+        let work = *work;
+        if x.is_some() || z.is_some() {
+            if offsets.vector(&self.sel).is_none() {
+                return Err(Refusal::Range(RANGE_OFFSET));
+            }
+            if self.contour.active() && g - 54 == self.sel.wcs {
+                return Err(Refusal::Busy("WORK of the system in effect"));
+            }
+        }
+        self.offsets = offsets;
+        let mut line = ReplyLine::new();
+        let _ = write!(line, "OK G={g} X=");
+        let _ = self.write_x(&mut line, work[0]);
+        let _ = write!(line, " Z={}", work[1]);
+        io.send(line.finish());
+        Ok(())
     }
 }
 
@@ -1480,6 +1743,43 @@ impl fmt::Display for MotionSummary {
 }
 
 /// `centre − start` in ångström: the I and K words of an arc.
+/// A point (Å) moved by the offsets.
+fn shifted(p: [i64; 2], off: [Length; 2]) -> Result<[i64; 2], Refusal<'static>> {
+    let add = |axis: usize| {
+        Length::from_angstrom(p[axis])
+            .and_then(|l| l.checked_add(off[axis]))
+            .map(Length::as_angstrom)
+            .ok_or(Refusal::Range(RANGE_OFFSET))
+    };
+    Ok([add(0)?, add(1)?])
+}
+
+/// A coordinate after a word: the word itself, or added to `now`.
+fn step(
+    now: Length,
+    word: Length,
+    inc: bool,
+    beyond: &'static str,
+) -> Result<Length, Refusal<'static>> {
+    if inc {
+        now.checked_add(word).ok_or(Refusal::Range(beyond))
+    } else {
+        Ok(word)
+    }
+}
+
+/// A work point in machine coordinates.
+fn to_machine(work: [Length; 2], off: [Length; 2]) -> Result<[Length; 2], Refusal<'static>> {
+    let add = |axis: usize| {
+        work[axis]
+            .checked_add(off[axis])
+            .ok_or(Refusal::Range(RANGE_OFFSET))
+    };
+    Ok([add(0)?, add(1)?])
+}
+
+const RANGE_OFFSET: &str = "position with its offsets beyond 99999.999999 mm";
+
 /// An X word as a radius: halved when it is a diameter.
 fn x_radius(word: Length, diam: bool) -> Result<Length, Refusal<'static>> {
     if diam {

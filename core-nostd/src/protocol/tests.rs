@@ -1144,3 +1144,119 @@ fn reset_stops_the_spindle_and_coolant_and_ctrl_x_forgets_them() {
     );
     assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=FANUC");
 }
+
+#[test]
+fn work_and_tool_offsets_move_the_machine_not_the_program() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=FANUC");
+    // X values are diameters (DIAM=1), held on the radius.
+    assert_eq!(
+        ask1(&mut dev, "TOOL N=1 X=2 Z=-3 WX=-0.02 WZ=0.01"),
+        "OK N=1 X=2.0000 Z=-3.0000 WX=-0.0200 WZ=0.0100 R=- T=-"
+    );
+    assert_eq!(
+        ask1(&mut dev, "WORK G=54 Z=-100"),
+        "OK G=54 X=0.0000 Z=-100.0000"
+    );
+    let r = ask(&mut dev, b"G00 X20. Z5.\n");
+    assert_eq!(r[0], "DATA G00 X20.0000 Z-95.0000");
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=2000 PZ=-9500 X=20.0000 Z=5.0000 MX=20.0000 MZ=-95.0000"
+    );
+    // T0101 moves nothing; the next move takes its offsets up.
+    assert!(ask1(&mut dev, "T0101").starts_with("OK NX=0 NZ=0 "));
+    let r = ask(&mut dev, b"G00 X20. Z5.\n");
+    assert_eq!(r[0], "DATA G00 X21.9800 Z-97.9900");
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=2198 PZ=-9799 X=20.0000 Z=5.0000 MX=21.9800 MZ=-97.9900"
+    );
+    // G10 L2 sets G55; G10 L20 so that the tool stands at Z0 in G54.
+    ask1(&mut dev, "G10 L2 P2 X0 Z-50.");
+    assert_eq!(ask1(&mut dev, "WORK G=55"), "OK G=55 X=0.0000 Z=-50.0000");
+    let r = ask(&mut dev, b"G55 G00 Z0\n");
+    assert_eq!(r[0], "DATA G00 X21.9800 Z-52.9900");
+    ask1(&mut dev, "G54 G10 L20 P1 Z0");
+    assert_eq!(ask1(&mut dev, "WORK G=54"), "OK G=54 X=0.0000 Z=-50.0000");
+    // An arc cannot take up an offset change; a line can.
+    ask1(&mut dev, "T0100");
+    assert_eq!(
+        ask1(&mut dev, "G02 X24. Z-2. R2. F100"),
+        "ERR GEOMETRY an arc cannot take up an offset change: move in a line first"
+    );
+    assert!(ask1(&mut dev, "T0133").starts_with("ERR VALUE T offset register beyond"));
+    let bad = [
+        ("G10 L2 P7 X0", "ERR VALUE P names G54 to G59: 1 to 6"),
+        (
+            "G10 L3 P1 X0",
+            "ERR SYNTAX G10 needs L2 or L20 (a work offset)",
+        ),
+        ("G10 L2 P1 U1", "ERR SYNTAX G10 takes X and Z, not U and W"),
+        ("L2", "ERR SYNTAX L only with G10"),
+        ("TOOL N=33", "ERR VALUE N must be 1 to 32"),
+        ("TOOL N=1 T=12", "ERR VALUE T must be 0 to 9"),
+        ("WORK G=60", "ERR VALUE G must be 54 to 59"),
+    ];
+    let before = ask1(&mut dev, "POS");
+    for (line, want) in bad {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+    }
+    assert_eq!(ask1(&mut dev, "POS"), before);
+}
+
+#[test]
+fn iso_tools_change_with_m6_and_offset_with_g43() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "TOOL N=2 X=1 Z=0.5");
+    assert_eq!(ask1(&mut dev, "M6"), "ERR SYNTAX M06 needs the tool: T");
+    ask1(&mut dev, "T2 M6");
+    // Without G43 the tool's offsets are not in effect (LinuxCNC's way).
+    let r = ask(&mut dev, b"G00 X10 Z1\n");
+    assert_eq!(r[0], "DATA G00 X10.0000 Z1.0000");
+    ask1(&mut dev, "G43");
+    let r = ask(&mut dev, b"G00 X10 Z1\n");
+    assert_eq!(r[0], "DATA G00 X11.0000 Z1.5000");
+    ask1(&mut dev, "G49");
+    let r = ask(&mut dev, b"G00 X10 Z1\n");
+    assert_eq!(r[0], "DATA G00 X10.0000 Z1.0000");
+    assert_eq!(ask1(&mut dev, "H2"), "ERR SYNTAX H only with G43");
+    assert!(ask1(&mut dev, "G43 H40").starts_with("ERR VALUE H offset register beyond"));
+}
+
+#[test]
+fn compensation_takes_the_nose_of_the_tool_in_effect() {
+    let contour = [
+        "G00 X20 Z5",
+        "G42 G01 Z0 F100",
+        "X28",
+        "X48 Z-10",
+        "Z-46",
+        "G40 G00 X60",
+    ];
+    let data = |setup: &[&str], dialect: &str| {
+        let mut dev = Device::new();
+        ask1(&mut dev, &std::format!("OPT DIALECT={dialect}"));
+        for l in setup {
+            assert!(ask1(&mut dev, l).starts_with("OK"), "{l}");
+        }
+        let mut out = Vec::new();
+        for l in contour {
+            out.extend(ask(&mut dev, std::format!("{l}\n").as_bytes()));
+        }
+        out
+    };
+    let configured = data(&["CFG RN=0.8 TIP=2"], "ISO");
+    let fanuc = data(&["TOOL N=5 R=0.8 T=2", "T0505"], "FANUC");
+    let iso = data(&["TOOL N=5 R=0.8 T=2", "T5 M6"], "ISO");
+    assert_eq!(fanuc, configured);
+    assert_eq!(iso, configured);
+    assert_ne!(data(&[], "ISO"), configured);
+    // Offsets cannot change under compensation.
+    let mut dev = Device::new();
+    ask(&mut dev, b"G00 X20 Z5\nG42 G01 Z0 F100\n");
+    assert_eq!(
+        ask1(&mut dev, "G55 X28"),
+        "ERR GEOMETRY a work or tool offset change not allowed while G41/G42 is on; cancel with G40 first"
+    );
+}
