@@ -607,7 +607,10 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                     };
                     let xr = v[0].map(|x| if m.diam { x / 2 } else { x });
                     let target = [end(xr, m.cmd[0]), end(v[1], m.cmd[1])];
-                    if !within(target[0]) || !within(target[1]) {
+                    if m.diam && v[0].is_some_and(|x| x % 2 != 0) {
+                        // A diameter of 7 decimals whose half is off the grid.
+                        Expect::Err("VALUE")
+                    } else if !within(target[0]) || !within(target[1]) {
                         Expect::Err("RANGE")
                     } else if next.motion < 2 && arc_words {
                         Expect::Err("SYNTAX")
