@@ -39,7 +39,7 @@ const UAS_PER_DEG: i64 = 3_600_000_000;
 /// `digits[.digits]` (at most `max_dec` decimals) as an integer scaled by
 /// 10⁶; `None` if malformed.
 fn decimal_e6(text: &str, max_int: usize) -> Option<i64> {
-    let (int, frac) = match text.split_once('.') {
+    let (int, frac) = match crate::text::split_once(text, b'.') {
         Some((i, f)) if !f.is_empty() => (i, f),
         Some(_) => return None,
         None => (text, ""),
@@ -74,8 +74,8 @@ impl Angle {
     pub fn from_degrees_str(text: &str) -> Result<Angle, AngleError> {
         let text = text.strip_prefix('+').unwrap_or(text);
         let uas = if text.contains(':') {
-            let (d, rest) = text.split_once(':').ok_or(AngleError::Malformed)?;
-            let (m, s) = rest.split_once(':').ok_or(AngleError::Malformed)?;
+            let (d, rest) = crate::text::split_once(text, b':').ok_or(AngleError::Malformed)?;
+            let (m, s) = crate::text::split_once(rest, b':').ok_or(AngleError::Malformed)?;
             if s.contains(':') {
                 return Err(AngleError::Malformed);
             }

@@ -1084,7 +1084,7 @@ fn tool_word(number: &str, dialect: Dialect) -> Result<ToolWord, BlockError> {
 /// A G number as a code in tenths: `1`, `01`, `90.1`; `None` if it is no
 /// G code (a sign, more than one decimal, more than 3 digits).
 fn g_code(number: &str) -> Option<u16> {
-    let (whole, tenth) = match number.split_once('.') {
+    let (whole, tenth) = match crate::text::split_once(number, b'.') {
         Some((w, t)) => (w, Some(t)),
         None => (number, None),
     };

@@ -66,6 +66,7 @@ pub mod protocol;
 pub mod step;
 pub mod stepdir;
 pub mod stepper;
+mod text;
 pub mod trig;
 pub mod watch;
 mod wide;

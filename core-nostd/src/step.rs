@@ -228,7 +228,7 @@ impl TimedEvents {
 impl Iterator for TimedEvents {
     type Item = (StepEvent, u64);
 
-    #[inline]
+    #[inline(always)]
     fn next(&mut self) -> Option<(StepEvent, u64)> {
         let event = self.steps.next()?;
         if self.fast > 0 {
@@ -375,7 +375,7 @@ fn square_step(zz: u128, z: u128, d: u64, up: bool) -> u128 {
 /// `num/2den` in Q16, clamped to [0, 1], from the leading bits (about 2⁻¹⁴
 /// relative): for the prediction only. `den` is a Q64 tick count below
 /// 2⁹⁴, `num < 2·den`.
-#[inline]
+#[inline(always)]
 fn phi(num: u128, den: u128) -> i64 {
     // Q32 views (shifts by whole words), then 15 significant bits of the
     // divisor and one 32-bit division.
@@ -418,7 +418,7 @@ impl Predict {
 
     /// After an event `dk` ticks after the one before (`fresh`: a phase's
     /// first, or one whose `φ` is unknown) at `φ`.
-    #[inline]
+    #[inline(always)]
     fn next(&mut self, fresh: bool, dk: u64, phi: i64) {
         if fresh {
             *self = Predict {
@@ -437,7 +437,7 @@ impl Predict {
     }
 
     /// Ticks from the last event's to the next one's, as predicted.
-    #[inline]
+    #[inline(always)]
     fn jump(&self) -> u64 {
         let step = match self.known {
             0 => return 0,
@@ -463,7 +463,7 @@ pub(crate) static STEPS: core::sync::atomic::AtomicU32 = core::sync::atomic::Ato
 /// `zz`): the smallest `k' ≥ k` with `x < z_{k'}²`. From the predicted
 /// interval, corrected by Newton steps on `z² = x` (`z² − x` over `2z`
 /// ticks) and single ticks; `None` after [`MAX_STEPS`] corrections.
-#[inline]
+#[inline(always)]
 fn accel_walk(x: u128, k: u64, z: u128, zz: u128, jump: u64) -> Option<(u64, u128, u128)> {
     if x < zz {
         return Some((k, z, zz));
@@ -558,7 +558,7 @@ fn accel_direct(x: u128, origin: i128) -> (u64, u128, u128) {
 
 /// The deceleration's counterpart of [`accel_walk`]: the smallest `k' ≥ k`
 /// where `w < 0` or `y > w²`, `w_{k+1} = w_k − 1`.
-#[inline]
+#[inline(always)]
 fn decel_walk(y: u128, k: u64, w: i128, ww: u128, jump: u64) -> Option<(u64, i128, u128)> {
     let holds = |w: i128, ww: u128| w < 0 || y > ww;
     if holds(w, ww) {
@@ -731,7 +731,7 @@ impl Record {
     }
 
     /// Adds one event at `tick` of the current run.
-    #[inline]
+    #[inline(always)]
     pub fn event(&mut self, event: StepEvent, tick: u64) {
         // Deltas of 2³² ticks or more are recorded modulo 2³².
         let delta = tick.wrapping_sub(self.last) as u32;

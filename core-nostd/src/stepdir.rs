@@ -150,7 +150,7 @@ where
     /// the event before), then, on the tick, the STEP lines rise together,
     /// stay high for the pulse width and fall. DIR high means negative. On a
     /// pin failure both STEP lines are driven low.
-    #[inline]
+    #[inline(always)]
     pub fn issue<C: TickClock, D: DelayNs>(
         &mut self,
         event: StepEvent,
@@ -169,7 +169,7 @@ where
     /// sooner than the pulse width later, and may work meanwhile (a step
     /// interrupt pulls its next event). On a pin failure both STEP lines
     /// are driven low.
-    #[inline]
+    #[inline(always)]
     pub fn rise<C: TickClock, D: DelayNs>(
         &mut self,
         event: StepEvent,
@@ -186,7 +186,7 @@ where
     }
 
     /// Ends a pulse: both STEP lines low.
-    #[inline]
+    #[inline(always)]
     pub fn fall(&mut self) -> Result<(), PinError> {
         let x = self.x_step.set_low();
         let z = self.z_step.set_low();

@@ -209,7 +209,7 @@ impl<const R: usize> Stepper<R> {
     /// The next thing to do: a run boundary, a block's start, or a step
     /// event with its tick (recorded and counted in the registers as it is
     /// handed out). `None` when nothing is started, or a hold holds it.
-    #[inline]
+    #[inline(always)]
     pub fn pull(&mut self) -> Option<Pulled> {
         loop {
             match &mut self.now {

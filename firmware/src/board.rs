@@ -381,6 +381,7 @@ impl ErrorType for PortCPin {
 }
 
 impl OutputPin for PortCPin {
+    #[inline(always)]
     fn set_low(&mut self) -> Result<(), Infallible> {
         // SAFETY: BSRR writes are atomic and touch only this pin.
         let gpioc = unsafe { &*pac::GPIOC::ptr() };
@@ -390,6 +391,7 @@ impl OutputPin for PortCPin {
         Ok(())
     }
 
+    #[inline(always)]
     fn set_high(&mut self) -> Result<(), Infallible> {
         // SAFETY: as above.
         let gpioc = unsafe { &*pac::GPIOC::ptr() };

@@ -276,7 +276,7 @@ pub fn icount_bench(bench_elf: &Path) -> Result<Vec<String>, LinkError> {
     Ok(String::from_utf8_lossy(&log)
         .split('\n')
         .map(|l| l.trim_start_matches(|c: char| !c.is_ascii_graphic()))
-        .filter(|l| l.contains(": ") && l.is_ascii())
+        .filter(|l| l.contains(": ") && !l.chars().any(|c| c.is_control() || c == '\u{FFFD}'))
         .map(str::to_owned)
         .collect())
 }

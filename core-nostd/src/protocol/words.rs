@@ -46,7 +46,7 @@ pub(crate) fn parse_args<'a, const N: usize>(
 ) -> Result<[Option<&'a str>; N], ArgError<'a>> {
     let mut out = [None; N];
     for word in words {
-        let (key, value) = match word.split_once('=') {
+        let (key, value) = match crate::text::split_once(word, b'=') {
             Some((k, v)) if !k.is_empty() && !v.is_empty() => (k, v),
             _ => return Err(ArgError::NotKeyValue(word)),
         };

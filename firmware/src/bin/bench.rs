@@ -19,7 +19,7 @@ use firmware::board::{PortCPin, StepTimer};
 use firmware::halt;
 
 /// A line of text for the host.
-struct Line(heapless::String<160>);
+struct Line(heapless::String<256>);
 
 impl Line {
     fn print(args: core::fmt::Arguments<'_>) {
@@ -290,7 +290,7 @@ fn timed(tim: &StepTimer) {
         }
     }
     Line::print(format_args!(
-        "feed hold at cruise (3000 mm/min, 150 mm/s²): {c} instructions to act on it; the deceleration times every event pulled after it, whose 1 µs ticks first differ from the plan at event {k} ({cruise} ticks apart)"
+        "feed hold at cruise (3000 mm/min, 150 mm/s²): {c} instructions to act on it; the events after it first leave the plan's 1 µs ticks at event {k} ({cruise} ticks apart)"
     ));
     // Planning: short blocks along a polygon (chords of a circle at F600),
     // the window full: making the block, its junction, queueing it and
