@@ -187,12 +187,40 @@ pub enum Coolant {
     Off,
 }
 
-/// Program stops (`M02`, `M30`).
+/// Program stops (`M00`, `M01`, `M02`, `M30`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Stop {
+    /// `M00`: stop until cycle start.
+    Pause,
+    /// `M01`: stop until cycle start when the optional stop switch is on
+    /// (`OPT OPTSTOP=1`).
+    Optional,
     /// `M02`, `M30`: end of program.
     End,
+}
+
+/// The group-0 codes that move in machine coordinates or shift the work
+/// coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Special {
+    /// `G28` (`.0 = 0`) or `G30` (`.0 = 1`): a rapid to the stored
+    /// position, through the point of the block's `X`/`Z` (`U`/`W`) if
+    /// given, and then on the given axes only.
+    Reference(u8),
+    /// `G28.1` (`.0 = 0`) or `G30.1` (`.0 = 1`): the current machine
+    /// position is stored.
+    Store(u8),
+    /// `G53`: the block's `X`/`Z` are machine coordinates (G00 or G01).
+    Machine,
+    /// ISO `G92`, Fanuc `G50 X Z`: the work coordinates shifted so that
+    /// the current point has the block's `X`/`Z`.
+    Shift,
+    /// `G92.1`, `G92.2`: the shift cleared (`G92.2` keeps it for `G92.3`).
+    ClearShift(bool),
+    /// `G92.3`: the shift kept by `G92.2` restored.
+    RestoreShift,
 }
 
 /// A tool word: the tool, and in the Fanuc dialect its offset register.
@@ -287,8 +315,10 @@ pub struct Block {
     pub spindle: Option<Spindle>,
     /// M07/M08/M09.
     pub coolant: Option<Coolant>,
-    /// M02/M30.
+    /// M00/M01/M02/M30.
     pub stop: Option<Stop>,
+    /// G28, G30, G28.1, G30.1, G53, G92 (Fanuc G50 X Z).
+    pub special: Option<Special>,
     /// G54–G59 if given: 0 … 5.
     pub wcs: Option<u8>,
     /// G10 L2/L20: the block's `X`/`Z` are an offset's, not an end point.
@@ -882,7 +912,7 @@ impl Reading {
                     SpindleMode::Rpm
                 },
             ),
-            40 | 100 => set(&mut self.once, (tenths, pos)),
+            40 | 100 | 280 | 300 | 530 => set(&mut self.once, (tenths, pos)),
             540..=590 if tenths % 10 == 0 => set(&mut b.wcs, ((tenths - 540) / 10) as u8),
             700..=760 if tenths % 10 == 0 => Err(BlockError::Cycle(tenths)),
             // Fanuc system A.
@@ -896,10 +926,13 @@ impl Reading {
                 },
             ),
             900 | 920 | 940 if fanuc => Err(BlockError::Cycle(tenths)),
-            70 | 80 | 910 | 901 | 911 | 950 | 430 | 490 if fanuc => other(Dialect::Iso),
+            70 | 80 | 910 | 901 | 911 | 950 | 430 | 490 | 281 | 301 | 921 | 922 | 923 if fanuc => {
+                other(Dialect::Iso)
+            }
             430 => set(&mut b.tool_offset, ToolOffset::On(None)),
             490 => set(&mut b.tool_offset, ToolOffset::Off),
             // ISO.
+            281 | 301 | 920..=923 => set(&mut self.once, (tenths, pos)),
             900 | 910 => set(&mut b.incremental, tenths == 910),
             901 | 911 => set(&mut b.arc_absolute, tenths == 901),
             70 | 80 => set(&mut b.diameter, tenths == 70),
@@ -927,9 +960,13 @@ impl Reading {
             }
         };
         match tenths {
-            20 | 300 => {
+            0 | 10 | 20 | 300 => {
                 group(b.stop.is_some())?;
-                b.stop = Some(Stop::End);
+                b.stop = Some(match tenths {
+                    0 => Stop::Pause,
+                    10 => Stop::Optional,
+                    _ => Stop::End,
+                });
             }
             30 | 40 | 50 => {
                 group(b.spindle.is_some())?;
@@ -999,18 +1036,74 @@ impl Reading {
                 self.p = None;
                 self.l = None;
             }
-            Some(_) => {
-                // Fanuc G50: the spindle speed limit.
-                if motion_words || b.s.is_none() {
+            Some(code @ (280 | 300)) => {
+                if b.i.is_some() || b.k.is_some() || b.r.is_some() {
                     return Err((
-                        BlockError::Form(
-                            "G50 takes S (the spindle speed limit) alone: \
-                             G50 X Z coordinate setting is not supported",
-                        ),
+                        BlockError::Form("G28 and G30 take X and Z (U and W): the way point"),
                         once_at,
                     ));
                 }
-                b.clamp = b.s.take();
+                b.special = Some(Special::Reference(u8::from(code == 300)));
+            }
+            Some(code @ (281 | 301 | 921 | 922 | 923)) => {
+                if motion_words {
+                    return Err((
+                        BlockError::Form("G28.1, G30.1 and G92.1 to G92.3 take no axis words"),
+                        once_at,
+                    ));
+                }
+                b.special = Some(match code {
+                    281 => Special::Store(0),
+                    301 => Special::Store(1),
+                    923 => Special::RestoreShift,
+                    _ => Special::ClearShift(code == 922),
+                });
+            }
+            Some(530) => {
+                if b.i.is_some() || b.k.is_some() || b.r.is_some() {
+                    return Err((BlockError::Form("G53 moves in a line: X and Z"), once_at));
+                }
+                if b.incremental_x || b.incremental_z {
+                    return Err((BlockError::Form("G53 takes X and Z, not U and W"), once_at));
+                }
+                b.special = Some(Special::Machine);
+            }
+            Some(_) => {
+                // ISO G92, Fanuc G50: the coordinates shifted, and (Fanuc)
+                // the spindle speed limit.
+                let axes = b.x.is_some() || b.z.is_some();
+                let fanuc = self.dialect == Dialect::Fanuc;
+                if b.i.is_some()
+                    || b.k.is_some()
+                    || b.r.is_some()
+                    || b.incremental_x
+                    || b.incremental_z
+                {
+                    return Err((
+                        BlockError::Form(if fanuc {
+                            "G50 takes X and Z (the coordinates here) and S (the spindle speed limit)"
+                        } else {
+                            "G92 takes X and Z (the coordinates here)"
+                        }),
+                        once_at,
+                    ));
+                }
+                if !axes && (!fanuc || b.s.is_none()) {
+                    return Err((
+                        BlockError::Form(if fanuc {
+                            "G50 needs X and Z (the coordinates here) or S (the spindle speed limit)"
+                        } else {
+                            "G92 needs X or Z (the coordinates here)"
+                        }),
+                        once_at,
+                    ));
+                }
+                if axes {
+                    b.special = Some(Special::Shift);
+                }
+                if fanuc {
+                    b.clamp = b.s.take();
+                }
             }
             None => {}
         }
@@ -1232,7 +1325,32 @@ mod tests {
         );
         assert_eq!(refused("X1 U2"), BlockError::Form("X and U in one block"));
         assert_eq!(refused("W1 Z2"), BlockError::Form("Z and W in one block"));
-        assert!(matches!(refused("G50 X100 Z50"), BlockError::Form(_)));
+        let b = fanuc("G50 X100 Z50").unwrap();
+        assert_eq!(
+            (b.special, b.x, b.clamp),
+            (Some(Special::Shift), mm("100"), None)
+        );
+        let b = fanuc("G50 X100 S2000").unwrap();
+        assert_eq!((b.special, b.clamp), (Some(Special::Shift), mm("2000")));
+        assert!(matches!(refused("G50 U1"), BlockError::Form(_)));
+        assert!(matches!(refused("G50"), BlockError::Form(_)));
+        let b = fanuc("G28 U0 W0").unwrap();
+        assert_eq!(b.special, Some(Special::Reference(0)));
+        assert!(b.incremental_x && b.incremental_z);
+        assert_eq!(
+            fanuc("G30 U0").unwrap().special,
+            Some(Special::Reference(1))
+        );
+        assert_eq!(refused("G28 G04 P1"), BlockError::Repeated(b'G'));
+        assert!(matches!(refused("G28 U0 K1"), BlockError::Form(_)));
+        assert_eq!(
+            refused("G28.1"),
+            BlockError::OtherDialect(b'G', 281, Dialect::Iso)
+        );
+        assert_eq!(fanuc("M00").unwrap().stop, Some(Stop::Pause));
+        assert_eq!(fanuc("M1").unwrap().stop, Some(Stop::Optional));
+        assert_eq!(refused("M00 M30"), BlockError::Repeated(b'M'));
+        assert!(matches!(refused("G53 U1"), BlockError::Form(_)));
         assert_eq!(refused("G96 S100 D2000"), BlockError::UnknownAddress(b'D'));
         let iso = |line| parse(line, Dialect::Iso, Units::Mm);
         let b = iso("G7 G95 G90.1 G96 D2500 S200").unwrap();
@@ -1240,6 +1358,32 @@ mod tests {
         assert_eq!((b.clamp, b.s), (mm("2500"), mm("200")));
         assert_eq!(b.feed_mode, Some(FeedMode::PerRev));
         assert_eq!(iso("G8 G91.1").unwrap().arc_absolute, Some(false));
+        assert_eq!(iso("G92 Z0").unwrap().special, Some(Special::Shift));
+        assert!(matches!(iso("G92").unwrap_err().error, BlockError::Form(_)));
+        assert!(matches!(
+            iso("G92 S100").unwrap_err().error,
+            BlockError::Form(_)
+        ));
+        let cleared = [
+            ("G92.1", Special::ClearShift(false)),
+            ("G92.2", Special::ClearShift(true)),
+            ("G92.3", Special::RestoreShift),
+            ("G28.1", Special::Store(0)),
+            ("G30.1", Special::Store(1)),
+            ("G28", Special::Reference(0)),
+            ("G53 G01 X10 Z-3", Special::Machine),
+        ];
+        for (line, special) in cleared {
+            assert_eq!(iso(line).unwrap().special, Some(special), "{line}");
+        }
+        assert!(matches!(
+            iso("G28.1 X1").unwrap_err().error,
+            BlockError::Form(_)
+        ));
+        assert_eq!(
+            iso("G53 G92 X1").unwrap_err().error,
+            BlockError::Repeated(b'G')
+        );
         assert_eq!(
             iso("G99").unwrap_err().error,
             BlockError::OtherDialect(b'G', 990, Dialect::Fanuc)

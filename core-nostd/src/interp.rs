@@ -295,6 +295,13 @@ pub struct Offsets {
     pub work: [[Length; 2]; WORK_SYSTEMS],
     /// Registers 01 … 32.
     pub tools: [ToolEntry; TOOL_REGISTERS],
+    /// ISO `G92`, Fanuc `G50 X Z`: added to every work system.
+    pub shift: [Length; 2],
+    /// The shift `G92.2` cleared, for `G92.3`.
+    pub kept_shift: [Length; 2],
+    /// The positions `G28` and `G30` return to, machine coordinates
+    /// (machine zero until `G28.1`/`G30.1` store others).
+    pub reference: [[Length; 2]; 2],
 }
 
 impl Offsets {
@@ -306,6 +313,9 @@ impl Offsets {
             wear: [Length::ZERO; 2],
             nose: None,
         }; TOOL_REGISTERS],
+        shift: [Length::ZERO; 2],
+        kept_shift: [Length::ZERO; 2],
+        reference: [[Length::ZERO; 2]; 2],
     };
 
     /// A register (1 … 32); `None` for 0 or beyond the table.
@@ -322,12 +332,13 @@ impl Offsets {
         }
     }
 
-    /// The machine coordinates of work zero with the tool's offset: machine
-    /// = work + this, if within the length range.
+    /// The machine coordinates of work zero with the shift and the tool's
+    /// offset: machine = work + this, if within the length range.
     pub fn vector(&self, sel: &Selection) -> Option<[Length; 2]> {
         let work = self.work.get(usize::from(sel.wcs))?;
         let tool = self.tool_offset(sel)?;
-        Some([work[0].checked_add(tool[0])?, work[1].checked_add(tool[1])?])
+        let sum = |a: usize| work[a].checked_add(tool[a])?.checked_add(self.shift[a]);
+        Some([sum(0)?, sum(1)?])
     }
 }
 

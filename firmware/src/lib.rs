@@ -52,6 +52,7 @@ impl Controller {
                 diam: true,
                 speed: 0,
                 starved: 0,
+                stop: None,
             },
             queued: 0,
             asked: None,
@@ -122,6 +123,14 @@ impl Io for Controller {
             let now = board::ticks();
             left = left.saturating_sub(u64::from(now.wrapping_sub(last)));
             last = now;
+        }
+    }
+
+    fn program_stop(&mut self, _: u8) {
+        motion::clear_cycle_start();
+        while !motion::stop_ended() {
+            self.pause();
+            board::sleep_unless(|| motion::wanted() || motion::stop_ended());
         }
     }
 

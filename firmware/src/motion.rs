@@ -162,6 +162,8 @@ const WANT_STATUS: u8 = 1;
 const WANT_RESET: u8 = 2;
 /// When the byte a wanted status line answers arrived (TIM2 count).
 static STATUS_ASKED: AtomicU32 = AtomicU32::new(0);
+/// Cycle start (0x81) came since a program stop began waiting.
+static CYCLE_START: AtomicBool = AtomicBool::new(false);
 
 // The state itself lives in `.bss` (`singleton!`); an empty reference is
 // all-zero, so this static adds no `.data` image to flash.
@@ -381,6 +383,9 @@ pub fn motion() -> State {
 /// its line.
 pub fn realtime(rt: Realtime) {
     act(rt);
+    if rt == Realtime::Resume {
+        CYCLE_START.store(true, Ordering::Release);
+    }
     if rt == Realtime::Reset {
         WANTED.fetch_or(WANT_RESET, Ordering::AcqRel);
     } else {
@@ -428,6 +433,16 @@ pub fn take_status() -> Option<u32> {
 /// cleared).
 pub fn take_reset() -> bool {
     WANTED.fetch_and(!WANT_RESET, Ordering::AcqRel) & WANT_RESET != 0
+}
+
+/// Forgets a cycle start that came before a program stop began to wait.
+pub fn clear_cycle_start() {
+    CYCLE_START.store(false, Ordering::Release);
+}
+
+/// Whether a program stop's wait is over: cycle start came, or a reset.
+pub fn stop_ended() -> bool {
+    CYCLE_START.load(Ordering::Acquire) || WANTED.load(Ordering::Acquire) & WANT_RESET != 0
 }
 
 /// Whether a real-time request waits for thread mode.

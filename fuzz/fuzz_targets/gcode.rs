@@ -19,7 +19,7 @@
 
 use core_nostd::gcode::{
     is_block, parse, parse_block, Block, BlockError, Compensation, Coolant, Corner, Dialect,
-    FeedMode, LineKind, Motion, Spindle, SpindleMode, Stop, ToolOffset, Units,
+    FeedMode, LineKind, Motion, Special, Spindle, SpindleMode, Stop, ToolOffset, Units,
 };
 use core_nostd::length::LengthError;
 use core_nostd::protocol::Device;
@@ -110,8 +110,20 @@ fn as_reference(b: &Block) -> RefBlock {
             ToolOffset::Off => (false, None),
         }),
         tool_change: b.tool_change,
+        special: b.special.map(|s| match s {
+            Special::Reference(n) => 280 + 20 * u16::from(n),
+            Special::Store(n) => 281 + 20 * u16::from(n),
+            Special::Machine => 530,
+            Special::Shift => 920,
+            Special::ClearShift(keep) => 921 + u16::from(keep),
+            Special::RestoreShift => 923,
+        }),
         m: [
-            b.stop.map(|Stop::End| 30),
+            b.stop.map(|s| match s {
+                Stop::Pause => 0,
+                Stop::Optional => 1,
+                Stop::End => 30,
+            }),
             b.spindle.map(|s| match s {
                 Spindle::Cw => 3,
                 Spindle::Ccw => 4,
@@ -218,6 +230,9 @@ fn canonical(b: &RefBlock) -> String {
     if let Some((p, here)) = b.set_work {
         words.push(format!("G10 L{} P{p}", if here { 20 } else { 2 }));
     }
+    if let Some(g) = b.special {
+        words.push(format!("G{}.{}", g / 10, g % 10));
+    }
     match b.tool_offset {
         Some((true, Some(h))) => words.push(format!("G43 H{h}")),
         Some((true, None)) => words.push("G43".into()),
@@ -313,7 +328,9 @@ fuzz_target!(|text: &str| {
                 let inc = b.incremental.unwrap_or(*incremental);
                 let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
                 // G10's X and Z are an offset's.
-                let moves = (b.x.is_some() || b.z.is_some() || arc_words) && b.set_work.is_none();
+                let moves = (b.x.is_some() || b.z.is_some() || arc_words)
+                    && b.set_work.is_none()
+                    && b.special.is_none();
                 let end = |word: Option<core_nostd::length::Length>, now: i64, half: bool| {
                     word.map_or(now, |w| {
                         let w = w.as_angstrom();
@@ -329,7 +346,21 @@ fuzz_target!(|text: &str| {
                 // Compensation switched on (all preludes have it off): the
                 // start-up block's motion waits for the next block.
                 let starting = b.compensation.is_some_and(|c| c != Compensation::Off);
-                let want = if moves && !starting {
+                let none = b.x.is_none() && b.z.is_none();
+                let want = if let Some(Special::Reference(_)) = b.special {
+                    // To machine zero (nothing stored) on the axes named,
+                    // all without a way point.
+                    (
+                        if none || b.x.is_some() { 0 } else { x0 },
+                        if none || b.z.is_some() { 0 } else { z0 },
+                    )
+                } else if b.special == Some(Special::Machine) {
+                    let half = b.diameter.unwrap_or(diam);
+                    let at = |w: Option<core_nostd::length::Length>, now: i64, half: bool| {
+                        w.map_or(now, |w| w.as_angstrom() / if half { 2 } else { 1 })
+                    };
+                    (at(b.x, x0, half), at(b.z, z0, false))
+                } else if moves && !starting {
                     (
                         end(b.x, x0, b.diameter.unwrap_or(diam)),
                         end(b.z, z0, false),

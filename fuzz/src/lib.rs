@@ -1117,7 +1117,8 @@ pub struct RefBlock {
     pub clamp: Option<i64>,
     /// T, the tool number.
     pub tool: Option<u8>,
-    /// M codes by group: stop (2, 30), spindle (3–5), coolant (7–9).
+    /// M codes by group: stop (0, 1, 30 for M2 and M30), spindle (3–5),
+    /// coolant (7–9).
     pub m: [Option<u8>; 3],
     /// Fanuc: X came from a `U`, Z from a `W` (increments).
     pub from_u_w: [bool; 2],
@@ -1131,6 +1132,10 @@ pub struct RefBlock {
     pub tool_offset: Option<(bool, Option<u8>)>,
     /// ISO M6.
     pub tool_change: bool,
+    /// The group-0 codes that move in machine coordinates or shift the
+    /// work coordinates, in tenths: G28, G30 (with their way point), G28.1,
+    /// G30.1 (store), G53, G92 (Fanuc G50 X Z), G92.1, G92.2, G92.3.
+    pub special: Option<u16>,
 }
 
 /// Why the reference reading refuses a block.
@@ -1406,6 +1411,7 @@ pub fn reference_block_in(
                         let (group, value) = match (code, tenth) {
                             // M02 and M30 both end the program.
                             (2 | 30, 0) => (0, 30),
+                            (0 | 1, 0) => (0, code as u8),
                             (3..=5, 0) => (1, code as u8),
                             (7..=9, 0) => (2, code as u8),
                             (6, 0) if fanuc => return Err(RefBlockError::OtherDialect),
@@ -1431,27 +1437,49 @@ pub fn reference_block_in(
                         *slot = Some(v);
                         Ok(())
                     }
+                    let group0 = g4 || g50 || g10 || b.special.is_some();
                     match (code, tenth) {
+                        (28 | 30, 1) | (92, 1..=3) if fanuc => {
+                            return Err(RefBlockError::OtherDialect)
+                        }
+                        (28 | 30, 1) | (92, 1..=3) => {
+                            if group0 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            b.special = Some(code * 10 + tenth);
+                        }
                         (90 | 91, 1) if fanuc => return Err(RefBlockError::OtherDialect),
                         (90 | 91, 1) => put(&mut b.arc_distance, code * 10 + 1)?,
                         (_, 1..) => return Err(RefBlockError::UnsupportedG),
                         (50, _) if fanuc => {
-                            if g4 || g50 || g10 {
+                            if group0 {
                                 return Err(RefBlockError::Repeated(b'G'));
                             }
                             g50 = true;
                         }
                         (10, _) => {
-                            if g4 || g50 || g10 {
+                            if group0 {
                                 return Err(RefBlockError::Repeated(b'G'));
                             }
                             g10 = true;
+                        }
+                        (28 | 30 | 53, _) => {
+                            if group0 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            b.special = Some(code * 10);
                         }
                         (54..=59, _) => put(&mut b.wcs, code as u8 - 54)?,
                         (43 | 49, _) if fanuc => return Err(RefBlockError::OtherDialect),
                         (43 | 49, _) => put(&mut b.tool_offset, (code == 43, None))?,
                         (98 | 99, _) if fanuc => put(&mut b.feed_mode, code as u8 - 4)?,
                         (90 | 92 | 94, _) if fanuc => return Err(RefBlockError::Cycle),
+                        (92, _) => {
+                            if group0 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            b.special = Some(920);
+                        }
                         (7 | 8 | 91 | 95, _) if fanuc => return Err(RefBlockError::OtherDialect),
                         (450 | 451, _) => put(&mut b.corner, code)?,
                         (0..=3, _) => put(&mut b.motion, code as u8)?,
@@ -1463,7 +1491,7 @@ pub fn reference_block_in(
                         (94 | 95, _) => put(&mut b.feed_mode, code as u8)?,
                         (96 | 97, _) => put(&mut b.spindle_mode, code as u8)?,
                         (4, _) => {
-                            if g4 || g50 || g10 {
+                            if group0 {
                                 return Err(RefBlockError::Repeated(b'G'));
                             }
                             g4 = true;
@@ -1601,9 +1629,24 @@ pub fn reference_block_in(
         }
         (p, l) = (None, None);
     }
+    let ikr = b.xzikr[2..].iter().any(Option::is_some);
+    let axes = b.xzikr[0].is_some() || b.xzikr[1].is_some();
+    let u_w = b.from_u_w.contains(&true);
+    match b.special {
+        // G28, G30: X Z (U W) a way point, nothing else.
+        Some(280 | 300) if ikr => return Err(RefBlockError::Form),
+        Some(281 | 301 | 921 | 922 | 923) if motion_words => return Err(RefBlockError::Form),
+        Some(530 | 920) if ikr || u_w => return Err(RefBlockError::Form),
+        Some(920) if !axes => return Err(RefBlockError::Form),
+        _ => {}
+    }
     if g50 {
-        if motion_words || b.s.is_none() {
+        // Fanuc: X Z set the coordinates here, S the spindle limit.
+        if ikr || u_w || (!axes && b.s.is_none()) {
             return Err(RefBlockError::Form);
+        }
+        if axes {
+            b.special = Some(920);
         }
         b.clamp = b.s.take();
     }

@@ -72,7 +72,7 @@ mod tests {
 
     #[test]
     fn every_refused_line_is_listed_with_its_place() {
-        let program = "%\r\nO1000 (SHAFT)\r\nN10 G18 G28\r\nN20 G00 X30. Z2. Y1\r\n\r\nN30 G01 X.5 F100\r\nMOVE X=1\r\nN40 Q5\r\n%\r\n";
+        let program = "%\r\nO1000 (SHAFT)\r\nN10 G18 G28.2\r\nN20 G00 X30. Z2. Y1\r\n\r\nN30 G01 X.5 F100\r\nMOVE X=1\r\nN40 Q5\r\n%\r\n";
         let items = check(program);
         let got: Vec<(usize, usize, &str)> = items
             .iter()
@@ -81,7 +81,7 @@ mod tests {
         assert_eq!(
             got,
             [
-                (3, 9, "G28 not supported"),
+                (3, 9, "G28.2 not supported"),
                 (4, 18, "Y a lathe has no Y axis: only Y0"),
                 (7, 1, "not a G-code line"),
                 (8, 5, "unknown address Q"),

@@ -111,6 +111,14 @@ struct RunArgs {
     /// machine coordinates (X a diameter, I/K from the block's start).
     #[arg(long, requires = "file")]
     trace: bool,
+    /// A file of setup requests sent before the program, one per line
+    /// (`TOOL N=1 X=-2.5 Z=1.2 R=0.4 T=3`, `WORK G=54 Z=-120`; `#` starts a
+    /// comment): the tool table and the work offsets.
+    #[arg(long, value_name = "FILE", requires = "file")]
+    tools: Option<std::path::PathBuf>,
+    /// The optional stop switch on: M01 stops as M00 does.
+    #[arg(long, requires = "file")]
+    optional_stop: bool,
 }
 
 impl Default for RunArgs {
@@ -125,6 +133,8 @@ impl Default for RunArgs {
             dialect: "auto".into(),
             radius: false,
             trace: false,
+            tools: None,
+            optional_stop: false,
         }
     }
 }
@@ -294,15 +304,39 @@ fn run_program(
     let options = host_sim::program::Options {
         dialect,
         radius: args.radius,
+        optional_stop: args.optional_stop,
     };
-    let r = host_sim::program::run(&text, options);
+    let setup_text = match &args.tools {
+        Some(path) => std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?,
+        None => String::new(),
+    };
+    let setup = host_sim::program::setup_lines(&setup_text);
+    let r = host_sim::program::run_setup(&text, options, &setup);
+    let setup_name = args
+        .tools
+        .as_ref()
+        .map_or(String::new(), |p| p.display().to_string());
     if args.trace {
         for block in &r.trace {
             println!("{block}");
         }
     }
+    for refused in &r.setup_refused {
+        let request = setup
+            .iter()
+            .find(|(l, _)| *l == refused.line)
+            .map_or("", |(_, q)| q);
+        eprintln!(
+            "{setup_name}:{}: {request}: {}",
+            refused.line, refused.reply
+        );
+    }
     for refused in &r.refused {
         eprintln!("{f}:{}: {}", refused.line, refused.reply);
+    }
+    for (line, code) in &r.stops {
+        eprintln!("{f}:{line}: {code} program stop: cycle start pressed");
     }
     let report = |s: String| {
         if args.trace {
@@ -339,7 +373,7 @@ fn run_program(
             tools.join(", ")
         }
     ));
-    Ok(if r.refused.is_empty() {
+    Ok(if r.refused.is_empty() && r.setup_refused.is_empty() {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)

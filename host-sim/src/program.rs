@@ -16,6 +16,8 @@ pub struct Options {
     pub dialect: Dialect,
     /// X words are radii at the start (`G8`), not diameters.
     pub radius: bool,
+    /// The optional stop switch: `M01` stops too.
+    pub optional_stop: bool,
 }
 
 /// A line the device refused.
@@ -34,6 +36,8 @@ pub struct Report {
     pub blocks: usize,
     /// The lines it refused.
     pub refused: Vec<Refused>,
+    /// The setup requests it refused (line 0: the run's own settings).
+    pub setup_refused: Vec<Refused>,
     /// Time in motion, µs (the runs' ticks at the 1 MHz step clock).
     pub motion_us: u64,
     /// Time dwelling (`G04`), µs.
@@ -46,6 +50,9 @@ pub struct Report {
     pub rapid_mm: f64,
     /// Each tool change: the line and the `T` word as written.
     pub tools: Vec<(usize, String)>,
+    /// Each program stop, where cycle start was pressed: the line and
+    /// `M00` or `M01`.
+    pub stops: Vec<(usize, String)>,
     /// Every motion block the device ran, as G-code in machine coordinates
     /// (X a diameter, I/K radius values from the block's start).
     pub trace: Vec<String>,
@@ -79,6 +86,7 @@ struct Tally {
     run_ticks: u64,
     dwell_us: u64,
     events: u64,
+    stops: Vec<u8>,
 }
 
 impl Io for Tally {
@@ -93,6 +101,10 @@ impl Io for Tally {
     }
     fn dwell(&mut self, us: u64) {
         self.dwell_us += us;
+    }
+    fn program_stop(&mut self, code: u8) {
+        // Cycle start, pressed at once.
+        self.stops.push(code);
     }
 }
 
@@ -118,24 +130,42 @@ pub fn run(text: &str, options: Options) -> Report {
     run_with(text, options, &[])
 }
 
-/// Runs a program's text after `setup` requests (`CFG RN=0.8 TIP=2`); a
-/// setup request the device refuses is reported as refused at line 0.
+/// Runs a program's text after `setup` requests (`CFG RN=0.8 TIP=2`).
 pub fn run_with(text: &str, options: Options, setup: &[&str]) -> Report {
+    let setup: Vec<(usize, &str)> = setup.iter().map(|l| (0, *l)).collect();
+    run_setup(text, options, &setup)
+}
+
+/// A setup file's requests (`TOOL N=1 X=… R=0.4 T=3`, `WORK G=54 Z=…`):
+/// one per line, with its line number; blank lines and `#` comments
+/// skipped.
+pub fn setup_lines(text: &str) -> Vec<(usize, &str)> {
+    text.lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
+        .filter(|(_, l)| !l.is_empty())
+        .collect()
+}
+
+/// Runs a program's text after setup requests, each with the line of the
+/// file it comes from ([`Report::setup_refused`]).
+pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Report {
     let mut dev = Device::new();
     let mut io = Tally::default();
     let mut report = Report::default();
     let settings = [
         format!("OPT DIALECT={}", options.dialect.as_str()),
         format!("CFG DIAM={}", u8::from(!options.radius)),
+        format!("OPT OPTSTOP={}", u8::from(options.optional_stop)),
     ];
-    for setting in settings
+    for (line, setting) in settings
         .iter()
-        .map(String::as_str)
+        .map(|s| (0, s.as_str()))
         .chain(setup.iter().copied())
     {
         let reply = request(&mut dev, &mut io, setting);
         if !reply.starts_with("OK") {
-            report.refused.push(Refused { line: 0, reply });
+            report.setup_refused.push(Refused { line, reply });
         }
     }
     let mut units = Units::Mm;
@@ -159,6 +189,9 @@ pub fn run_with(text: &str, options: Options, setup: &[&str]) -> Report {
             continue;
         }
         report.blocks += 1;
+        for code in io.stops.drain(..) {
+            report.stops.push((i + 1, format!("M{code:02}")));
+        }
         // What the device read: the tool word and the unit.
         if let Ok(b) = parse(line, options.dialect, units) {
             units = b.units.unwrap_or(units);
@@ -247,6 +280,7 @@ mod tests {
     const FANUC: Options = Options {
         dialect: Dialect::Fanuc,
         radius: false,
+        optional_stop: false,
     };
 
     #[test]
@@ -285,14 +319,49 @@ mod tests {
     }
 
     #[test]
+    fn coordinate_setting_program_stops_and_the_reference_return() {
+        let program = "G21 G18\nT0101\nG00 X40. Z5.\nG50 X0 Z0\nG00 X10. Z-2.\n\
+                       M00\nM01\nG28 U0 W0\nG00 U4. W-1.\nG28 U0\nM30\n";
+        let setup = [(1, "TOOL N=1 X=2 Z=-1"), (2, "WORK G=54 Z=-50")];
+        let r = run_setup(program, FANUC, &setup);
+        assert!(r.refused.is_empty() && r.setup_refused.is_empty(), "{r:?}");
+        // Register 1 adds X 1 (radius) and Z -1, G54 Z -50; G50 makes the
+        // point X40 Z5 the zero; G28 returns to machine zero, through the
+        // way point (the point itself with U0 W0) on the axes named.
+        assert_eq!(
+            r.trace,
+            [
+                "G00 X42.0000 Z-46.0000",
+                "G00 X52.0000 Z-48.0000",
+                "G00 X0.0000 Z0.0000",
+                "G00 X4.0000 Z-1.0000",
+                "G00 X0.0000 Z-1.0000"
+            ]
+        );
+        assert_eq!(r.stops, [(6, "M00".to_string())]);
+        let r = run_setup(
+            program,
+            Options {
+                optional_stop: true,
+                ..FANUC
+            },
+            &setup,
+        );
+        assert_eq!(r.stops, [(6, "M00".into()), (7, "M01".into())]);
+        let r = run_setup("G00 X2.\n", FANUC, &[(3, "TOOL N=40")]);
+        assert_eq!(r.setup_refused.len(), 1);
+        assert_eq!(r.setup_refused[0].line, 3);
+    }
+
+    #[test]
     fn refusals_are_listed_and_the_rest_runs() {
-        let r = run("G00 X10\nG28\nMOVE X=1\nG00 X20\n", FANUC);
+        let r = run("G00 X10\nG71 U2 R.5\nMOVE X=1\nG00 X20\n", FANUC);
         assert_eq!(
             r.refused,
             [
                 Refused {
                     line: 2,
-                    reply: "ERR VALUE G28 not supported".into()
+                    reply: "ERR VALUE G71 canned cycles not supported".into()
                 },
                 Refused {
                     line: 3,

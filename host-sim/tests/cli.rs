@@ -151,7 +151,7 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
     std::fs::write(
         &part,
         "%\nO1000\nG21 G18 G99\nT0101\nG50 S2500\nG96 S180 M03\nG00 X30. Z2.\n\
-         G01 Z-40. F.2\nG28\nU2. W-1.\nG71 U1. R.5\nM30\n%\n",
+         G01 Z-40. F.2\nM98 P2000\nU2. W-1.\nG71 U1. R.5\nM30\n%\n",
     )
     .unwrap();
     let run = |args: &[&str]| {
@@ -165,7 +165,7 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
         text,
         format!(
             "{p}: dialect: FANUC (line 3 is one of its words)\n\
-             {p}:9:1: G28 not supported\n\
+             {p}:9:1: M98 subprograms are expanded by the host\n\
              {p}:11:1: G71 canned cycles not supported\n\
              {p}: 2 lines the device would refuse\n"
         )
@@ -186,6 +186,54 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
         String::from_utf8_lossy(&out.stderr)
             .contains("the program mixes dialects: line 1 is Fanuc's, line 3 ISO's"),
         "{out:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn run_loads_a_tool_file_and_presses_cycle_start_at_a_stop() {
+    let dir = std::env::temp_dir().join(format!("host-sim-tools-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (part, tools) = (dir.join("part.nc"), dir.join("tools.txt"));
+    std::fs::write(
+        &part,
+        "%\nO1000\nG21 G18 G98\nT0101\nG00 X20. Z2.\nM00\nG01 Z-5. F100.\nG28 U0 W0\nM30\n%\n",
+    )
+    .unwrap();
+    std::fs::write(
+        &tools,
+        "# register 1: the turning tool\nTOOL N=1 X=4 Z=-1.5 R=0.4 T=3\nWORK G=54 Z=-100\n",
+    )
+    .unwrap();
+    let (p, t) = (part.to_str().unwrap(), tools.to_str().unwrap());
+    let out = Command::new(BIN)
+        .args(["run", p, "--tools", t, "--trace"])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    // Machine coordinates: X 20 + 4 (diameters), Z 2 - 100 - 1.5.
+    assert_eq!(
+        stdout,
+        "G00 X24.0000 Z-99.5000\nG01 X24.0000 Z-106.5000\nG00 X0.0000 Z0.0000\n"
+    );
+    assert!(
+        stderr.contains(&format!("{p}:6: M00 program stop: cycle start pressed")),
+        "{stderr}"
+    );
+    std::fs::write(&tools, "TOOL N=1 X=4\n\nTOOL N=40 X=1\n").unwrap();
+    let out = Command::new(BIN)
+        .args(["run", p, "--tools", t])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{t}:3: TOOL N=40 X=1: ERR VALUE N")),
+        "{stderr}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

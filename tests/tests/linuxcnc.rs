@@ -119,6 +119,16 @@ const PEERS: &[Peer] = &[
         entry: Some(1),
         inch: false,
     },
+    Peer {
+        name: "machine coordinates (G53), reference returns (G28, G30, G28.1) and G92 shifts",
+        body: "G18 G21 G7 G90 G40\nG10 L2 P1 X2 Z-20\nT1 M6 G43\nG00 X30 Z5\nG28.1\n\
+               G00 X40 Z8\nG53 G00 X10 Z-3\nG01 X20 F200\nG53 G01 X12 Z-1\nG28 X50 Z10\n\
+               G92 X0 Z0\nG00 X10 Z-5\nG01 Z-8\nG30\nG00 X6 Z-2\nG92.1\nG00 X20 Z2\n\
+               G91 G28 X0\nG90 G00 X24 Z4\nG92 Z10\nG03 X30 Z7 R3\nG92.2\nG00 X30 Z0\nM2\n",
+        tool: Some(("X0.05 Z-0.1 Q2", "X=2.54 Z=-2.54 R=0.4 T=3")),
+        entry: None,
+        inch: false,
+    },
 ];
 
 fn rs274_available() -> bool {
@@ -150,8 +160,11 @@ fn triple(text: &str) -> Vec<f64> {
 }
 
 /// LinuxCNC's canonical moves of a program, in mm and machine coordinates:
-/// its positions plus the work offset (`SET_G5X_OFFSET`) and the tool
-/// offset (`USE_TOOL_LENGTH_OFFSET`) in effect.
+/// its positions plus the work offset (`SET_G5X_OFFSET`), the `G92` shift
+/// (`SET_G92_OFFSET`) and the tool offset (`USE_TOOL_LENGTH_OFFSET`) in
+/// effect. A traverse that does not move is left out: LinuxCNC sends the
+/// way point of `G28`/`G30` even where the tool already is, the device
+/// does not.
 fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
     let dir = std::env::temp_dir().join(format!("linuxcnc-peer-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -174,7 +187,8 @@ fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
         String::from_utf8_lossy(&out.stderr)
     );
     let mut scale = 1.0;
-    let (mut work, mut offset) = ([0.0; 2], [0.0; 2]);
+    let (mut work, mut shift, mut offset) = ([0.0; 2], [0.0; 2], [0.0; 2]);
+    let mut last: Option<(f64, f64)> = None;
     let mut moves = Vec::new();
     for line in text.lines() {
         let Some(call) = line.split("N..... ").nth(1) else {
@@ -182,8 +196,8 @@ fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
         };
         let at = |x: f64, z: f64| {
             (
-                x * scale + work[0] + offset[0],
-                z * scale + work[1] + offset[1],
+                x * scale + work[0] + shift[0] + offset[0],
+                z * scale + work[1] + shift[1] + offset[1],
             )
         };
         if call.starts_with("USE_LENGTH_UNITS") {
@@ -191,6 +205,9 @@ fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
         } else if call.starts_with("SET_G5X_OFFSET") {
             let a = args(call);
             work = [a[1] * scale, a[3] * scale];
+        } else if call.starts_with("SET_G92_OFFSET") {
+            let a = args(call);
+            shift = [a[0] * scale, a[2] * scale];
         } else if call.starts_with("USE_TOOL_LENGTH_OFFSET") {
             let inner = call.split_once('(').unwrap().1;
             let xyz = triple(inner.split(',').next().unwrap());
@@ -198,6 +215,11 @@ fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
         } else if call.starts_with("STRAIGHT_TRAVERSE") || call.starts_with("STRAIGHT_FEED") {
             let a = args(call);
             let (x, z) = at(a[0], a[2]);
+            let still = last.is_some_and(|(px, pz)| (px - x).abs() < 1e-9 && (pz - z).abs() < 1e-9);
+            last = Some((x, z));
+            if still && call.starts_with("STRAIGHT_TRAVERSE") {
+                continue;
+            }
             moves.push(Move {
                 g: u8::from(call.starts_with("STRAIGHT_FEED")),
                 x,
@@ -208,6 +230,7 @@ fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
             // XZ plane: Z end, X end, Z centre, X centre, turn (+1 G03).
             let a = args(call);
             let (x, z) = at(a[1], a[0]);
+            last = Some((x, z));
             let centre = at(a[3], a[2]);
             moves.push(Move {
                 g: if a[4] > 0.0 { 3 } else { 2 },
@@ -228,11 +251,17 @@ fn device(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
     let options = Options {
         dialect: Dialect::Iso,
         radius: false,
+        optional_stop: false,
     };
     let setup = tool.map(|t| format!("TOOL N=1 {t}"));
     let setup: Vec<&str> = setup.iter().map(String::as_str).collect();
     let report = host_sim::program::run_with(&text, options, &setup);
     assert!(report.refused.is_empty(), "{name}: {:?}", report.refused);
+    assert!(
+        report.setup_refused.is_empty(),
+        "{name}: {:?}",
+        report.setup_refused
+    );
     let mm = |a: i64| a as f64 / 1e7;
     report
         .path

@@ -180,3 +180,61 @@ fn firmware_answers_real_time_bytes_like_the_in_process_device() {
     assert!(client.read_line().unwrap().starts_with("OK EV=100 "));
     assert!(client.read_line().unwrap().starts_with("OK PX=200 PZ=-200"));
 }
+
+/// The next line that is not a `DATA` line.
+fn final_line(client: &mut Client) -> String {
+    loop {
+        let line = client.read_line().unwrap();
+        if !line.starts_with("DATA") {
+            return line.trim_end().to_string();
+        }
+    }
+}
+
+/// `M00` on the board: the axes come to rest, the reply waits for cycle
+/// start (0x81), status bytes are answered meanwhile with `STOP=M00`; `M01`
+/// passes with the optional stop switch off.
+#[test]
+fn a_program_stop_waits_for_cycle_start_on_the_board() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client) = booted();
+    let ask = |client: &mut Client, line: &[u8], want: &str| {
+        client.write_raw(line).unwrap();
+        let got = final_line(client);
+        assert!(got.starts_with(want), "{got} (wanted {want})");
+    };
+    ask(&mut client, b"G00 X10 Z-5\n", "OK NX=1000 NZ=-500 ");
+    ask(&mut client, b"M01\n", "OK NX=0 NZ=0");
+    client.write_raw(b"M00\n").unwrap();
+    // Status lines while the block before it runs to its end, then the
+    // stop; no reply to M00 meanwhile.
+    let mut stopped = None;
+    for _ in 0..50 {
+        client.write_raw(b"\x80").unwrap();
+        let status = final_line(&mut client);
+        assert!(status.starts_with("!STATUS "), "{status}");
+        if status.contains(" STOP=M00 ") {
+            stopped = Some(status);
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let status = stopped.expect("STOP=M00 in a status line");
+    assert!(
+        status.starts_with("!STATUS STATE=IDLE PX=1000 PZ=-500 "),
+        "{status}"
+    );
+    client.write_raw(b"\x80").unwrap();
+    assert!(final_line(&mut client).contains(" STOP=M00 "));
+    client.write_raw(b"\x81").unwrap();
+    let mut two = [final_line(&mut client), final_line(&mut client)];
+    two.sort();
+    assert!(two[0].starts_with("!STATUS STATE=IDLE"), "{two:?}");
+    assert!(two[1].starts_with("OK NX=0 NZ=0"), "{two:?}");
+    client.write_raw(b"\x80").unwrap();
+    let status = final_line(&mut client);
+    assert!(!status.contains("STOP="), "{status}");
+    ask(&mut client, b"G00 X0 Z0\n", "OK NX=-1000 NZ=500 PX=0 PZ=0");
+}

@@ -113,6 +113,8 @@ pub struct StatusView {
     pub speed: i64,
     /// Starved block starts since the last `SYNC` or `ZERO`.
     pub starved: u32,
+    /// Waiting for cycle start after `M00` (0) or `M01` (1): ` STOP=M00`.
+    pub stop: Option<u8>,
 }
 
 /// Where replies and motion go: the transport side of a [`Device`].
@@ -165,6 +167,14 @@ pub trait Io {
     /// runs are timed each from its own start, has nothing to wait for.
     fn dwell(&mut self, us: u64) {
         let _ = us;
+    }
+
+    /// A program stop (`M00`, or `M01` with the switch on; `code` 0 or 1),
+    /// the axes at rest: a board waits for cycle start (0x81), answering
+    /// status bytes meanwhile (`STOP=M00`); a reset ends the wait too. A
+    /// transport without an operator presses cycle start at once.
+    fn program_stop(&mut self, code: u8) {
+        let _ = code;
     }
 
     /// For a `!STATUS` line: how the transport keeps time, where it

@@ -14,8 +14,8 @@ use crate::comp::{
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{
-    is_block, parse, BlockError, Coolant, Dialect, FeedMode, Motion, Spindle, SpindleMode, Stop,
-    ToolOffset, ToolWord,
+    is_block, parse, BlockError, Coolant, Dialect, FeedMode, Motion, Special, Spindle, SpindleMode,
+    Stop, ToolOffset, ToolWord,
 };
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
@@ -139,6 +139,8 @@ pub struct Session {
     /// The block delete switch (`OPT BDEL=`): blocks that begin with `/`
     /// are skipped while it is on.
     block_delete: bool,
+    /// The optional stop switch: `M01` stops (`OPT OPTSTOP=`).
+    optional_stop: bool,
     /// The id of the last request that carried one, and its final reply.
     last_id: Option<u32>,
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
@@ -218,6 +220,7 @@ impl Session {
             last_moves: Moves::new(),
             token: 0,
             block_delete: false,
+            optional_stop: false,
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
@@ -363,10 +366,14 @@ impl Session {
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
         } else if command.eq_ignore_ascii_case("OPT") {
-            let [bdel, dialect] = parse_args(words, ["BDEL", "DIALECT"])?;
+            let [bdel, dialect, optstop] = parse_args(words, ["BDEL", "DIALECT", "OPTSTOP"])?;
             let block_delete = match bdel {
                 Some(v) => parse_flag("BDEL", v)?,
                 None => self.block_delete,
+            };
+            let optional_stop = match optstop {
+                Some(v) => parse_flag("OPTSTOP", v)?,
+                None => self.optional_stop,
             };
             let dialect = match dialect {
                 None => self.dialect,
@@ -375,12 +382,14 @@ impl Session {
                 Some(_) => return Err(Refusal::Value("DIALECT", "must be ISO or FANUC")),
             };
             (self.block_delete, self.dialect) = (block_delete, dialect);
+            self.optional_stop = optional_stop;
             send_ok(
                 io,
                 Some(format_args!(
-                    "BDEL={} DIALECT={}",
+                    "BDEL={} DIALECT={} OPTSTOP={}",
                     u8::from(self.block_delete),
-                    self.dialect.as_str()
+                    self.dialect.as_str(),
+                    u8::from(self.optional_stop)
                 )),
             );
             Ok(())
@@ -765,7 +774,53 @@ impl Session {
                 .map_err(|e| Refusal::Value("S", e.as_str()))?;
         }
         let diam = b.diameter.unwrap_or(self.cfg.diam);
-        let (sel, offsets) = self.offsets_after(&b, &aux, diam)?;
+        let (sel, mut offsets) = self.offsets_after(&b, &aux, diam)?;
+        let special = b.special;
+        if special.is_some() && (self.contour.active() || b.compensation.is_some()) {
+            return Err(Refusal::Busy(
+                "G28, G30, G53 and G92 (G50) with nose compensation",
+            ));
+        }
+        // G92 (G50): the point here takes the block's coordinates.
+        let mut prog = self.prog;
+        let shift = offsets.shift;
+        match special {
+            Some(Special::Shift) => {
+                let words = [b.x.map(|x| x_radius(x, diam)).transpose()?, b.z];
+                for ((s, p), w) in offsets.shift.iter_mut().zip(prog.iter_mut()).zip(words) {
+                    if let Some(w) = w {
+                        *s = s
+                            .checked_add(*p)
+                            .and_then(|v| v.checked_sub(w))
+                            .ok_or(Refusal::Range(RANGE_OFFSET))?;
+                        *p = w;
+                    }
+                }
+            }
+            Some(Special::ClearShift(keep)) => {
+                offsets.kept_shift = if keep { shift } else { [Length::ZERO; 2] };
+                offsets.shift = [Length::ZERO; 2];
+            }
+            Some(Special::RestoreShift) => offsets.shift = offsets.kept_shift,
+            Some(Special::Store(n)) => {
+                if let Some(r) = offsets.reference.get_mut(usize::from(n)) {
+                    *r = self.cmd;
+                }
+            }
+            _ => {}
+        }
+        if matches!(
+            special,
+            Some(Special::ClearShift(_) | Special::RestoreShift)
+        ) {
+            // The machine stays: the programmed point moves by the shift.
+            for ((p, old), new) in prog.iter_mut().zip(shift).zip(offsets.shift) {
+                *p = p
+                    .checked_add(old)
+                    .and_then(|v| v.checked_sub(new))
+                    .ok_or(Refusal::Range(RANGE_OFFSET))?;
+            }
+        }
         let off = offsets.vector(&sel).ok_or(Refusal::Range(
             "the offsets in effect add beyond 99999.999999 mm",
         ))?;
@@ -773,9 +828,12 @@ impl Session {
             return Err(Refusal::Busy("a work or tool offset change"));
         }
         // Words are work coordinates; increments add to the programmed point.
-        let mut target = self.prog;
-        let words = if b.set_work.is_some() {
-            // G10's X and Z are an offset's.
+        let mut target = prog;
+        let words = if b.set_work.is_some()
+            || matches!(special, Some(s) if !matches!(s, Special::Reference(_)))
+        {
+            // G10's X and Z are an offset's, G53's machine coordinates,
+            // G92's the point here.
             (None, None)
         } else {
             (b.x, b.z)
@@ -793,6 +851,8 @@ impl Session {
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
         let a = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
         let shape = match modal.motion {
+            // G28 and G30 move through their way point themselves.
+            _ if special.is_some() => None,
             Motion::Rapid | Motion::Linear => {
                 if arc_words {
                     return Err(Refusal::Missing("I, K and R need G02 or G03"));
@@ -854,7 +914,52 @@ impl Session {
             shape,
             n: b.n,
         });
-        let feeds = element.is_some_and(|e| !matches!(e.shape, Shape::Line { rapid: true }));
+        // G28/G30 (through the way point) and G53: rapids, G53 also a feed,
+        // in machine coordinates.
+        let mut machine_path = heapless::Vec::<[Length; 2], 2>::new();
+        match special {
+            Some(Special::Reference(n)) => {
+                let mut at = self.cmd;
+                if has_end {
+                    at = to_machine(target, off)?;
+                    if at != self.cmd {
+                        let _ = machine_path.push(at);
+                    }
+                }
+                let stored = offsets.reference.get(usize::from(n)).copied().unwrap_or(at);
+                let all = !has_end;
+                let end = [
+                    if all || words.0.is_some() {
+                        stored[0]
+                    } else {
+                        at[0]
+                    },
+                    if all || words.1.is_some() {
+                        stored[1]
+                    } else {
+                        at[1]
+                    },
+                ];
+                let _ = machine_path.push(end);
+            }
+            Some(Special::Machine) => {
+                if !matches!(modal.motion, Motion::Rapid | Motion::Linear) {
+                    return Err(Refusal::Missing("G53 moves in G00 or G01"));
+                }
+                let mut end = self.cmd;
+                if let Some(x) = b.x {
+                    end[0] = x_radius(x, diam)?;
+                }
+                if let Some(z) = b.z {
+                    end[1] = z;
+                }
+                let _ = machine_path.push(end);
+            }
+            _ => {}
+        }
+        let rapid = special != Some(Special::Machine) || modal.motion == Motion::Rapid;
+        let feeds = element.is_some_and(|e| !matches!(e.shape, Shape::Line { rapid: true }))
+            || (!machine_path.is_empty() && !rapid);
         // Output blocks of the element held back by compensation run at its
         // feed; this block's own and the corners between, at this one's.
         let now = if feeds {
@@ -876,6 +981,14 @@ impl Session {
                 *centre = shifted(*centre, off)?;
             }
         }
+        for to in &machine_path {
+            // No element, no compensation: room for both.
+            let _ = moves.push(Move {
+                to: a(*to),
+                kind: MoveKind::Line { rapid },
+                origin: Origin::Current,
+            });
+        }
         if feeds && modal.feed.is_none() {
             return Err(Refusal::Value(
                 "F",
@@ -885,6 +998,15 @@ impl Session {
         let end = b.stop == Some(Stop::End);
         if end && contour.active() {
             return Err(Refusal::Busy("M02/M30"));
+        }
+        let pause = match b.stop {
+            Some(Stop::Pause) => true,
+            Some(Stop::Optional) => self.optional_stop,
+            _ => false,
+        };
+        if pause && contour.active() {
+            // The compensated path of the last element is not known yet.
+            return Err(Refusal::Busy("M00/M01"));
         }
         // Plan and check every block before the first one moves.
         let mut planned = heapless::Vec::<Planned, MAX_MOVES>::new();
@@ -919,8 +1041,15 @@ impl Session {
         for p in &planned {
             crc = self.run_planned(p, crc, io);
         }
-        if element.is_some() || has_end {
+        if let Some(end) = machine_path.last() {
+            self.prog = [
+                end[0].checked_sub(off[0]).unwrap_or(end[0]),
+                end[1].checked_sub(off[1]).unwrap_or(end[1]),
+            ];
+        } else if element.is_some() || has_end {
             self.prog = target;
+        } else {
+            self.prog = prog;
         }
         self.modal = modal;
         self.aux = aux;
@@ -930,6 +1059,18 @@ impl Session {
         self.last_moves = moves;
         if element.is_some() {
             self.element_feed = now;
+        }
+        if pause {
+            // At rest where the block ends, until cycle start.
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            let code = if b.stop == Some(Stop::Pause) { 0 } else { 1 };
+            if io.background().is_some() {
+                let mut view = self.view(self.machine.speed());
+                view.stop = Some(code);
+                io.view(&view);
+            }
+            io.program_stop(code);
+            self.share_view(io);
         }
         if end {
             // The end of the program: at rest, spindle and coolant off, the
@@ -1393,6 +1534,7 @@ impl Session {
             diam: self.cfg.diam,
             speed,
             starved: self.machine.starved(),
+            stop: None,
         }
     }
 
@@ -1890,6 +2032,10 @@ pub fn status_line(
     let speed = if motion == Axes::Held { 0 } else { view.speed };
     let _ = write_mm4(&mut line, speed);
     let _ = write!(line, " Q={queued} STARVED={}", view.starved);
+    if let Some(code) = view.stop {
+        // Waiting for cycle start after M00 or M01.
+        let _ = write!(line, " STOP=M{code:02}");
+    }
     line
 }
 
@@ -1966,6 +2112,10 @@ impl<I: Io> Io for Suffixed<'_, I> {
 
     fn dwell(&mut self, us: u64) {
         self.inner.dwell(us);
+    }
+
+    fn program_stop(&mut self, code: u8) {
+        self.inner.program_stop(code);
     }
 
     fn timing(&mut self) -> Option<super::Timing> {

@@ -938,8 +938,19 @@ fn a_posted_program_runs_line_by_line_and_names_what_it_cannot() {
     }
     assert!(ask1(&mut dev, "POS").starts_with("OK PX=50 PZ=-4000 "));
     // With the block delete switch on, `/` blocks are skipped, and say so.
-    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=ISO");
-    assert_eq!(ask1(&mut dev, "OPT BDEL=1"), "OK BDEL=1 DIALECT=ISO");
+    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=ISO OPTSTOP=0");
+    assert_eq!(
+        ask1(&mut dev, "OPT BDEL=1"),
+        "OK BDEL=1 DIALECT=ISO OPTSTOP=0"
+    );
+    assert_eq!(
+        ask1(&mut dev, "OPT OPTSTOP=1"),
+        "OK BDEL=1 DIALECT=ISO OPTSTOP=1"
+    );
+    assert_eq!(
+        ask1(&mut dev, "OPT OPTSTOP=2"),
+        "ERR VALUE OPTSTOP must be 0 or 1"
+    );
     let r = ask(&mut dev, b"/N50 X40.\n");
     assert_eq!(r.len(), 1);
     assert!(r[0].ends_with(" SEQ=00000000 SKIP=BDEL"), "{r:?}");
@@ -1009,7 +1020,7 @@ fn a_fanuc_program_moves_as_its_iso_equivalent() {
     let mut fanuc = Device::new();
     assert_eq!(
         ask1(&mut fanuc, "OPT DIALECT=fanuc"),
-        "OK BDEL=0 DIALECT=FANUC"
+        "OK BDEL=0 DIALECT=FANUC OPTSTOP=0"
     );
     // 180 m/min at Ø30: 1909.8593171 rpm (at Ø40, where it ends, 1432.3945); 0.2 mm/rev of it is
     // 381.9718634 mm/min. The spindle and coolant switch at rest, the
@@ -1142,7 +1153,7 @@ fn reset_stops_the_spindle_and_coolant_and_ctrl_x_forgets_them() {
         ask1(&mut dev, "AUX"),
         "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=-"
     );
-    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=FANUC");
+    assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=FANUC OPTSTOP=0");
 }
 
 #[test]
