@@ -28,6 +28,8 @@
 //! - [`step`]: the timed step generator: each event's tick, integer-only.
 //! - [`stepper`]: started motion in order, pulled one event at a time (the
 //!   stage a step interrupt runs), with what has been issued.
+//! - [`store`]: the tool table and work offsets as a record in two flash
+//!   slots that a power cut during a write cannot break.
 //! - [`machine`]: the planner and the stepper behind one front, as the
 //!   virtual-clock device of `docs/motion.md`.
 //! - [`stepdir`]: step/dir outputs on `embedded-hal` pins, paced by a timer.
@@ -66,6 +68,7 @@ pub mod protocol;
 pub mod step;
 pub mod stepdir;
 pub mod stepper;
+pub mod store;
 mod text;
 pub mod trig;
 pub mod watch;

@@ -132,6 +132,7 @@ pub fn init(dp: pac::Peripherals) -> Board {
             tim3: dp.TIM3,
             dbgmcu: dp.DBGMCU,
         },
+        flash: dp.FLASH,
     }
 }
 
@@ -195,6 +196,8 @@ pub struct Board {
     pub tim5: pac::TIM5,
     /// The watchdog and its supervisor's timer (not started).
     pub watchdog: Watchdog,
+    /// The flash interface, for the offsets kept across power cuts.
+    pub flash: pac::FLASH,
 }
 
 /// What [`crate::supervisor::start`] takes.

@@ -16,6 +16,7 @@
 pub mod board;
 pub mod log;
 pub mod motion;
+pub mod storage;
 pub mod supervisor;
 
 use board::{Board, Serial};
@@ -36,15 +37,20 @@ pub struct Controller {
     queued: usize,
     /// When the status byte being answered arrived (TIM2 count).
     asked: Option<u32>,
+    /// The offsets kept across power cuts.
+    pub storage: storage::Storage,
 }
 
 impl Controller {
     /// Takes the board: the timers and the step outputs go to the step
-    /// interrupt (STEP outputs low).
-    pub fn new(board: Board) -> Self {
+    /// interrupt (STEP outputs low); the offsets kept in flash go to the
+    /// device.
+    pub fn new(board: Board, device: &mut core_nostd::protocol::Device) -> Self {
+        let storage = storage::Storage::load(board.flash, device);
         motion::install(board.tim2, board.tim5);
         supervisor::start(board.watchdog);
         Controller {
+            storage,
             serial: board.serial,
             view: StatusView {
                 hx: 0,
@@ -57,6 +63,11 @@ impl Controller {
             queued: 0,
             asked: None,
         }
+    }
+
+    /// Nothing runs or waits to run: the axes at rest, no block queued.
+    pub fn idle(&self) -> bool {
+        self.queued == 0 && motion::drained()
     }
 
     /// Answers what the serial interrupt left for thread mode through the

@@ -14,7 +14,7 @@ fn main() -> ! {
     // hands it out as a `&'static mut` once.
     static mut DEVICE: MaybeUninit<Device> = MaybeUninit::uninit();
     let device: &'static mut Device = DEVICE.write(Device::new());
-    let mut io = Controller::new(firmware::boot());
+    let mut io = Controller::new(firmware::boot(), device);
     defmt::info!(
         "{=str} {=str} ready, {=u32} Hz",
         core_nostd::protocol::NAME,
@@ -35,13 +35,22 @@ fn main() -> ! {
             device.poll(&mut io);
         }
         match io.serial.receive() {
-            Some(byte) => device.receive(byte, &mut io),
+            Some(byte) => {
+                io.storage.heard();
+                device.receive(byte, &mut io);
+            }
             None if feed => {}
-            None => board::sleep_unless(|| {
-                board::rx_pending()
-                    || firmware::motion::wanted()
-                    || (device.can_feed() && firmware::motion::hungry())
-            }),
+            None => {
+                // Changed offsets go to flash once all is quiet.
+                let idle = io.idle();
+                let storage = &mut io.storage;
+                storage.save_if_due(device, idle);
+                board::sleep_unless(|| {
+                    board::rx_pending()
+                        || firmware::motion::wanted()
+                        || (device.can_feed() && firmware::motion::hungry())
+                })
+            }
         }
     }
 }

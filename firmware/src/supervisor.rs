@@ -27,6 +27,8 @@ static STEP_DUE: AtomicU32 = AtomicU32::new(0);
 static STEP_WAITED_ON: AtomicBool = AtomicBool::new(false);
 /// The main loop's heartbeat.
 static BEAT: AtomicU32 = AtomicU32::new(0);
+/// A flash erase or write is under way (the core stalls on it).
+static FLASHING: AtomicBool = AtomicBool::new(false);
 
 /// The step interrupt must run by the raw TIM2 count `due`.
 #[inline(always)]
@@ -58,12 +60,8 @@ pub fn start(watchdog: crate::board::Watchdog) {
     dbgmcu
         .apb1_fz()
         .modify(|_, w| w.dbg_iwdg_stop().set_bit().dbg_tim3_stop().set_bit());
-    // LSI / 8 = 4 kHz; 400 counts = 100 ms.
-    iwdg.kr().write(|w| w.key().unlock());
-    iwdg.pr().write(|w| w.pr().divide_by8());
-    iwdg.rlr().write(|w| unsafe { w.rl().bits(400) });
     iwdg.kr().write(|w| w.key().start());
-    iwdg.kr().write(|w| w.key().feed());
+    watchdog_timeout(&iwdg, false);
 
     // TIM3 at 10 kHz, an update every 1000 counts.
     let psc = crate::board::TIM2_CLK_HZ / 10_000 - 1;
@@ -81,6 +79,43 @@ pub fn start(watchdog: crate::board::Watchdog) {
         core.NVIC.set_priority(Interrupt::TIM3, 0x00);
         pac::NVIC::unmask(Interrupt::TIM3);
     }
+}
+
+/// The watchdog's timeout: 100 ms (LSI / 8 = 4 kHz, 400 counts), or 32 s
+/// (LSI / 256, 4095 counts) while the flash stalls the core; fed.
+fn watchdog_timeout(iwdg: &pac::iwdg::RegisterBlock, long: bool) {
+    // The supervisor's feed would lock the registers again half-way.
+    cortex_m::interrupt::free(|_| {
+        iwdg.kr().write(|w| w.key().unlock());
+        if long {
+            iwdg.pr().write(|w| w.pr().divide_by256());
+            iwdg.rlr().write(|w| unsafe { w.rl().bits(4095) });
+        } else {
+            iwdg.pr().write(|w| w.pr().divide_by8());
+            iwdg.rlr().write(|w| unsafe { w.rl().bits(400) });
+        }
+        while iwdg.sr().read().pvu().bit_is_set() || iwdg.sr().read().rvu().bit_is_set() {}
+        iwdg.kr().write(|w| w.key().feed());
+    });
+}
+
+/// Runs a flash operation that stalls the core for up to seconds (the axes
+/// at rest): the watchdog waits 32 s meanwhile and the supervisor stands
+/// aside; both resume as before when it ends.
+pub fn while_flashing<T>(operation: impl FnOnce() -> T) -> T {
+    if cfg!(feature = "qemu") {
+        return operation();
+    }
+    // SAFETY: the watchdog's registers, written with interrupts masked so
+    // that the supervisor's feed cannot come between.
+    let iwdg = unsafe { &*pac::IWDG::ptr() };
+    FLASHING.store(true, Ordering::Release);
+    watchdog_timeout(iwdg, true);
+    let out = operation();
+    watchdog_timeout(iwdg, false);
+    beat();
+    FLASHING.store(false, Ordering::Release);
+    out
 }
 
 /// Whether the last reset came from the watchdog (the flags are cleared).
@@ -103,6 +138,12 @@ fn TIM3() {
     let due = STEP_WAITED_ON
         .load(Ordering::Acquire)
         .then(|| STEP_DUE.load(Ordering::Relaxed));
+    if FLASHING.load(Ordering::Acquire) {
+        // The core stood still in the flash operation: watch afresh after.
+        *WATCH = None;
+        iwdg.kr().write(|w| w.key().feed());
+        return;
+    }
     let watch = WATCH.get_or_insert(Watch::new(now, beat));
     match watch.check(now, due, beat) {
         Verdict::Alive => {

@@ -290,6 +290,12 @@ impl Device {
     pub fn session(&self) -> &Session {
         &self.session
     }
+
+    /// The table, work offsets and stored positions kept from before the
+    /// power cut, put back at power-on.
+    pub fn restore_offsets(&mut self, offsets: crate::interp::Offsets) {
+        self.session.restore_offsets(offsets);
+    }
 }
 
 #[cfg(test)]

@@ -141,6 +141,8 @@ pub struct Session {
     block_delete: bool,
     /// The optional stop switch: `M01` stops (`OPT OPTSTOP=`).
     optional_stop: bool,
+    /// Changes of the table, the work offsets and the stored positions.
+    generation: u32,
     /// The id of the last request that carried one, and its final reply.
     last_id: Option<u32>,
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
@@ -221,6 +223,7 @@ impl Session {
             token: 0,
             block_delete: false,
             optional_stop: false,
+            generation: 0,
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
@@ -1054,7 +1057,7 @@ impl Session {
         self.modal = modal;
         self.aux = aux;
         self.sel = sel;
-        self.offsets = offsets;
+        self.take_offsets(offsets);
         self.contour = contour;
         self.last_moves = moves;
         if element.is_some() {
@@ -1613,6 +1616,33 @@ impl Session {
         self.share_view(io);
     }
 
+    /// The tool table, the work offsets and the stored positions.
+    pub fn offsets(&self) -> &Offsets {
+        &self.offsets
+    }
+
+    /// Counts the changes of what a board keeps in flash (the table, the
+    /// work offsets and the stored positions): a board saves when it moved.
+    pub fn offsets_generation(&self) -> u32 {
+        self.generation
+    }
+
+    /// The table, work offsets and stored positions kept from before the
+    /// power cut (a board loads them at power-on, before any request).
+    pub fn restore_offsets(&mut self, offsets: Offsets) {
+        self.offsets = offsets;
+        self.prog = self.work_point(self.cmd);
+    }
+
+    /// New offsets; what a board keeps of them changed or not.
+    fn take_offsets(&mut self, new: Offsets) {
+        let kept = |o: &Offsets| (o.work, o.tools, o.reference);
+        if kept(&new) != kept(&self.offsets) {
+            self.generation = self.generation.wrapping_add(1);
+        }
+        self.offsets = new;
+    }
+
     /// The offsets in effect (machine = work + this); always within range,
     /// as every change of them is checked.
     fn offset(&self) -> [Length; 2] {
@@ -1750,7 +1780,7 @@ impl Session {
                 return Err(Refusal::Busy("TOOL of the register in effect"));
             }
         }
-        self.offsets = offsets;
+        self.take_offsets(offsets);
         let mut line = ReplyLine::new();
         let _ = write!(line, "OK N={n} X=");
         let _ = self.write_x(&mut line, entry.geometry[0]);
@@ -1798,7 +1828,7 @@ impl Session {
                 return Err(Refusal::Busy("WORK of the system in effect"));
             }
         }
-        self.offsets = offsets;
+        self.take_offsets(offsets);
         let mut line = ReplyLine::new();
         let _ = write!(line, "OK G={g} X=");
         let _ = self.write_x(&mut line, work[0]);

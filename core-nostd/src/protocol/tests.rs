@@ -1271,3 +1271,37 @@ fn compensation_takes_the_nose_of_the_tool_in_effect() {
         "ERR GEOMETRY a work or tool offset change not allowed while G41/G42 is on; cancel with G40 first"
     );
 }
+
+#[test]
+fn what_a_board_keeps_in_flash_counts_its_changes() {
+    let mut dev = Device::new();
+    let g = |dev: &Device| dev.session().offsets_generation();
+    let mut last = g(&dev);
+    for (line, changes) in [
+        ("TOOL N=3", false),
+        ("TOOL N=3 X=1.5 R=0.4 T=2", true),
+        ("TOOL N=3 X=1.5", false),
+        ("WORK G=56 Z=-20", true),
+        ("G10 L2 P2 X4", true),
+        ("G55 G00 X10 Z2", false),
+        ("G92 X0", false),
+        ("G92.1", false),
+        ("G28.1", true),
+        ("G28.1", false),
+        ("G00 X20", false),
+        ("G30.1", true),
+    ] {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+        assert_eq!(g(&dev) != last, changes, "{line}");
+        last = g(&dev);
+    }
+    // At power-on a board puts them back.
+    let kept = *dev.session().offsets();
+    let mut fresh = Device::new();
+    let before = ask1(&mut fresh, "TOOL N=3");
+    fresh.restore_offsets(kept);
+    assert_ne!(ask1(&mut fresh, "TOOL N=3"), before);
+    assert_eq!(ask1(&mut fresh, "TOOL N=3"), ask1(&mut dev, "TOOL N=3"));
+    assert_eq!(ask1(&mut fresh, "WORK G=55"), ask1(&mut dev, "WORK G=55"));
+}

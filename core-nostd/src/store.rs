@@ -1,0 +1,382 @@
+//! The tool table, the work offsets and the stored reference positions as
+//! a record in two flash slots, so that they survive a power cut, one
+//! during a write included.
+//!
+//! A record is whole 32-bit words: a magic word, a sequence number, the
+//! payload's length, the payload, and last the CRC-32 of all before it. A
+//! save goes to the slot that does not hold the newest whole record: it is
+//! erased (all ones), the record is programmed word by word, and the CRC
+//! word last. Until that word is in, the slot's CRC fails and a load takes
+//! the other slot, whose record is the one before; once it is in, the new
+//! record is whole and newer. Flash programming only clears bits, so a
+//! word cut half-way is wrong, never right by chance (beyond the CRC's
+//! 2⁻³²).
+//!
+//! A record whose values are out of their ranges is refused as a broken
+//! one would be.
+
+use crate::crc32::Crc32;
+use crate::interp::{Offsets, ToolEntry, TOOL_REGISTERS, WORK_SYSTEMS};
+use crate::length::Length;
+
+/// `LTO1`: the record of this layout.
+const MAGIC: u32 = u32::from_le_bytes(*b"LTO1");
+
+/// Lengths in the payload: work offsets (X, Z), per register geometry,
+/// wear, nose radius (-1: none) and tip code, and the two stored
+/// positions.
+const LENGTHS: usize = WORK_SYSTEMS * 2 + TOOL_REGISTERS * 6 + 2 * 2;
+
+/// Payload words: two per length.
+const PAYLOAD_WORDS: usize = LENGTHS * 2;
+
+/// Words of a whole record: magic, sequence, length, payload, CRC.
+pub const RECORD_WORDS: usize = 3 + PAYLOAD_WORDS + 1;
+
+/// Two slots of flash, each erasable on its own and at least
+/// [`RECORD_WORDS`] words long.
+pub trait Flash {
+    /// The word at `index` of `slot` (0 or 1).
+    fn read(&mut self, slot: usize, index: usize) -> u32;
+    /// Sets every word of `slot` to all ones.
+    fn erase(&mut self, slot: usize);
+    /// Programs the word at `index` of `slot`, which is erased (bits only
+    /// go from 1 to 0).
+    fn program(&mut self, slot: usize, index: usize, word: u32);
+}
+
+/// The values a record keeps (the shift of `G92` is not among them: as on
+/// a Fanuc, it does not outlive a power cycle).
+fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
+    let work = o
+        .work
+        .iter()
+        .flat_map(|w| w.iter().map(|l| l.as_angstrom()));
+    let tools = o.tools.iter().flat_map(|t| {
+        let (radius, tip) = match t.nose {
+            Some((r, tip)) => (r.as_angstrom(), i64::from(tip)),
+            None => (-1, -1),
+        };
+        [
+            t.geometry[0].as_angstrom(),
+            t.geometry[1].as_angstrom(),
+            t.wear[0].as_angstrom(),
+            t.wear[1].as_angstrom(),
+            radius,
+            tip,
+        ]
+    });
+    let reference = o
+        .reference
+        .iter()
+        .flat_map(|p| p.iter().map(|l| l.as_angstrom()));
+    work.chain(tools).chain(reference)
+}
+
+/// The words of the record of `offsets` with sequence number `seq`,
+/// without its CRC.
+fn body(offsets: &Offsets, seq: u32) -> impl Iterator<Item = u32> + '_ {
+    let header = [MAGIC, seq, (PAYLOAD_WORDS * 4) as u32];
+    let payload = lengths(offsets).flat_map(|v| {
+        let v = v as u64;
+        [v as u32, (v >> 32) as u32]
+    });
+    header.into_iter().chain(payload)
+}
+
+fn crc_of(words: impl Iterator<Item = u32>) -> u32 {
+    let mut crc = Crc32::new();
+    for w in words {
+        crc.update(&w.to_le_bytes());
+    }
+    crc.finish()
+}
+
+/// The sequence number of the whole record in `slot`, if it holds one.
+fn sequence<F: Flash>(flash: &mut F, slot: usize) -> Option<u32> {
+    if flash.read(slot, 0) != MAGIC || flash.read(slot, 2) != (PAYLOAD_WORDS * 4) as u32 {
+        return None;
+    }
+    let crc = crc_of((0..RECORD_WORDS - 1).map(|i| flash.read(slot, i)));
+    (crc == flash.read(slot, RECORD_WORDS - 1)).then(|| flash.read(slot, 1))
+}
+
+/// What a load found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Loaded {
+    /// The offsets (all zero when no record was whole).
+    pub offsets: Offsets,
+    /// The record's sequence number (0: none).
+    pub seq: u32,
+}
+
+/// The offsets of the newest whole record whose values are in range (the
+/// other slot's when the newest one's are not), or all zero (power-on)
+/// when there is none.
+pub fn load<F: Flash>(flash: &mut F) -> Loaded {
+    match current(flash) {
+        Some((_, seq, offsets)) => Loaded { offsets, seq },
+        None => Loaded {
+            offsets: Offsets::ZERO,
+            seq: 0,
+        },
+    }
+}
+
+/// The slot, sequence number and offsets of the record a load takes.
+fn current<F: Flash>(flash: &mut F) -> Option<(usize, u32, Offsets)> {
+    let slots = match (sequence(flash, 0), sequence(flash, 1)) {
+        (Some(a), Some(b)) if b.wrapping_sub(a) as i32 > 0 => [Some((1, b)), Some((0, a))],
+        (a, b) => [a.map(|a| (0, a)), b.map(|b| (1, b))],
+    };
+    slots
+        .into_iter()
+        .flatten()
+        .find_map(|(slot, seq)| Some((slot, seq, decode(flash, slot)?)))
+}
+
+/// The offsets of the whole record in `slot`, if every value is in range.
+fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
+    let mut i = 3;
+    let mut next = || {
+        let lo = u64::from(flash.read(slot, i));
+        let hi = u64::from(flash.read(slot, i + 1));
+        i += 2;
+        (hi << 32 | lo) as i64
+    };
+    let mut o = Offsets::ZERO;
+    for w in o.work.iter_mut().flatten() {
+        *w = Length::from_angstrom(next())?;
+    }
+    for t in o.tools.iter_mut() {
+        let mut l = [Length::ZERO; 4];
+        for v in l.iter_mut() {
+            *v = Length::from_angstrom(next())?;
+        }
+        let nose = match (next(), next()) {
+            (-1, -1) => None,
+            (r, tip @ 0..=9) if (0..=250_000_000).contains(&r) => {
+                Some((Length::from_angstrom(r)?, tip as u8))
+            }
+            _ => return None,
+        };
+        *t = ToolEntry {
+            geometry: [l[0], l[1]],
+            wear: [l[2], l[3]],
+            nose,
+        };
+    }
+    for p in o.reference.iter_mut().flatten() {
+        *p = Length::from_angstrom(next())?;
+    }
+    Some(o)
+}
+
+/// Saves `offsets` as the record after `last` (the sequence number a load
+/// or the previous save returned), into the slot that does not hold the
+/// record a load takes now; returns the new sequence number.
+pub fn save<F: Flash>(flash: &mut F, offsets: &Offsets, last: u32) -> u32 {
+    let slot = match current(flash) {
+        Some((0, ..)) => 1,
+        _ => 0,
+    };
+    let seq = last.wrapping_add(1);
+    flash.erase(slot);
+    for (i, w) in body(offsets, seq).enumerate() {
+        flash.program(slot, i, w);
+    }
+    // The CRC last: only now is the record whole.
+    flash.program(slot, RECORD_WORDS - 1, crc_of(body(offsets, seq)));
+    seq
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    /// NOR flash in RAM: erase to ones, programming only clears bits;
+    /// `cut` words programmed before the power goes (the rest of the save
+    /// does nothing).
+    #[derive(Clone)]
+    struct Nor {
+        slots: [Vec<u32>; 2],
+        cut: Option<usize>,
+        erase_cut: bool,
+    }
+
+    impl Nor {
+        fn new() -> Nor {
+            Nor {
+                slots: [
+                    std::vec![0; RECORD_WORDS + 8],
+                    std::vec![0; RECORD_WORDS + 8],
+                ],
+                cut: None,
+                erase_cut: false,
+            }
+        }
+        fn powered(&mut self) -> bool {
+            match &mut self.cut {
+                Some(0) => false,
+                Some(n) => {
+                    *n -= 1;
+                    true
+                }
+                None => true,
+            }
+        }
+    }
+
+    impl Flash for Nor {
+        fn read(&mut self, slot: usize, index: usize) -> u32 {
+            self.slots[slot][index]
+        }
+        fn erase(&mut self, slot: usize) {
+            if self.erase_cut {
+                // Cut half-way through the erase: some words ones, the
+                // rest as they were.
+                let half = self.slots[slot].len() / 2;
+                self.slots[slot][..half].fill(u32::MAX);
+                self.cut = Some(0);
+                return;
+            }
+            self.slots[slot].fill(u32::MAX);
+        }
+        fn program(&mut self, slot: usize, index: usize, word: u32) {
+            if self.powered() {
+                self.slots[slot][index] &= word;
+            }
+        }
+    }
+
+    fn l(mm: &str) -> Length {
+        Length::from_mm_str(mm).unwrap()
+    }
+
+    fn table(k: i64) -> Offsets {
+        let mut o = Offsets::ZERO;
+        o.work[1] = [l("1.5"), Length::from_angstrom(-1_234_567 * k).unwrap()];
+        o.tools[0].geometry = [l("-12.25"), Length::from_angstrom(30_000_001).unwrap()];
+        o.tools[0].wear = [l("0.01"), Length::from_angstrom(k).unwrap()];
+        o.tools[0].nose = Some((l("0.4"), 3));
+        o.tools[31].nose = Some((l("25"), 9));
+        o.reference[1] = [l("99999.999999"), l("-99999.999999")];
+        o.shift = [l("7"), l("8")];
+        o
+    }
+
+    fn kept(o: &Offsets) -> Offsets {
+        Offsets {
+            shift: [Length::ZERO; 2],
+            kept_shift: [Length::ZERO; 2],
+            ..*o
+        }
+    }
+
+    #[test]
+    fn a_blank_or_foreign_flash_loads_power_on() {
+        let mut f = Nor::new();
+        assert_eq!(
+            load(&mut f),
+            Loaded {
+                offsets: Offsets::ZERO,
+                seq: 0
+            }
+        );
+        f.slots[0].fill(u32::MAX);
+        f.slots[1].fill(u32::MAX);
+        assert_eq!(load(&mut f).seq, 0);
+    }
+
+    #[test]
+    fn what_is_saved_loads_back_and_saves_alternate() {
+        let mut f = Nor::new();
+        let mut seq = load(&mut f).seq;
+        for k in 1..=5 {
+            seq = save(&mut f, &table(k), seq);
+            assert_eq!(seq, k as u32);
+            let got = load(&mut f);
+            assert_eq!(
+                got,
+                Loaded {
+                    offsets: kept(&table(k)),
+                    seq
+                }
+            );
+        }
+        // Both slots hold whole records: the newer wins, and it lies in
+        // the slot the last save wrote (5 is odd: slot 0).
+        assert_eq!(sequence(&mut f, 0), Some(5));
+        assert_eq!(sequence(&mut f, 1), Some(4));
+    }
+
+    #[test]
+    fn a_power_cut_at_any_word_of_a_save_leaves_the_old_record_or_the_new() {
+        let mut f = Nor::new();
+        let mut seq = save(&mut f, &table(1), 0);
+        seq = save(&mut f, &table(2), seq);
+        let (old, new) = (kept(&table(2)), kept(&table(3)));
+        let mut saw = [0; 2];
+        for cut in 0..=RECORD_WORDS {
+            let mut g = f.clone();
+            g.cut = Some(cut);
+            save(&mut g, &table(3), seq);
+            g.cut = None;
+            let got = load(&mut g);
+            if cut < RECORD_WORDS {
+                assert_eq!(got, Loaded { offsets: old, seq }, "cut after {cut} words");
+                saw[0] += 1;
+            } else {
+                assert_eq!(
+                    got,
+                    Loaded {
+                        offsets: new,
+                        seq: seq + 1
+                    }
+                );
+                saw[1] += 1;
+            }
+            // The next save after the cut goes on from what was loaded.
+            let next = save(&mut g, &table(4), got.seq);
+            assert_eq!(load(&mut g).offsets, kept(&table(4)));
+            assert_eq!(next, got.seq + 1);
+        }
+        assert_eq!(saw, [RECORD_WORDS, 1]);
+        // Cut during the erase.
+        let mut g = f.clone();
+        g.erase_cut = true;
+        save(&mut g, &table(3), seq);
+        assert_eq!(load(&mut g), Loaded { offsets: old, seq });
+    }
+
+    #[test]
+    fn a_flipped_bit_or_a_value_out_of_range_is_refused() {
+        let mut f = Nor::new();
+        let seq = save(&mut f, &table(1), 0);
+        let seq = save(&mut f, &table(2), seq);
+        // Slot 1 holds the newest (seq 2): a bit cleared in it falls back.
+        for index in [0, 1, 2, 3, 100, RECORD_WORDS - 1] {
+            let mut g = f.clone();
+            g.slots[1][index] ^= 1 << (index % 32);
+            assert_eq!(load(&mut g).offsets, kept(&table(1)), "word {index}");
+        }
+        // A tip code of 10 with a CRC that fits: refused all the same.
+        let mut g = f.clone();
+        let tip_word = 3 + (WORK_SYSTEMS * 2 + 5) * 2;
+        assert_eq!(g.slots[1][tip_word], 3);
+        let mut words: Vec<u32> = (0..RECORD_WORDS - 1).map(|i| g.slots[1][i]).collect();
+        words[tip_word] = 10;
+        g.slots[1][tip_word] = 10;
+        g.slots[1][RECORD_WORDS - 1] = crc_of(words.into_iter());
+        assert_eq!(sequence(&mut g, 1), Some(seq));
+        assert_eq!(
+            load(&mut g),
+            Loaded {
+                offsets: kept(&table(1)),
+                seq: seq - 1
+            }
+        );
+    }
+}
