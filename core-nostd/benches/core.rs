@@ -329,8 +329,50 @@ fn motion(c: &mut Criterion) {
     g.finish();
 }
 
+/// The G-code reader on lines as CAM posts and machinists write them.
+fn reader(c: &mut Criterion) {
+    use core_nostd::gcode::{parse, Dialect, Units};
+    const FANUC: [&str; 8] = [
+        "N100 G00 X30. Z2. M08",
+        "N110 G96 S180 M03",
+        "N120 G01 Z-12.25 F.2",
+        "N130 X34.5 W-1.75 (CHAMFER)",
+        "N140 G02 U6. W-3. R3.",
+        "N150 G01 Z-40.",
+        "N160 G28 U0 W0",
+        "N170 T0202 M05 M09",
+    ];
+    const ISO: [&str; 8] = [
+        "N100 G0 X30 Z2 M8",
+        "N110 G96 D2500 S180 M3",
+        "N120 G1 Z-12.25 F0.2",
+        "N130 X34.5 Z-14 ; chamfer",
+        "N140 G2 X40.5 Z-17 I0 K-3",
+        "N150 G1 Z-40",
+        "N160 G53 G0 X120 Z50",
+        "N170 T2 M6 G43",
+    ];
+    let mut g = c.benchmark_group("reader");
+    g.throughput(Throughput::Elements(8));
+    for (name, lines, dialect) in [("Fanuc", FANUC, Dialect::Fanuc), ("ISO", ISO, Dialect::Iso)] {
+        g.bench_function(format!("{name} lathe blocks"), |b| {
+            b.iter(|| {
+                let mut n = 0u32;
+                for line in black_box(&lines) {
+                    if let Ok(block) = parse(line, dialect, Units::Mm) {
+                        n = n.wrapping_add(u32::from(block.x.is_some()));
+                    }
+                }
+                n
+            })
+        });
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
+    reader,
     interleaver,
     quantizer,
     protocol,

@@ -422,6 +422,31 @@ fn arcs(tim: &StepTimer) {
     ));
 }
 
+/// The G-code reader alone: a CAM-style Fanuc program's blocks.
+fn reader(tim: &StepTimer) {
+    use core_nostd::gcode::{parse, Dialect, Units};
+    const LINES: [&str; 8] = [
+        "N100 G00 X30. Z2. M08",
+        "N110 G96 S180 M03",
+        "N120 G01 Z-12.25 F.2",
+        "N130 X34.5 W-1.75 (CHAMFER)",
+        "N140 G02 U6. W-3. R3.",
+        "N150 G01 Z-40.",
+        "N160 G28 U0 W0",
+        "N170 T0202 M05 M09",
+    ];
+    let mut read = 0u32;
+    let t = measure(tim, || {
+        for line in LINES {
+            read += u32::from(parse(line, Dialect::Fanuc, Units::Mm).is_ok());
+        }
+    });
+    Line::print(format_args!(
+        "G-code reader: {read} Fanuc blocks, {} instructions per block",
+        t / 8
+    ));
+}
+
 #[entry]
 fn main() -> ! {
     let mut b = firmware::boot();
@@ -455,6 +480,8 @@ fn main() -> ! {
         t / n,
         (t % n) * 100 / n
     ));
+
+    reader(tim);
 
     let mut axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
     let timing = DriveTiming::DEFAULT;
