@@ -29,38 +29,69 @@ pub fn check(text: &str) -> Vec<Item> {
 
 /// The items of a program's text in `dialect`, in order; each line read in
 /// the unit (`G20`/`G21`) the lines before it left.
+///
+/// A program with macros, subprograms or expressions is expanded first, as
+/// the host does before streaming: what cannot be expanded is the one item
+/// then; otherwise the expanded blocks are checked, each at its source
+/// line (a block an expression wrote is named as written, its column that
+/// of the written block), every item once.
 pub fn check_in(text: &str, dialect: Dialect) -> Vec<Item> {
-    let mut items = Vec::new();
+    let source: Vec<&str> = text.split('\n').collect();
+    let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
+        match crate::expand::expand(text, dialect) {
+            Ok(lines) => lines.into_iter().map(|l| (l.source - 1, l.text)).collect(),
+            Err(e) => {
+                return vec![Item {
+                    line: e.line,
+                    column: e.column,
+                    what: e.what,
+                }]
+            }
+        }
+    } else {
+        source.iter().map(|l| l.to_string()).enumerate().collect()
+    };
+    let mut items: Vec<Item> = Vec::new();
     let mut units = Units::Mm;
-    for (i, raw) in text.split('\n').enumerate() {
+    for (i, raw) in &lines {
+        let i = *i;
         let line = raw.strip_suffix('\r').unwrap_or(raw);
-        let item = |column, what: String| Item {
-            line: i + 1,
-            column,
-            what,
+        let written = source.get(i).map(|l| l.strip_suffix('\r').unwrap_or(l));
+        let expanded = written != Some(line);
+        let mut item = |column, what: String| {
+            let what = if expanded {
+                format!("{what} (in `{line}`)")
+            } else {
+                what
+            };
+            let item = Item {
+                line: i + 1,
+                column,
+                what,
+            };
+            if !items.contains(&item) {
+                items.push(item);
+            }
         };
         if line.trim().is_empty() {
             continue;
         }
         if line.len() > MAX_LINE {
-            items.push(item(
-                MAX_LINE + 1,
-                format!("line longer than {MAX_LINE} bytes"),
-            ));
+            item(MAX_LINE + 1, format!("line longer than {MAX_LINE} bytes"));
             continue;
         }
         if let Some(at) = line.find(|c: char| !(c == '\t' || (' '..='~').contains(&c))) {
-            items.push(item(at + 1, "not printable ASCII".to_string()));
+            item(at + 1, "not printable ASCII".to_string());
             continue;
         }
         if !is_block(line) {
             let at = line.len() - line.trim_start().len();
-            items.push(item(at + 1, "not a G-code line".to_string()));
+            item(at + 1, "not a G-code line".to_string());
             continue;
         }
         match parse(line, dialect, units) {
             Ok(b) => units = b.units.unwrap_or(units),
-            Err(e) => items.push(item(e.column, e.error.to_string())),
+            Err(e) => item(e.column, e.error.to_string()),
         }
     }
     items
@@ -88,6 +119,19 @@ mod tests {
             ]
         );
         assert!(check("G01 X1\nG02 X2 Z2 R1\n").is_empty());
+        // Expanded first: a refused block of a loop is named once, as the
+        // expression wrote it; what cannot be expanded is the one item.
+        let looped = "#1 = 0\no1 while [#1 LT 3]\nG01 X[#1] Q[#1]\n#1 = [#1 + 1]\no1 endwhile\n";
+        let items = check(looped);
+        assert_eq!(items.len(), 3, "{items:?}");
+        assert_eq!(
+            (items[0].line, items[0].column, items[0].what.as_str()),
+            (3, 8, "unknown address Q (in `G01 X0 Q0`)")
+        );
+        let items = check("o2 call\nG01 X1\n");
+        assert_eq!(items.len(), 1);
+        assert_eq!((items[0].line, items[0].column), (1, 1));
+        assert!(items[0].what.contains("not defined"), "{items:?}");
         let long = format!("G01 X1 ({})", "A".repeat(MAX_LINE));
         assert_eq!(
             check(&long)[0].what,

@@ -244,9 +244,25 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
     // followed it.
     let mut waiting: Option<(Source, Vec<String>)> = None;
     let mut at = [0i64; 2];
-    let lines: Vec<&str> = program.lines().collect();
-    for (i, raw) in lines.iter().enumerate().chain([(lines.len(), &"G40")]) {
-        let end_of_program = i == lines.len();
+    // Macros, subprograms and expressions are expanded first, as the host
+    // does before streaming; each block keeps its source line.
+    let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(program) {
+        crate::expand::expand(program, settings.dialect)
+            .map_err(|e| CompensateError {
+                line: e.line,
+                reason: format!("column {}: {}", e.column, e.what),
+            })?
+            .into_iter()
+            .map(|l| (l.source - 1, l.text))
+            .collect()
+    } else {
+        program.lines().map(str::to_owned).enumerate().collect()
+    };
+    let last = lines.last().map_or(0, |(i, _)| i + 1);
+    let ends = [(last, "G40".to_string())];
+    for (n, (i, raw)) in lines.iter().chain(&ends).enumerate() {
+        let i = *i;
+        let end_of_program = n == lines.len();
         let line = raw.trim_end_matches('\r');
         // The unit and diameter mode of the output so far: a line's own
         // G20/G21 or G7/G8 applies from its own block on.
@@ -486,6 +502,25 @@ mod tests {
                 "ERR VALUE G99 belongs to the FANUC dialect (OPT DIALECT=FANUC)"
             )
         );
+    }
+
+    #[test]
+    fn parameters_and_subroutines_are_expanded_first() {
+        let plain = "G21\nG00 X20 Z2\nG42 G01 Z0 F100\nX28\nX48 Z-10\nZ-30\nG40 G00 X60\n";
+        let with_sub = "#<d> = 28\no10 sub\nX[#1] Z[#2]\no10 endsub\nG21\nG00 X20 Z2\n\
+                        G42 G01 Z0 F100\nX#<d>\no10 call [48] [-10]\nZ-30\nG40 G00 X60\n";
+        let a = compensate(plain, &Settings::default()).unwrap();
+        let b = compensate(with_sub, &Settings::default()).unwrap();
+        let blocks = |t: &str| -> Vec<String> {
+            t.lines()
+                .filter(|l| l.starts_with('G') || l.starts_with('X') || l.starts_with('Z'))
+                .map(str::to_owned)
+                .collect()
+        };
+        assert!(blocks(&a.text).len() >= 5, "{}", a.text);
+        assert_eq!(blocks(&a.text), blocks(&b.text));
+        let e = compensate("G00 X[1/0]\n", &Settings::default()).unwrap_err();
+        assert_eq!(e.line, 1);
     }
 
     #[test]

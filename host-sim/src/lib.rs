@@ -24,6 +24,7 @@
 //!   would refuse, with its line and column;
 //! - [`dialect`]: which dialect a program is written in, for `--dialect
 //!   auto`;
+//! - [`expand`]: macros, subprograms and parameters expanded to plain blocks;
 //! - [`program`]: `host-sim run FILE`, a whole program through the
 //!   in-process device in virtual time (cycle time, travel, tools,
 //!   refusals, the path);
@@ -36,6 +37,7 @@ pub mod contour;
 mod dd;
 pub mod device;
 pub mod dialect;
+pub mod expand;
 pub mod link;
 pub mod program;
 pub mod qemu;

@@ -322,6 +322,10 @@ fn run_program(
             println!("{block}");
         }
     }
+    if let Some(e) = &r.expand_error {
+        eprintln!("{f}:{e}");
+        return Ok(ExitCode::from(1));
+    }
     for refused in &r.setup_refused {
         let request = setup
             .iter()

@@ -38,6 +38,9 @@ pub struct Report {
     pub refused: Vec<Refused>,
     /// The setup requests it refused (line 0: the run's own settings).
     pub setup_refused: Vec<Refused>,
+    /// Why the host could not expand the program's macros, subprograms or
+    /// expressions (nothing ran then).
+    pub expand_error: Option<crate::expand::ExpandError>,
     /// Time in motion, µs (the runs' ticks at the 1 MHz step clock).
     pub motion_us: u64,
     /// Time dwelling (`G04`), µs.
@@ -168,10 +171,23 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
             report.setup_refused.push(Refused { line, reply });
         }
     }
+    // What the device should not interpret, the host expands first.
+    let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
+        match crate::expand::expand(text, options.dialect) {
+            Ok(lines) => lines.into_iter().map(|l| (l.source - 1, l.text)).collect(),
+            Err(e) => {
+                report.expand_error = Some(e);
+                return report;
+            }
+        }
+    } else {
+        text.lines().map(str::to_owned).enumerate().collect()
+    };
     let mut units = Units::Mm;
     let mut tool = None;
     let mut at = [0i64; 2];
-    for (i, raw) in text.lines().enumerate() {
+    for (i, raw) in &lines {
+        let i = *i;
         let line = raw.trim_end_matches('\r');
         if line.trim().is_empty() {
             continue;
@@ -351,6 +367,32 @@ mod tests {
         let r = run_setup("G00 X2.\n", FANUC, &[(3, "TOOL N=40")]);
         assert_eq!(r.setup_refused.len(), 1);
         assert_eq!(r.setup_refused[0].line, 3);
+    }
+
+    #[test]
+    fn subprograms_and_macro_loops_are_expanded_by_the_host() {
+        let program = "%\nO1000\nG21 G18 G98\nG00 X40. Z2.\n#100 = 0\n\
+                       WHILE [#100 LT 2] DO1\nG01 X[38. - #100 * 2] Z0 F200.\n\
+                       #100 = #100 + 1\nEND1\nM98 P2000 L2\nM30\n\
+                       O2000\nG00 W-5.\nG71 U1.\nM99\n%\n";
+        let r = run(program, FANUC);
+        assert_eq!(
+            r.trace,
+            [
+                "G00 X40.0000 Z2.0000",
+                "G01 X38.0000 Z0.0000",
+                "G01 X36.0000 Z0.0000",
+                "G00 X36.0000 Z-5.0000",
+                "G00 X36.0000 Z-10.0000"
+            ]
+        );
+        // The refusal inside the subprogram, at its line, once per call.
+        let at: Vec<usize> = r.refused.iter().map(|x| x.line).collect();
+        assert_eq!(at, [14, 14]);
+        let r = run("G01 X[1 / 0] F100\n", FANUC);
+        let e = r.expand_error.unwrap();
+        assert_eq!((e.line, r.blocks), (1, 0));
+        assert!(e.what.contains("zero"), "{e}");
     }
 
     #[test]

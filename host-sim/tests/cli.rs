@@ -270,3 +270,33 @@ fn run_reports_a_program_and_traces_its_path() {
     let out = Command::new(BIN).args(["run", "--trace"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn run_expands_subprograms_and_names_what_it_cannot_expand() {
+    let dir = std::env::temp_dir().join(format!("host-sim-expand-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let part = dir.join("part.nc");
+    std::fs::write(
+        &part,
+        "%\nO1000\nG21 G18 G98\nG00 X40. Z2.\nM98 P2000 L3\nM30\nO2000\nG00 W-5.\nM99\n%\n",
+    )
+    .unwrap();
+    let p = part.to_str().unwrap();
+    let out = Command::new(BIN)
+        .args(["run", p, "--trace"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "G00 X40.0000 Z2.0000\nG00 X40.0000 Z-3.0000\nG00 X40.0000 Z-8.0000\nG00 X40.0000 Z-13.0000\n"
+    );
+    std::fs::write(&part, "G21 G18 G98\nG00 X40. Z2.\nM98 P3000\nM30\n").unwrap();
+    let out = Command::new(BIN).args(["run", p]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains(&format!("{p}:3:")), "{stderr}");
+    assert!(stderr.contains("not defined"), "{stderr}");
+    assert!(out.stdout.is_empty());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
