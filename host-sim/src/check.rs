@@ -150,13 +150,18 @@ mod tests {
                 let (dialect, _) = crate::dialect::choose("auto", &text).unwrap();
                 assert_eq!(dialect, Dialect::Fanuc, "{}", path.display());
                 assert_eq!(check_in(&text, dialect), [], "{}", path.display());
-                // Read as ISO, the Fanuc words are named.
+                // Read as ISO, the Fanuc words are named (or the Fanuc
+                // macro words, which LinuxCNC does not have).
                 let iso = check_in(&text, Dialect::Iso);
-                assert!(
-                    iso.iter()
-                        .any(|i| i.what == "G99 belongs to the FANUC dialect (OPT DIALECT=FANUC)"),
-                    "{iso:?}"
-                );
+                assert!(!iso.is_empty(), "{}", path.display());
+                if text.contains("G99") {
+                    assert!(
+                        iso.iter()
+                            .any(|i| i.what
+                                == "G99 belongs to the FANUC dialect (OPT DIALECT=FANUC)"),
+                        "{iso:?}"
+                    );
+                }
                 seen += 1;
             }
         }

@@ -5,6 +5,7 @@
 //! Skipped with a message where `qemu-system-arm` is missing, except under CI
 //! (`CI` set), where a missing QEMU fails.
 
+use core_nostd::gcode::Dialect;
 use host_sim::compare::Comparator;
 use host_sim::device::LocalDevice;
 use host_sim::link::{final_lines, Client};
@@ -291,4 +292,54 @@ fn the_offsets_survive_a_power_cycle() {
     // shift is not (the position reads in machine coordinates again).
     assert!(ask(&mut link, "POS").starts_with("OK PX=0 PZ=0 X=0.0000 Z=0.0000"));
     assert!(ask(&mut link, "G28").starts_with("OK NX=1000 NZ=500 PX=1000 PZ=500"));
+}
+
+/// The example programs, as the host streams them (expanded first where
+/// they use macros or subprograms), line by line to the firmware and to the
+/// in-process device: every reply equal, none refused.
+#[test]
+fn the_example_programs_run_on_the_firmware_as_in_process() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client) = booted();
+    let mut local = LocalDevice::new();
+    let dir = format!("{}/../examples", env!("CARGO_MANIFEST_DIR"));
+    let mut blocks = 0;
+    for (name, setup) in [
+        ("krylenko-fig12.nc", "CFG RN=0.4 TIP=3"),
+        ("krylenko-fig17.nc", "CFG RN=0.4 TIP=2"),
+        ("krylenko-fig22.nc", "CFG RN=0.4 TIP=3"),
+        ("fanuc-grooves.nc", "CFG RN=0.4 TIP=3"),
+    ] {
+        let text = std::fs::read_to_string(format!("{dir}/{name}")).unwrap();
+        let lines: Vec<String> = if host_sim::expand::needs_expansion(&text) {
+            host_sim::expand::expand(&text, Dialect::Fanuc)
+                .unwrap()
+                .into_iter()
+                .map(|l| l.text)
+                .collect()
+        } else {
+            text.lines().map(str::to_owned).collect()
+        };
+        let session = ["OPT DIALECT=FANUC", setup, "ZERO"]
+            .into_iter()
+            .map(str::to_owned)
+            .chain(lines.into_iter().filter(|l| !l.trim().is_empty()))
+            .chain(["SYNC".to_string()]);
+        for line in session {
+            let bytes = format!("{line}\n");
+            let want = String::from_utf8_lossy(&local.feed(bytes.as_bytes())).into_owned();
+            let want: Vec<&str> = want.split_terminator("\r\n").collect();
+            client.write_raw(bytes.as_bytes()).unwrap();
+            let got: Vec<String> = (0..want.len())
+                .map(|_| client.read_line().unwrap().trim_end().to_string())
+                .collect();
+            assert_eq!(got, want, "{name}: {line}");
+            let last = want.last().copied().unwrap_or("");
+            assert!(last.starts_with("OK"), "{name}: {line} -> {last}");
+            blocks += 1;
+        }
+    }
+    eprintln!("{blocks} requests of the example programs answered alike, none refused");
 }

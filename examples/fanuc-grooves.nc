@@ -1,0 +1,27 @@
+%
+O1000 (SHAFT: THREE ROUGHING PASSES BY A MACRO LOOP, TWO GROOVES BY A SUBPROGRAM)
+; run with: host-sim run examples/fanuc-grooves.nc
+; the host expands the loop and the subprogram before streaming
+G21 G18 G98
+T0101
+G97 S1200 M03
+G00 X40. Z2. M08
+#100 = 0
+WHILE [#100 LT 3] DO1
+G01 X[38. - #100 * 2.] Z0 F200.
+G01 Z-20.
+G00 U2. Z2.
+#100 = #100 + 1
+END1
+G00 Z-30.
+M98 P2000 L2
+G00 X60. Z10. M09
+M05
+M30
+O2000 (GROOVE 3 MM DEEP, DWELL 0.5 S)
+G01 U-6. F50.
+G04 P500
+G00 U6.
+W-8.
+M99
+%
