@@ -770,10 +770,12 @@ impl Session {
             }
         }
         let aux = self.aux.after(&b);
-        // The spindle speed where the block starts (the tool's X).
+        // The spindle speed where the block starts: the programmed X, the
+        // diameter the tool cuts at (X0 of every work system is the
+        // spindle's axis; offsets move the slide, not the part).
         if aux.spindle.turning != Spindle::Off {
             aux.spindle
-                .rpm(self.cmd[0], modal.units)
+                .rpm(self.prog[0], modal.units)
                 .map_err(|e| Refusal::Value("S", e.as_str()))?;
         }
         let diam = b.diameter.unwrap_or(self.cfg.diam);
@@ -966,7 +968,7 @@ impl Session {
         // Output blocks of the element held back by compensation run at its
         // feed; this block's own and the corners between, at this one's.
         let now = if feeds {
-            path_feed(&modal, &aux.spindle, self.cmd[0])
+            path_feed(&modal, &aux.spindle, self.prog[0])
                 .map_err(|e| Refusal::Value("F", e.as_str()))?
         } else {
             None
@@ -1659,7 +1661,7 @@ impl Session {
     }
 
     /// `OK SPINDLE= S= SMODE= LIMIT= COOLANT= T=`: the auxiliary
-    /// functions as programmed; `S` the commanded rpm at the tool's X (0
+    /// functions as programmed; `S` the commanded rpm at the programmed X (0
     /// while stopped), `LIMIT` 0 when none is set, `T` as written in the
     /// dialect (`-` when none was named).
     #[inline(never)]
@@ -1679,7 +1681,7 @@ impl Session {
             Coolant::Flood => "FLOOD",
             Coolant::Off => "OFF",
         };
-        let rpm = a.spindle.running_rpm(self.cmd[0], self.modal.units);
+        let rpm = a.spindle.running_rpm(self.prog[0], self.modal.units);
         let limit = a.spindle.clamp.unwrap_or(Length::ZERO);
         let mut line = ReplyLine::new();
         let _ = write!(

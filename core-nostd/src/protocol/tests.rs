@@ -1305,3 +1305,35 @@ fn what_a_board_keeps_in_flash_counts_its_changes() {
     assert_eq!(ask1(&mut fresh, "TOOL N=3"), ask1(&mut dev, "TOOL N=3"));
     assert_eq!(ask1(&mut fresh, "WORK G=55"), ask1(&mut dev, "WORK G=55"));
 }
+
+#[test]
+fn surface_speed_is_taken_at_the_programmed_diameter_whatever_the_offsets() {
+    let speed = |setup: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=FANUC");
+        for line in setup {
+            assert!(ask1(&mut dev, line).starts_with("OK"), "{line}");
+        }
+        for line in [
+            "G50 S3000",
+            "G96 S180 M03 G99",
+            "G00 X30. Z2.",
+            "G01 Z-10. F.2",
+        ] {
+            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+        }
+        ask1(&mut dev, "AUX")
+    };
+    let plain = speed(&[]);
+    // 180 m/min at Ø30: 1909.8593 rpm, at any tool or work offset.
+    assert!(plain.contains(" S=1909.8593 "), "{plain:?}");
+    let offset = speed(&["TOOL N=1 X=-20 Z=5", "WORK G=54 X=40", "T0101"]);
+    let s = |aux: &str| {
+        aux.split(' ')
+            .find(|w| w.starts_with("S="))
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(s(&offset), s(&plain));
+}
