@@ -134,6 +134,15 @@ impl SpindleState {
         }))
     }
 
+    /// The state with `top` (the spindle's top speed) as a limit too.
+    pub fn within(&self, top: Option<Length>) -> SpindleState {
+        let clamp = match (self.clamp, top) {
+            (Some(c), Some(t)) => Some(c.min(t)),
+            (c, t) => c.or(t),
+        };
+        SpindleState { clamp, ..*self }
+    }
+
     /// The rpm while the spindle turns, else 0.
     pub fn running_rpm(&self, radius: Length, units: Units) -> Length {
         match (self.turning, self.rpm(radius, units)) {

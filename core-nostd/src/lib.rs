@@ -18,6 +18,8 @@
 //!   ISO and the Fanuc dialect.
 //! - [`interp`]: the interpreter's state between blocks (modal codes, feed,
 //!   spindle, coolant, tool) and a block's feed and spindle speed.
+//! - [`outputs`]: the spindle's run, direction and speed (a PWM duty)
+//!   and the coolant, as the board drives them.
 //! - [`cone`]: taper corrections for a tool nose radius (Krylenko, Nomura).
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
@@ -63,6 +65,7 @@ pub mod interleave;
 pub mod interp;
 pub mod length;
 pub mod machine;
+pub mod outputs;
 pub mod plan;
 pub mod protocol;
 pub mod step;

@@ -54,6 +54,11 @@ pub trait Background {
     fn queued(&mut self, blocks: usize) {
         let _ = blocks;
     }
+    /// The spindle speed its outputs command now, 10⁻³ rpm, if it drives
+    /// a spindle.
+    fn spindle(&mut self) -> Option<u32> {
+        None
+    }
 }
 
 /// Where started motion goes: issued at once through [`StepSink::step`]
@@ -97,6 +102,9 @@ pub struct Status {
     pub speed2: u128,
     /// Running, holding or idle.
     pub motion: Motion,
+    /// The spindle speed commanded now (that of the block running, or set
+    /// at rest since), 10⁻³ rpm.
+    pub spindle: u32,
 }
 
 impl Status {
@@ -128,6 +136,8 @@ pub struct Machine {
     /// them (the host did not keep the queue filled), since the last
     /// `SYNC` or `ZERO`.
     starved: u32,
+    /// The spindle speed the blocks queued from now on carry, 10⁻³ rpm.
+    spindle: u32,
 }
 
 impl Default for Machine {
@@ -150,7 +160,22 @@ impl Machine {
             stepper: Stepper::new(),
             point: [0, 0],
             starved: 0,
+            spindle: 0,
         }
+    }
+
+    /// The spindle speed commanded for the blocks queued from now on (10⁻³
+    /// rpm, 0 stopped): each carries it to its start, where the output
+    /// follows (under `G96` it changes block by block).
+    pub fn set_spindle(&mut self, milli_rpm: u32) {
+        self.spindle = milli_rpm;
+    }
+
+    /// Sets the spindle speed at rest, nothing queued (`M03 S…`): the
+    /// output's now, and that of the blocks queued from now on.
+    pub fn switch_spindle(&mut self, milli_rpm: u32) {
+        self.spindle = milli_rpm;
+        self.stepper.set_spindle(milli_rpm);
     }
 
     /// The limits in force.
@@ -199,6 +224,7 @@ impl Machine {
         let Some(block) = Block::new(from, to, events, feed, h, &self.rates) else {
             return;
         };
+        let block = block.with_spindle(self.spindle);
         if self.planner.window_full() {
             self.start_one(sink);
         }
@@ -289,9 +315,13 @@ impl Machine {
     /// What the axes are doing.
     pub fn status<S: StepSink>(&self, sink: &mut S) -> Status {
         let queued = self.planner.queued();
-        let (motion, issued) = match sink.background() {
-            Some(b) => (b.motion(), b.issued()),
-            None => (Motion::Idle, self.stepper.issued()),
+        let (motion, issued, spindle) = match sink.background() {
+            Some(b) => (
+                b.motion(),
+                b.issued(),
+                b.spindle().unwrap_or(self.stepper.spindle()),
+            ),
+            None => (Motion::Idle, self.stepper.issued(), self.stepper.spindle()),
         };
         let motion = match motion {
             Motion::Idle if queued > 0 => Motion::Run,
@@ -302,6 +332,7 @@ impl Machine {
             issued,
             speed2: self.planner.exit2(),
             motion,
+            spindle,
         }
     }
 

@@ -321,9 +321,24 @@ pub struct Block {
     /// limits a rapid cruise: what timing a cruise needs besides the block.
     per_min: u64,
     axis_vmax: u64,
+    /// The spindle speed commanded while it runs, 10⁻³ rpm (0: stopped):
+    /// the output follows it at the block's start.
+    spindle: u32,
 }
 
 impl Block {
+    /// The block with the spindle speed commanded while it runs (10⁻³
+    /// rpm).
+    pub const fn with_spindle(mut self, milli_rpm: u32) -> Block {
+        self.spindle = milli_rpm;
+        self
+    }
+
+    /// The spindle speed commanded while it runs, 10⁻³ rpm.
+    pub const fn spindle(&self) -> u32 {
+        self.spindle
+    }
+
     /// The block from `from` to `to` (Å·2³², `|coordinate| < 2⁷²`) issuing
     /// `events` at prices `h`, at `feed` (rapid when `None`); `None` when it
     /// has no length (such a block takes no time and issues nothing).
@@ -439,6 +454,7 @@ impl Block {
             junction2: 0,
             skip: 0,
             count: nx.unsigned_abs().max(nz.unsigned_abs()),
+            spindle: 0,
             per_min: rates.ticks_per_min() as u64,
             axis_vmax: match source {
                 Source::Axis(axis) => rates.limits.vmax[axis & 1],

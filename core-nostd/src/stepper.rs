@@ -138,6 +138,8 @@ pub struct Stepper<const R: usize> {
     /// exit speed² (as it actually runs).
     end: u128,
     exit2: u128,
+    /// The spindle speed of the block that started last, 10⁻³ rpm.
+    spindle: u32,
 }
 
 impl<const R: usize> Default for Stepper<R> {
@@ -162,7 +164,19 @@ impl<const R: usize> Stepper<R> {
             in_run: false,
             end: 0,
             exit2: 0,
+            spindle: 0,
         }
+    }
+
+    /// The spindle speed commanded for the block that started last, or
+    /// set at rest since (10⁻³ rpm): what a spindle output follows.
+    pub const fn spindle(&self) -> u32 {
+        self.spindle
+    }
+
+    /// Sets the spindle speed at rest (`M03 S…` between blocks).
+    pub fn set_spindle(&mut self, milli_rpm: u32) {
+        self.spindle = milli_rpm;
     }
 
     /// Whether another item fits.
@@ -286,6 +300,7 @@ impl<const R: usize> Stepper<R> {
     /// as a hold's deceleration.
     fn block(&mut self, s: Started) -> Pulled {
         let planned_exit = s.timed.speeds2()[2];
+        self.spindle = s.block.spindle();
         if let Hold::Braking(carry, _) = self.hold {
             self.brake(&s.block, 0, 0, carry, self.end, planned_exit);
         } else if self.retime {

@@ -5,6 +5,7 @@
 //! | USART1 TX / RX | PA9 / PA10 (AF7) | 115200 8N1 |
 //! | X STEP / X DIR | PC0 / PC1 | push-pull |
 //! | Z STEP / Z DIR | PC2 / PC3 | push-pull |
+//! | spindle and coolant | PB6 … PB10 | [`crate::spindle`] |
 //!
 //! Two configurations. The real board runs from an 8 MHz crystal through the
 //! PLL at 168 MHz (APB2 84 MHz, APB1 42 MHz, timers 84 MHz). QEMU 7.2's
@@ -52,11 +53,25 @@ static RX_PAUSED: AtomicBool = AtomicBool::new(false);
 pub fn init(dp: pac::Peripherals) -> Board {
     clocks(&dp);
     let rcc = &dp.RCC;
-    rcc.ahb1enr()
-        .modify(|_, w| w.gpioaen().set_bit().gpiocen().set_bit());
+    rcc.ahb1enr().modify(|_, w| {
+        w.gpioaen()
+            .set_bit()
+            .gpioben()
+            .set_bit()
+            .gpiocen()
+            .set_bit()
+    });
     rcc.apb2enr().modify(|_, w| w.usart1en().set_bit());
-    rcc.apb1enr()
-        .modify(|_, w| w.tim2en().set_bit().tim3en().set_bit().tim5en().set_bit());
+    rcc.apb1enr().modify(|_, w| {
+        w.tim2en()
+            .set_bit()
+            .tim3en()
+            .set_bit()
+            .tim4en()
+            .set_bit()
+            .tim5en()
+            .set_bit()
+    });
 
     // PA9, PA10: alternate function 7, PA10 pulled up.
     let gpioa = &dp.GPIOA;
@@ -127,6 +142,7 @@ pub fn init(dp: pac::Peripherals) -> Board {
         serial: Serial { usart },
         tim2,
         tim5: dp.TIM5,
+        spindle: crate::spindle::Spindle::new(dp.TIM4, &dp.GPIOB),
         watchdog: Watchdog {
             iwdg: dp.IWDG,
             tim3: dp.TIM3,
@@ -194,6 +210,8 @@ pub struct Board {
     pub tim2: StepTimer,
     /// The step interrupt's alarm (enabled, not configured).
     pub tim5: pac::TIM5,
+    /// The spindle and coolant outputs (low).
+    pub spindle: crate::spindle::Spindle,
     /// The watchdog and its supervisor's timer (not started).
     pub watchdog: Watchdog,
     /// The flash interface, for the offsets kept across power cuts.

@@ -16,6 +16,7 @@
 pub mod board;
 pub mod log;
 pub mod motion;
+pub mod spindle;
 pub mod storage;
 pub mod supervisor;
 
@@ -47,7 +48,7 @@ impl Controller {
     /// device.
     pub fn new(board: Board, device: &mut core_nostd::protocol::Device) -> Self {
         let storage = storage::Storage::load(board.flash, device);
-        motion::install(board.tim2, board.tim5);
+        motion::install(board.tim2, board.tim5, board.spindle);
         supervisor::start(board.watchdog);
         Controller {
             storage,
@@ -59,6 +60,7 @@ impl Controller {
                 speed: 0,
                 starved: 0,
                 stop: None,
+                outputs: core_nostd::outputs::Outputs::OFF,
             },
             queued: 0,
             asked: None,
@@ -101,7 +103,11 @@ fn timing(asked: u32) -> Timing {
 fn answer_status(serial: &mut Serial, view: &StatusView, queued: usize) {
     if let Some(asked) = motion::take_status() {
         let issued = motion::issued().unwrap_or_default();
-        let mut line = status_line("!STATUS", motion::motion(), issued, queued, view);
+        let view = StatusView {
+            outputs: motion::outputs().unwrap_or(view.outputs),
+            ..*view
+        };
+        let mut line = status_line("!STATUS", motion::motion(), issued, queued, &view);
         timing(asked).write_to(&mut line);
         serial.send(line.finish());
     }
@@ -147,6 +153,10 @@ impl Io for Controller {
 
     fn timing(&mut self) -> Option<Timing> {
         self.asked.take().map(timing)
+    }
+
+    fn outputs(&mut self, outputs: &core_nostd::outputs::Outputs) {
+        motion::set_outputs(outputs);
     }
 }
 
@@ -200,6 +210,10 @@ impl Background for Controller {
     fn queued(&mut self, blocks: usize) {
         self.queued = blocks;
     }
+
+    fn spindle(&mut self) -> Option<u32> {
+        motion::outputs().map(|o| o.rpm)
+    }
 }
 
 /// Reset to running: takes the peripherals (once, at reset), starts the
@@ -222,6 +236,7 @@ unsafe fn HardFault(_: &cortex_m_rt::ExceptionFrame) -> ! {
 /// Stops here for good, outputs safe.
 pub fn halt() -> ! {
     board::step_outputs_low();
+    spindle::all_low();
     loop {
         cortex_m::asm::wfi();
     }
@@ -244,6 +259,7 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 fn panic(info: &core::panic::PanicInfo) -> ! {
     // The axes first: no STEP pulse may stay high or follow.
     board::step_outputs_low();
+    spindle::all_low();
     cortex_m::interrupt::disable();
     defmt::error!("panic: {}", defmt::Display2Format(info));
     #[cfg(feature = "qemu")]

@@ -16,6 +16,7 @@
 #[cfg(not(feature = "qemu-paced"))]
 use crate::board::TIM2_CLK_HZ;
 use crate::board::{sleep_unless, CycleDelay, PortCPin, StepTimer};
+use crate::spindle::Spindle;
 use crate::supervisor;
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
@@ -149,6 +150,8 @@ struct Motion {
     late: u32,
     /// The TIM2 count at which the STEP pulse in progress may end.
     pulse_end: Option<u32>,
+    /// The spindle and coolant outputs.
+    spindle: Spindle,
 }
 
 /// A reset dropped the motion; what the protocol still hands over is
@@ -194,6 +197,8 @@ impl Motion {
         self.alarm.stop();
         self.pulse_end = None;
         self.axes.stop_outputs();
+        self.spindle.off();
+        self.stepper.set_spindle(0);
         self.busy = false;
         supervisor::step_idle();
         found
@@ -267,7 +272,7 @@ impl Motion {
                     return;
                 }
                 Some(Pulled::RunStart) => self.clock.start_run(),
-                Some(Pulled::BlockStart(_)) => {}
+                Some(Pulled::BlockStart(_)) => self.spindle.follow(self.stepper.spindle()),
                 Some(Pulled::Step(event, tick)) => self.next = Some((event, tick)),
                 Some(Pulled::RunEnd(_)) => {
                     self.end_pulse();
@@ -280,7 +285,7 @@ impl Motion {
 
 /// Takes the step outputs, the run clock and the alarm, and enables the
 /// step interrupt above the serial one.
-pub fn install(clock: StepTimer, alarm: pac::TIM5) {
+pub fn install(clock: StepTimer, alarm: pac::TIM5, spindle: Spindle) {
     let axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
     let alarm = Alarm::new(alarm, &clock);
     let motion = Motion {
@@ -294,6 +299,7 @@ pub fn install(clock: StepTimer, alarm: pac::TIM5) {
         aborted: None,
         late: 0,
         pulse_end: None,
+        spindle,
     };
     critical_section::with(|cs| {
         if let Ok(mut m) = MOTION.borrow(cs).try_borrow_mut() {
@@ -468,6 +474,20 @@ pub fn late_events() -> u32 {
 /// The registers of the steps issued.
 pub fn issued() -> Option<ImpulsePoint> {
     with(|m| m.issued())
+}
+
+/// What the spindle and coolant outputs command now.
+pub fn outputs() -> Option<core_nostd::outputs::Outputs> {
+    with(|m| m.spindle.outputs())
+}
+
+/// Switches the spindle and coolant outputs, at rest: the blocks that
+/// start from now on change the speed only.
+pub fn set_outputs(o: &core_nostd::outputs::Outputs) {
+    with(|m| {
+        m.stepper.set_spindle(o.rpm);
+        m.spindle.set(o);
+    });
 }
 
 /// Sets them, at rest.

@@ -3,7 +3,7 @@
 //! tick.
 
 use core_nostd::interleave::{LinearBlock, StepEvent};
-use core_nostd::protocol::{Device, Io};
+use core_nostd::protocol::{Device, Io, Realtime};
 use core_nostd::stepdir::DriveTiming;
 
 /// One step event as issued: its byte (the `SEQ` layout) and its tick in
@@ -18,15 +18,31 @@ pub struct Issued {
     pub run: u64,
 }
 
+/// The person at the machine, on the other end of the link the device
+/// serves: a program stop (`M00`, `M01`) waits on them for cycle start.
+pub trait Operator {
+    /// Sends reply bytes now.
+    fn write(&mut self, bytes: &[u8]);
+    /// The next byte from the link, waiting for it; `None` when the link
+    /// has ended.
+    fn read(&mut self) -> Option<u8>;
+}
+
 /// Collects reply bytes and the events the device issued.
-struct Collect<'a> {
+struct Collect<'a, 'o> {
     out: Vec<u8>,
     events: &'a mut Vec<Issued>,
     starts: &'a mut Vec<(usize, LinearBlock)>,
     runs: &'a mut u64,
+    /// Who presses cycle start; without one it is pressed at once.
+    operator: Option<&'o mut (dyn Operator + 'o)>,
+    /// The status line of the program stop in progress.
+    stop_line: Vec<u8>,
+    /// Bytes that came while it waited, for after the request.
+    later: Vec<u8>,
 }
 
-impl Io for Collect<'_> {
+impl Io for Collect<'_, '_> {
     fn send(&mut self, line: &[u8]) {
         self.out.extend_from_slice(line);
     }
@@ -42,6 +58,30 @@ impl Io for Collect<'_> {
     }
     fn block_start(&mut self, block: &LinearBlock) {
         self.starts.push((self.events.len(), *block));
+    }
+    fn stop_status(&mut self, line: &[u8]) {
+        self.stop_line = line.to_vec();
+    }
+    /// As the board: replies so far go out, status bytes are answered with
+    /// the stop's line, cycle start (0x81) or a reset (Ctrl-X) ends the
+    /// wait; every other byte waits its turn after the request, real-time
+    /// ones too (answered then, as the board answers them after its
+    /// wait).
+    fn program_stop(&mut self, _: u8) {
+        let Some(op) = self.operator.as_deref_mut() else {
+            return;
+        };
+        op.write(&std::mem::take(&mut self.out));
+        while let Some(b) = op.read() {
+            match Realtime::from_byte(b) {
+                Some(Realtime::Status) => op.write(&self.stop_line),
+                Some(Realtime::Resume | Realtime::Reset) => {
+                    self.later.push(b);
+                    return;
+                }
+                _ => self.later.push(b),
+            }
+        }
     }
 }
 
@@ -72,16 +112,38 @@ impl LocalDevice {
         }
     }
 
-    /// Feeds raw bytes; returns the raw reply bytes they produced.
+    /// Feeds raw bytes; returns the raw reply bytes they produced. A
+    /// program stop goes on at once, as if cycle start were pressed.
     pub fn feed(&mut self, bytes: &[u8]) -> Vec<u8> {
+        self.serve(bytes, None)
+    }
+
+    /// As [`LocalDevice::feed`], a program stop waiting for `operator` to
+    /// press cycle start (the replies before it written to them first).
+    pub fn feed_operated(&mut self, bytes: &[u8], operator: &mut dyn Operator) -> Vec<u8> {
+        self.serve(bytes, Some(operator))
+    }
+
+    fn serve<'o>(
+        &mut self,
+        bytes: &[u8],
+        operator: Option<&'o mut (dyn Operator + 'o)>,
+    ) -> Vec<u8> {
         let before = self.events.len();
         let mut io = Collect {
             out: Vec::new(),
             events: &mut self.events,
             starts: &mut self.starts,
             runs: &mut self.runs,
+            operator,
+            stop_line: Vec::new(),
+            later: Vec::new(),
         };
         self.dev.receive_bytes(bytes, &mut io);
+        while !io.later.is_empty() {
+            let later = std::mem::take(&mut io.later);
+            self.dev.receive_bytes(&later, &mut io);
+        }
         let out = io.out;
         self.issued += (self.events.len() - before) as u64;
         if !self.record {

@@ -243,6 +243,30 @@ impl Transport for Client {
     }
 }
 
+/// Whoever is on the pty's other end, as a program stop waits on them.
+struct PtyOperator<'a> {
+    master: &'a mut TTYPort,
+    stop: &'a AtomicBool,
+}
+
+impl crate::device::Operator for PtyOperator<'_> {
+    fn write(&mut self, bytes: &[u8]) {
+        let _ = self.master.write_all(bytes);
+    }
+
+    fn read(&mut self) -> Option<u8> {
+        let mut b = [0u8; 1];
+        while !self.stop.load(Ordering::Relaxed) {
+            match self.master.read(&mut b) {
+                Ok(1) => return Some(b[0]),
+                Err(e) if e.kind() == io::ErrorKind::TimedOut => {}
+                _ => std::thread::sleep(Duration::from_millis(5)),
+            }
+        }
+        None
+    }
+}
+
 /// The in-process device serving the master end of a pseudo-terminal.
 pub struct PtyDevice {
     path: String,
@@ -275,7 +299,11 @@ impl PtyDevice {
                     match master.read(&mut buf) {
                         Ok(0) => std::thread::sleep(Duration::from_millis(1)),
                         Ok(n) => {
-                            let out = device.feed(&buf[..n]);
+                            let mut operator = PtyOperator {
+                                master: &mut master,
+                                stop: &stop_flag,
+                            };
+                            let out = device.feed_operated(&buf[..n], &mut operator);
                             if !out.is_empty() && master.write_all(&out).is_err() {
                                 std::thread::sleep(Duration::from_millis(1));
                             }

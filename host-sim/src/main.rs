@@ -262,19 +262,47 @@ fn main() -> ExitCode {
     }
 }
 
+/// Standard input and output as the link; a program stop waits on it for
+/// cycle start.
+struct Stdio {
+    stdin: std::io::StdinLock<'static>,
+    stdout: std::io::StdoutLock<'static>,
+}
+
+impl host_sim::device::Operator for Stdio {
+    fn write(&mut self, bytes: &[u8]) {
+        let _ = self.stdout.write_all(bytes);
+        let _ = self.stdout.flush();
+    }
+
+    fn read(&mut self) -> Option<u8> {
+        let mut b = [0u8; 1];
+        loop {
+            match self.stdin.read(&mut b) {
+                Ok(0) => return None,
+                Ok(_) => return Some(b[0]),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(_) => return None,
+            }
+        }
+    }
+}
+
 fn serve_stdio() -> Result<ExitCode, Box<dyn std::error::Error>> {
     let mut device = LocalDevice::new();
-    let mut stdin = std::io::stdin().lock();
-    let mut stdout = std::io::stdout().lock();
+    let mut link = Stdio {
+        stdin: std::io::stdin().lock(),
+        stdout: std::io::stdout().lock(),
+    };
     let mut buf = [0u8; 4096];
     loop {
-        let n = stdin.read(&mut buf)?;
+        let n = link.stdin.read(&mut buf)?;
         if n == 0 {
             return Ok(ExitCode::SUCCESS);
         }
-        let out = device.feed(&buf[..n]);
-        stdout.write_all(&out)?;
-        stdout.flush()?;
+        let out = device.feed_operated(&buf[..n], &mut link);
+        link.stdout.write_all(&out)?;
+        link.stdout.flush()?;
     }
 }
 

@@ -1113,6 +1113,7 @@ fn status_reports_the_steps_issued_and_the_queue() {
         issued,
         speed2: planner.exit2(),
         motion: core_nostd::stepper::Motion::Run,
+        spindle: 0,
     }
     .speed(TickRate::TIMER);
     assert!(speed > 0, "moving at a corner taken with δ = 0.01 mm");

@@ -240,6 +240,54 @@ fn a_program_stop_waits_for_cycle_start_on_the_board() {
     ask(&mut client, b"G00 X0 Z0\n", "OK NX=-1000 NZ=500 PX=0 PZ=0");
 }
 
+/// The spindle and coolant outputs on the board: switched at rest, the
+/// speed following X under `G96` block by block from the step interrupt,
+/// everything off at a reset; status lines report what is driven.
+#[test]
+fn the_spindle_outputs_follow_the_program_on_the_board() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client) = booted();
+    let ask = |client: &mut Client, line: &[u8]| -> String {
+        client.write_raw(line).unwrap();
+        let got = final_line(client);
+        got.rsplit_once('*')
+            .map_or(got.as_str(), |(b, _)| b)
+            .to_string()
+    };
+    assert!(ask(&mut client, b"AUX SMAX=3000\n").ends_with(" SMAX=3000.0000 SPINUP=0.000"));
+    for line in [
+        "OPT DIALECT=FANUC",
+        "G50 S2500",
+        "G00 X30. Z2.",
+        "G96 S180 M03 M08",
+    ] {
+        let got = ask(&mut client, format!("{line}\n").as_bytes());
+        assert!(got.starts_with("OK"), "{line}: {got}");
+    }
+    let on = " SPINDLE=CW S=1909.859 COOLANT=FLOOD";
+    assert!(ask(&mut client, b"STATUS\n").ends_with(on));
+    let status = ask(&mut client, b"\x80");
+    assert!(status.contains(&format!("{on} LAT=")), "{status}");
+    // Ø30 to Ø40, then from Ø40: the speed where the last block started.
+    for line in ["G99 G01 X40. F.2", "X60. W-10.", "SYNC"] {
+        let got = ask(&mut client, format!("{line}\n").as_bytes());
+        assert!(got.starts_with("OK"), "{line}: {got}");
+    }
+    let status = ask(&mut client, b"\x80");
+    assert!(
+        status.contains(" SPINDLE=CW S=1432.394 COOLANT=FLOOD LAT="),
+        "{status}"
+    );
+    assert!(ask(&mut client, b"\x18").starts_with("!RESET "));
+    let status = ask(&mut client, b"\x80");
+    assert!(
+        status.contains(" SPINDLE=OFF S=0.000 COOLANT=OFF LAT="),
+        "{status}"
+    );
+}
+
 /// The tool table, the work offsets and the stored positions outlive a
 /// power cycle (QEMU's `system_reset`; under QEMU the two flash slots are
 /// RAM that a reset keeps); what a power cycle forgets, the `G92` shift,

@@ -14,6 +14,7 @@ pub use session::{status_line, Config, Pass, Session, NAME, VERSION};
 
 use crate::interleave::{LinearBlock, StepEvent};
 use crate::machine::Background;
+use crate::outputs::Outputs;
 use crate::stepdir::DriveTiming;
 use core::fmt;
 use framing::{Framed, LineAssembler};
@@ -115,6 +116,9 @@ pub struct StatusView {
     pub starved: u32,
     /// Waiting for cycle start after `M00` (0) or `M01` (1): ` STOP=M00`.
     pub stop: Option<u8>,
+    /// The spindle and coolant outputs (` SPINDLE= S= COOLANT=`); a board
+    /// puts in the speed it drives now.
+    pub outputs: Outputs,
 }
 
 /// Where replies and motion go: the transport side of a [`Device`].
@@ -175,6 +179,20 @@ pub trait Io {
     /// transport without an operator presses cycle start at once.
     fn program_stop(&mut self, code: u8) {
         let _ = code;
+    }
+
+    /// Before a program stop on a transport without a background stepper:
+    /// the `!STATUS … STOP=M00` line (complete) that answers a status byte
+    /// while it waits, nothing moving meanwhile.
+    fn stop_status(&mut self, line: &[u8]) {
+        let _ = line;
+    }
+
+    /// The spindle and the coolant switch, the axes at rest (the speed
+    /// also changes at block starts, through the stepper): a board drives
+    /// its outputs.
+    fn outputs(&mut self, outputs: &Outputs) {
+        let _ = outputs;
     }
 
     /// For a `!STATUS` line: how the transport keeps time, where it

@@ -5,7 +5,7 @@ use core::fmt;
 
 /// Room for one reply line, checksum and terminator included. Every reply
 /// the handler composes fits; a longer one would be cut, never overrun.
-pub const REPLY_CAPACITY: usize = 160;
+pub const REPLY_CAPACITY: usize = 200;
 
 /// One reply line under construction.
 #[derive(Clone)]

@@ -15,13 +15,14 @@ use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{
     is_block, parse, BlockError, Coolant, Dialect, FeedMode, Motion, Special, Spindle, SpindleMode,
-    Stop, ToolOffset, ToolWord,
+    Stop, ToolOffset, ToolWord, Units,
 };
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::interp::{path_feed, Aux, Modal, Offsets, Selection, TOOL_REGISTERS};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
 use crate::machine::{Background, Machine, StepSink};
+use crate::outputs::{milli_rpm, write_rpm, Outputs};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
 use crate::stepdir::{DriveTiming, TimingError};
 use crate::stepper::{Aborted, Item, Motion as Axes};
@@ -151,6 +152,15 @@ pub struct Session {
     /// The feed of the last element given to the contour engine (the one
     /// it holds while compensation is on); `None` for a rapid.
     element_feed: Option<Feed>,
+    /// The spindle's top speed, rpm (`AUX SMAX`): the speed at full PWM
+    /// duty and a limit of every commanded speed; none when the speed is
+    /// set on the machine by hand.
+    top: Option<Length>,
+    /// The wait after the spindle starts or changes speed at rest, µs
+    /// (`AUX SPINUP`).
+    spinup_us: u64,
+    /// The spindle and coolant outputs as last switched at rest.
+    outputs: Outputs,
 }
 
 impl Default for Session {
@@ -228,6 +238,9 @@ impl Session {
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
             element_feed: None,
+            top: None,
+            spinup_us: 0,
+            outputs: Outputs::OFF,
         }
     }
 
@@ -428,6 +441,7 @@ impl Session {
                 ..Modal::POWER_ON
             };
             self.aux = self.aux.stopped();
+            self.switch_outputs(self.outputs_for(&self.aux, Units::Mm), io);
             self.contour = Contour::new();
             self.last_moves = Moves::new();
             self.prog = self.work_point(self.cmd);
@@ -442,9 +456,7 @@ impl Session {
         } else if command.eq_ignore_ascii_case("WORK") {
             self.work_command(words, io)
         } else if command.eq_ignore_ascii_case("AUX") {
-            no_args(words, "AUX")?;
-            self.aux_reply(io);
-            Ok(())
+            self.aux_command(words, io)
         } else {
             Err(Refusal::Unknown(command))
         }
@@ -772,9 +784,11 @@ impl Session {
         let aux = self.aux.after(&b);
         // The spindle speed where the block starts: the programmed X, the
         // diameter the tool cuts at (X0 of every work system is the
-        // spindle's axis; offsets move the slide, not the part).
+        // spindle's axis; offsets move the slide, not the part); within
+        // the spindle's top speed.
+        let spindle = aux.spindle.within(self.top);
         if aux.spindle.turning != Spindle::Off {
-            aux.spindle
+            spindle
                 .rpm(self.prog[0], modal.units)
                 .map_err(|e| Refusal::Value("S", e.as_str()))?;
         }
@@ -968,7 +982,7 @@ impl Session {
         // Output blocks of the element held back by compensation run at its
         // feed; this block's own and the corners between, at this one's.
         let now = if feeds {
-            path_feed(&modal, &aux.spindle, self.prog[0])
+            path_feed(&modal, &spindle, self.prog[0])
                 .map_err(|e| Refusal::Value("F", e.as_str()))?
         } else {
             None
@@ -1036,9 +1050,21 @@ impl Session {
         if self.aux.needs_rest(&aux) || b.dwell.is_some() || b.tool_change {
             self.machine.flush(&mut Sink::new(io, self.drive));
         }
+        if self.aux.needs_rest(&aux) {
+            let (was, now) = (self.outputs, self.outputs_for(&aux, modal.units));
+            self.switch_outputs(now, io);
+            // A spindle that starts or changes speed gets up to it first.
+            if now.spindle != Spindle::Off && (was.spindle != now.spindle || was.rpm != now.rpm) {
+                io.dwell(self.spinup_us);
+            }
+        }
         if let Some(us) = b.dwell {
             io.dwell(us);
         }
+        // The blocks carry the speed at their start (under G96 it follows
+        // X block by block).
+        self.machine
+            .set_spindle(self.outputs_for(&aux, modal.units).rpm);
         // The DATA lines write X as this block reads it.
         self.cfg.diam = diam;
         let start = self.pos;
@@ -1073,6 +1099,14 @@ impl Session {
                 let mut view = self.view(self.machine.speed());
                 view.stop = Some(code);
                 io.view(&view);
+            } else {
+                // Nothing moves while it waits: one line answers every
+                // status byte.
+                let st = self.machine.status(&mut Sink::new(io, self.drive));
+                let mut view = self.view(0);
+                (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
+                let mut line = status_line("!STATUS", st.motion, st.issued, st.queued, &view);
+                io.stop_status(line.finish());
             }
             io.program_stop(code);
             self.share_view(io);
@@ -1088,6 +1122,7 @@ impl Session {
                 ..Modal::POWER_ON
             };
             self.aux = self.aux.stopped();
+            self.switch_outputs(self.outputs_for(&self.aux, self.modal.units), io);
         }
         send_ok(
             io,
@@ -1521,7 +1556,8 @@ impl Session {
     /// the blocks waiting.
     fn status_reply<I: Io>(&self, io: &mut I, prefix: &str) {
         let st = self.machine.status(&mut Sink::new(io, self.drive));
-        let view = self.view(st.speed(self.machine.tick()));
+        let mut view = self.view(st.speed(self.machine.tick()));
+        view.outputs.rpm = st.spindle;
         let mut line = status_line(prefix, st.motion, st.issued, st.queued, &view);
         if prefix.starts_with('!') {
             if let Some(timing) = io.timing() {
@@ -1540,6 +1576,7 @@ impl Session {
             speed,
             starved: self.machine.starved(),
             stop: None,
+            outputs: self.outputs,
         }
     }
 
@@ -1599,6 +1636,9 @@ impl Session {
         self.pos = issued;
         self.modal = Modal::POWER_ON;
         self.aux = Aux::POWER_ON;
+        // The board dropped its outputs with the motion; the session's
+        // follow.
+        self.switch_outputs(self.outputs_for(&self.aux, Units::Mm), io);
         self.contour = Contour::new();
         self.last_moves = Moves::new();
         self.element_feed = None;
@@ -1681,7 +1721,10 @@ impl Session {
             Coolant::Flood => "FLOOD",
             Coolant::Off => "OFF",
         };
-        let rpm = a.spindle.running_rpm(self.prog[0], self.modal.units);
+        let rpm = a
+            .spindle
+            .within(self.top)
+            .running_rpm(self.prog[0], self.modal.units);
         let limit = a.spindle.clamp.unwrap_or(Length::ZERO);
         let mut line = ReplyLine::new();
         let _ = write!(
@@ -1696,7 +1739,67 @@ impl Session {
             }) => write!(line, "{tool:02}{o:02}"),
             Some(ToolWord { tool, offset: None }) => write!(line, "{tool}"),
         };
+        let top = self.top.unwrap_or(Length::ZERO);
+        let ms = self.spinup_us / 1_000;
+        let _ = write!(line, " SMAX={top} SPINUP={}.{:03}", ms / 1_000, ms % 1_000);
         io.send(line.finish());
+    }
+
+    /// `AUX [SMAX=] [SPINUP=]`: the spindle's top speed (rpm at full PWM
+    /// duty, 0 for none) and the wait after it starts or changes speed
+    /// (seconds); with the auxiliary functions as programmed.
+    fn aux_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [smax, spinup] = parse_args(words, ["SMAX", "SPINUP"])?;
+        let mut top = self.top;
+        if let Some(v) = smax {
+            let l = parse_amount("SMAX", v, 99_999_999, "must be 0 to 99999.999 rpm")?;
+            top = (l > Length::ZERO).then_some(l);
+        }
+        let mut spinup_us = self.spinup_us;
+        if let Some(v) = spinup {
+            let l = parse_amount("SPINUP", v, 60_000, "must be 0 to 60 s")?;
+            // Å of a second to whole ms, rounded half up.
+            spinup_us = (l.as_angstrom().unsigned_abs() + 5_000) / 10_000 * 1_000;
+        }
+        if top != self.top {
+            // What the spindle turns at changes with it: at rest.
+            if self.aux.spindle.turning != Spindle::Off {
+                self.aux
+                    .spindle
+                    .within(top)
+                    .rpm(self.prog[0], self.modal.units)
+                    .map_err(|e| Refusal::Value("SMAX", e.as_str()))?;
+            }
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            self.top = top;
+            self.switch_outputs(self.outputs_for(&self.aux, self.modal.units), io);
+        }
+        self.spinup_us = spinup_us;
+        self.aux_reply(io);
+        Ok(())
+    }
+
+    /// The outputs for `aux` with the tool at the programmed X (`units`
+    /// those of a surface speed).
+    fn outputs_for(&self, aux: &Aux, units: Units) -> Outputs {
+        let rpm = aux
+            .spindle
+            .within(self.top)
+            .running_rpm(self.prog[0], units);
+        Outputs {
+            spindle: aux.spindle.turning,
+            rpm: milli_rpm(rpm),
+            top: self.top.map_or(0, milli_rpm),
+            coolant: aux.coolant,
+        }
+    }
+
+    /// Switches the spindle and coolant outputs, the axes at rest.
+    fn switch_outputs<I: Io>(&mut self, outputs: Outputs, io: &mut I) {
+        self.outputs = outputs;
+        self.machine.switch_spindle(outputs.rpm);
+        io.outputs(&outputs);
+        self.share_view(io);
     }
 
     /// `OK PX= PZ= X= Z= [MX= MZ=]`: the registers, the commanded point in
@@ -2064,6 +2167,20 @@ pub fn status_line(
     let speed = if motion == Axes::Held { 0 } else { view.speed };
     let _ = write_mm4(&mut line, speed);
     let _ = write!(line, " Q={queued} STARVED={}", view.starved);
+    let o = &view.outputs;
+    let spindle = match o.spindle {
+        Spindle::Cw => "CW",
+        Spindle::Ccw => "CCW",
+        Spindle::Off => "OFF",
+    };
+    let _ = write!(line, " SPINDLE={spindle} S=");
+    let _ = write_rpm(&mut line, o.rpm);
+    let coolant = match o.coolant {
+        Coolant::Mist => "MIST",
+        Coolant::Flood => "FLOOD",
+        Coolant::Off => "OFF",
+    };
+    let _ = write!(line, " COOLANT={coolant}");
     if let Some(code) = view.stop {
         // Waiting for cycle start after M00 or M01.
         let _ = write!(line, " STOP=M{code:02}");
@@ -2150,6 +2267,14 @@ impl<I: Io> Io for Suffixed<'_, I> {
         self.inner.program_stop(code);
     }
 
+    fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
+        self.inner.outputs(outputs);
+    }
+
+    fn stop_status(&mut self, line: &[u8]) {
+        self.inner.stop_status(line);
+    }
+
     fn timing(&mut self) -> Option<super::Timing> {
         self.inner.timing()
     }
@@ -2218,6 +2343,20 @@ fn parse_bounded(
     } else {
         Err(Refusal::Value(key, why))
     }
+}
+
+/// A quantity other than a length (rpm, seconds) written as one, 0 to
+/// `max` millionths: anything else is refused with `why` alone.
+fn parse_amount(
+    key: &'static str,
+    v: &str,
+    max: i64,
+    why: &'static str,
+) -> Result<Length, Refusal<'static>> {
+    Length::from_mm_str(v)
+        .ok()
+        .filter(|l| *l >= Length::ZERO && Length::from_um(max).is_some_and(|m| *l <= m))
+        .ok_or(Refusal::Value(key, why))
 }
 
 /// An unsigned decimal count of at most 7 digits, or `default` when absent.

@@ -1044,7 +1044,7 @@ fn a_fanuc_program_moves_as_its_iso_equivalent() {
     );
     assert_eq!(
         a.2,
-        "OK SPINDLE=CW S=1432.3945 SMODE=CSS LIMIT=2500.0000 COOLANT=FLOOD T=0101"
+        "OK SPINDLE=CW S=1432.3945 SMODE=CSS LIMIT=2500.0000 COOLANT=FLOOD T=0101 SMAX=0.0000 SPINUP=0.000"
     );
     let mut iso = Device::new();
     let b = run(
@@ -1065,7 +1065,7 @@ fn a_fanuc_program_moves_as_its_iso_equivalent() {
     assert!(ask1(&mut fanuc, "N110 M05 M09 M30").starts_with("OK NX=0 NZ=0 "));
     assert_eq!(
         ask1(&mut fanuc, "AUX"),
-        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=2500.0000 COOLANT=OFF T=0101"
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=2500.0000 COOLANT=OFF T=0101 SMAX=0.0000 SPINUP=0.000"
     );
 }
 
@@ -1096,7 +1096,7 @@ fn spindle_speeds_that_cannot_be_had_are_refused_and_change_nothing() {
     }
     assert_eq!(
         ask1(&mut dev, "AUX"),
-        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=-"
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=- SMAX=0.0000 SPINUP=0.000"
     );
     // S with M05: the feed per revolution still has no speed.
     ask1(&mut dev, "G99 S1000 M05");
@@ -1139,19 +1139,19 @@ fn reset_stops_the_spindle_and_coolant_and_ctrl_x_forgets_them() {
     );
     assert_eq!(
         ask1(&mut dev, "AUX"),
-        "OK SPINDLE=CCW S=636.6198 SMODE=CSS LIMIT=2000.0000 COOLANT=MIST T=0303"
+        "OK SPINDLE=CCW S=636.6198 SMODE=CSS LIMIT=2000.0000 COOLANT=MIST T=0303 SMAX=0.0000 SPINUP=0.000"
     );
     ask1(&mut dev, "RESET");
     assert_eq!(
         ask1(&mut dev, "AUX"),
-        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=2000.0000 COOLANT=OFF T=0303"
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=2000.0000 COOLANT=OFF T=0303 SMAX=0.0000 SPINUP=0.000"
     );
     // The feed per revolution stays with its F, and needs the spindle.
     assert!(ask1(&mut dev, "G01 W-1.").starts_with("ERR VALUE F per revolution"));
     ask(&mut dev, b"\x18");
     assert_eq!(
         ask1(&mut dev, "AUX"),
-        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=-"
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=- SMAX=0.0000 SPINUP=0.000"
     );
     assert_eq!(ask1(&mut dev, "OPT"), "OK BDEL=0 DIALECT=FANUC OPTSTOP=0");
 }
@@ -1336,4 +1336,119 @@ fn surface_speed_is_taken_at_the_programmed_diameter_whatever_the_offsets() {
             .to_string()
     };
     assert_eq!(s(&offset), s(&plain));
+}
+
+/// A board's view of the device: its replies, what it drives, its waits.
+#[derive(Default)]
+struct Panel {
+    lines: Lines,
+    outputs: Vec<crate::outputs::Outputs>,
+    dwells: Vec<u64>,
+}
+
+impl Io for Panel {
+    fn send(&mut self, line: &[u8]) {
+        self.lines.send(line);
+    }
+    fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
+        self.outputs.push(*outputs);
+    }
+    fn dwell(&mut self, us: u64) {
+        self.dwells.push(us);
+    }
+}
+
+#[test]
+fn the_spindle_and_coolant_outputs_follow_the_program_and_status_reports_them() {
+    use crate::gcode::{Coolant, Spindle};
+    use crate::outputs::Outputs;
+    let mut dev = Device::new();
+    let mut panel = Panel::default();
+    let tell = |dev: &mut Device, panel: &mut Panel, line: &str| -> String {
+        dev.receive_bytes(std::format!("{line}\n").as_bytes(), panel);
+        panel.lines.out.pop().unwrap()
+    };
+    let out = |spindle, rpm, coolant| Outputs {
+        spindle,
+        rpm,
+        top: 3_000_000,
+        coolant,
+    };
+    assert_eq!(
+        tell(&mut dev, &mut panel, "AUX SMAX=3000 SPINUP=1.5"),
+        "OK SPINDLE=OFF S=0.0000 SMODE=RPM LIMIT=0.0000 COOLANT=OFF T=- SMAX=3000.0000 SPINUP=1.500"
+    );
+    assert_eq!(panel.outputs, [out(Spindle::Off, 0, Coolant::Off)]);
+    for (bad, why) in [
+        (
+            "AUX SMAX=100000",
+            "ERR VALUE SMAX must be 0 to 99999.999 rpm",
+        ),
+        ("AUX SMAX=-1", "ERR VALUE SMAX must be 0 to 99999.999 rpm"),
+        ("AUX SPINUP=61", "ERR VALUE SPINUP must be 0 to 60 s"),
+        ("AUX SPINUP=x", "ERR VALUE SPINUP must be 0 to 60 s"),
+        ("AUX SMAX=1e3", "ERR VALUE SMAX must be 0 to 99999.999 rpm"),
+    ] {
+        assert!(tell(&mut dev, &mut panel, bad).starts_with(why), "{bad}");
+    }
+    tell(&mut dev, &mut panel, "OPT DIALECT=FANUC");
+    tell(&mut dev, &mut panel, "G50 S2500");
+    tell(&mut dev, &mut panel, "G00 X30. Z2.");
+    panel.outputs.clear();
+    // 180 m/min at Ø30: 1909.859 rpm; the spindle gets up to speed first.
+    tell(&mut dev, &mut panel, "G96 S180 M03");
+    assert_eq!(panel.outputs, [out(Spindle::Cw, 1_909_859, Coolant::Off)]);
+    assert_eq!(panel.dwells, [1_500_000]);
+    let status = tell(&mut dev, &mut panel, "STATUS");
+    assert!(
+        status.ends_with(" SPINDLE=CW S=1909.859 COOLANT=OFF"),
+        "{status}"
+    );
+    // The coolant switches alone: no spin-up wait.
+    tell(&mut dev, &mut panel, "M08");
+    assert_eq!(
+        panel.outputs[1],
+        out(Spindle::Cw, 1_909_859, Coolant::Flood)
+    );
+    assert_eq!(panel.dwells.len(), 1);
+    // Under G96 the speed follows X block by block, with no stop: each
+    // block carries the speed where it starts (Ø30, then Ø40: 1432.394).
+    tell(&mut dev, &mut panel, "G99 G01 X40. F.2");
+    tell(&mut dev, &mut panel, "X60. W-10.");
+    tell(&mut dev, &mut panel, "SYNC");
+    assert_eq!(panel.outputs.len(), 2);
+    let status = tell(&mut dev, &mut panel, "STATUS");
+    assert!(
+        status.ends_with(" SPINDLE=CW S=1432.394 COOLANT=FLOOD"),
+        "{status}"
+    );
+    // The top speed limits what is commanded, feed per revolution
+    // included: 5000 rpm asked, 3000 turned.
+    tell(&mut dev, &mut panel, "G50 S9000");
+    tell(&mut dev, &mut panel, "G97 S5000 M04");
+    assert_eq!(
+        panel.outputs[2],
+        out(Spindle::Ccw, 3_000_000, Coolant::Flood)
+    );
+    assert_eq!(panel.dwells, [1_500_000, 1_500_000]);
+    assert!(tell(&mut dev, &mut panel, "AUX").starts_with("OK SPINDLE=CCW S=3000.0000 "));
+    // A reset drops the outputs at once and forgets the G50 limit; the
+    // top speed stays, and is a limit at X0 under G96.
+    dev.receive_bytes(b"\x18", &mut panel);
+    assert_eq!(panel.outputs[3], out(Spindle::Off, 0, Coolant::Off));
+    tell(&mut dev, &mut panel, "G00 X0");
+    tell(&mut dev, &mut panel, "G96 S100 M03");
+    assert_eq!(panel.outputs[4], out(Spindle::Cw, 3_000_000, Coolant::Off));
+    // Taking the top speed away would leave it without one: refused, and
+    // nothing changes.
+    assert_eq!(
+        tell(&mut dev, &mut panel, "AUX SMAX=0"),
+        "ERR VALUE SMAX G96 surface speed at X0 needs a spindle speed limit (G50 S or G96 D)"
+    );
+    assert_eq!(panel.outputs.len(), 5);
+    assert!(tell(&mut dev, &mut panel, "STATUS").ends_with(" SPINDLE=CW S=3000.000 COOLANT=OFF"));
+    // The end of the program switches everything off.
+    tell(&mut dev, &mut panel, "M30");
+    assert_eq!(panel.outputs[5], out(Spindle::Off, 0, Coolant::Off));
+    assert!(tell(&mut dev, &mut panel, "STATUS").ends_with(" SPINDLE=OFF S=0.000 COOLANT=OFF"));
 }
