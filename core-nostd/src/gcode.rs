@@ -223,6 +223,18 @@ pub enum Special {
     RestoreShift,
 }
 
+/// Lecture 13's `G45`–`G48` (one block): each axis move of the block
+/// lengthened or shortened by the offset of register `D` for that axis,
+/// once or twice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PositionOffset {
+    /// `G45` +1 (lengthened by one offset), `G46` −1, `G47` +2, `G48` −2.
+    pub times: i8,
+    /// The offset register, 1 … [`crate::interp::TOOL_REGISTERS`].
+    pub register: u8,
+}
+
 /// A tool word: the tool, and in the Fanuc dialect its offset register.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -327,6 +339,8 @@ pub struct Block {
     pub tool_offset: Option<ToolOffset>,
     /// ISO M06: the tool named by `T` is put in.
     pub tool_change: bool,
+    /// `G45`–`G48` with its `D`.
+    pub position_offset: Option<PositionOffset>,
 }
 
 /// Why a block was refused.
@@ -554,6 +568,8 @@ pub fn parse_located(line: &str) -> Result<Block, Located> {
 struct Scan {
     units: Option<Units>,
     dwell: bool,
+    /// `G45`–`G48`: `D` is an offset register (also in the Fanuc dialect).
+    position_offset: bool,
 }
 
 fn scan(line: &str) -> Scan {
@@ -575,6 +591,7 @@ fn scan(line: &str) -> Scan {
                     Some(200) if found.units.is_none() => found.units = Some(Units::Inch),
                     Some(210) if found.units.is_none() => found.units = Some(Units::Mm),
                     Some(40) => found.dwell = true,
+                    Some(450 | 460 | 470 | 480) => found.position_offset = true,
                     _ => {}
                 }
                 pos += 1 + n;
@@ -602,6 +619,7 @@ struct Reading {
     dialect: Dialect,
     units: Units,
     dwell: bool,
+    position_offset: bool,
     /// The group-0 G code (G04, G50) and its column.
     once: Option<(u16, usize)>,
     /// The dwell time, µs.
@@ -622,6 +640,7 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
         dialect,
         units: scanned.units.unwrap_or(units),
         dwell: scanned.dwell,
+        position_offset: scanned.position_offset,
         once: None,
         time: None,
         p: None,
@@ -831,7 +850,11 @@ impl Reading {
             b'L' => self.l = Some((whole(letter, number)?, pos)),
             b'H' if !fanuc => self.h = Some((whole(letter, number)?, pos)),
             b'S' => b.s = Some(unitless(letter, number)?),
-            b'D' if !fanuc => self.d = Some((unitless(letter, number)?, pos)),
+            // ISO's spindle speed limit with G96; an offset register with
+            // G45–G48 (checked with the whole block).
+            b'D' if !fanuc || self.position_offset => {
+                self.d = Some((unitless(letter, number)?, pos))
+            }
             b'T' => b.tool = Some(tool_word(number, self.dialect)?),
             b'N' => {
                 Length::from_gcode_mm(number).map_err(|e| BlockError::Value(letter, e))?;
@@ -912,7 +935,9 @@ impl Reading {
                     SpindleMode::Rpm
                 },
             ),
-            40 | 100 | 280 | 300 | 530 => set(&mut self.once, (tenths, pos)),
+            40 | 100 | 280 | 300 | 530 | 450 | 460 | 470 | 480 => {
+                set(&mut self.once, (tenths, pos))
+            }
             540..=590 if tenths % 10 == 0 => set(&mut b.wcs, ((tenths - 540) / 10) as u8),
             700..=760 if tenths % 10 == 0 => Err(BlockError::Cycle(tenths)),
             // Fanuc system A.
@@ -1059,6 +1084,44 @@ impl Reading {
                     _ => Special::ClearShift(code == 922),
                 });
             }
+            Some(code @ (450 | 460 | 470 | 480)) => {
+                if b.i.is_some() || b.k.is_some() || b.r.is_some() {
+                    return Err((
+                        BlockError::Form("G45 to G48 move in a line: X and Z (U and W)"),
+                        once_at,
+                    ));
+                }
+                if b.x.is_none() && b.z.is_none() {
+                    return Err((
+                        BlockError::Form("G45 to G48 need X or Z (U or W): the move"),
+                        once_at,
+                    ));
+                }
+                let Some((d, at)) = self.d.take() else {
+                    return Err((
+                        BlockError::Form("G45 to G48 need D: the offset register"),
+                        once_at,
+                    ));
+                };
+                let register = d.as_angstrom() / 10_000_000;
+                if d.as_angstrom() % 10_000_000 != 0
+                    || !(1..=crate::interp::TOOL_REGISTERS as i64).contains(&register)
+                {
+                    return Err((
+                        BlockError::Form("D (the offset register) must be 1 to 32"),
+                        at,
+                    ));
+                }
+                b.position_offset = Some(PositionOffset {
+                    times: match code {
+                        450 => 1,
+                        460 => -1,
+                        470 => 2,
+                        _ => -2,
+                    },
+                    register: register as u8,
+                });
+            }
             Some(530) => {
                 if b.i.is_some() || b.k.is_some() || b.r.is_some() {
                     return Err((BlockError::Form("G53 moves in a line: X and Z"), once_at));
@@ -1126,7 +1189,9 @@ impl Reading {
         if let Some((d, at)) = self.d {
             if b.spindle_mode != Some(SpindleMode::Surface) {
                 return Err((
-                    BlockError::Form("D (the spindle speed limit) only with G96"),
+                    BlockError::Form(
+                        "D only with G96 (the spindle speed limit) or G45 to G48 (the offset register)",
+                    ),
                     at,
                 ));
             }
@@ -1269,7 +1334,9 @@ mod tests {
         assert_eq!(
             at("G97 S200 D3000"),
             (
-                BlockError::Form("D (the spindle speed limit) only with G96"),
+                BlockError::Form(
+                    "D only with G96 (the spindle speed limit) or G45 to G48 (the offset register)"
+                ),
                 10
             )
         );

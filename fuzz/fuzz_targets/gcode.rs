@@ -110,6 +110,7 @@ fn as_reference(b: &Block) -> RefBlock {
             ToolOffset::Off => (false, None),
         }),
         tool_change: b.tool_change,
+        position_offset: b.position_offset.map(|p| (p.times, p.register)),
         special: b.special.map(|s| match s {
             Special::Reference(n) => 280 + 20 * u16::from(n),
             Special::Store(n) => 281 + 20 * u16::from(n),
@@ -232,6 +233,15 @@ fn canonical(b: &RefBlock) -> String {
     }
     if let Some(g) = b.special {
         words.push(format!("G{}.{}", g / 10, g % 10));
+    }
+    if let Some((times, register)) = b.position_offset {
+        let g = match times {
+            1 => 45,
+            -1 => 46,
+            2 => 47,
+            _ => 48,
+        };
+        words.push(format!("G{g} D{register}"));
     }
     match b.tool_offset {
         Some((true, Some(h))) => words.push(format!("G43 H{h}")),

@@ -1136,6 +1136,8 @@ pub struct RefBlock {
     /// work coordinates, in tenths: G28, G30 (with their way point), G28.1,
     /// G30.1 (store), G53, G92 (Fanuc G50 X Z), G92.1, G92.2, G92.3.
     pub special: Option<u16>,
+    /// G45–G48 (+1, −1, +2, −2) and D, the offset register.
+    pub position_offset: Option<(i8, u8)>,
 }
 
 /// Why the reference reading refuses a block.
@@ -1197,11 +1199,12 @@ pub fn parse_gcode_inch(text: &str) -> Result<i64, LengthRefusal> {
 
 /// The unit a line's own `G20`/`G21` sets (true: inch): the first such
 /// word outside comments, before any `;`.
-/// The line's first `G20`/`G21` (true for inches), and whether it holds a
-/// `G4`, outside comments and before `;`.
-fn reference_scan(line: &str) -> (Option<bool>, bool) {
+/// The line's first `G20`/`G21` (true for inches), whether it holds a
+/// `G4`, and whether a `G45`–`G48`, outside comments and before `;`.
+fn reference_scan(line: &str) -> (Option<bool>, bool, bool) {
     let mut units = None;
     let mut dwell = false;
+    let mut g45 = false;
     let mut in_comment = false;
     let chars: Vec<char> = line.chars().collect();
     let mut i = 0;
@@ -1231,6 +1234,7 @@ fn reference_scan(line: &str) -> (Option<bool>, bool) {
                         Ok(20) if units.is_none() => units = Some(true),
                         Ok(21) if units.is_none() => units = Some(false),
                         Ok(4) => dwell = true,
+                        Ok(45..=48) => g45 = true,
                         _ => {}
                     }
                 }
@@ -1238,7 +1242,7 @@ fn reference_scan(line: &str) -> (Option<bool>, bool) {
             _ => {}
         }
     }
-    (units, dwell)
+    (units, dwell, g45)
 }
 
 /// A G-code number of millimetres: `[+-]` then `d+`, `d+.`, `d+.d+` or
@@ -1312,7 +1316,8 @@ pub fn reference_block_in(
 ) -> Result<RefBlock, RefBlockError> {
     let mut b = RefBlock::default();
     let mut seen = [false; 26];
-    let (units, dwell) = reference_scan(line);
+    let (units, dwell, g45_line) = reference_scan(line);
+    let mut g45 = None::<i8>;
     let inch = units.unwrap_or(modal_inch);
     // G4 given, its time (µs), and D (×10⁷), for the checks at the end.
     let mut g4 = false;
@@ -1437,7 +1442,7 @@ pub fn reference_block_in(
                         *slot = Some(v);
                         Ok(())
                     }
-                    let group0 = g4 || g50 || g10 || b.special.is_some();
+                    let group0 = g4 || g50 || g10 || b.special.is_some() || g45.is_some();
                     match (code, tenth) {
                         (28 | 30, 1) | (92, 1..=3) if fanuc => {
                             return Err(RefBlockError::OtherDialect)
@@ -1468,6 +1473,17 @@ pub fn reference_block_in(
                                 return Err(RefBlockError::Repeated(b'G'));
                             }
                             b.special = Some(code * 10);
+                        }
+                        (45..=48, _) => {
+                            if group0 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            g45 = Some(match code {
+                                45 => 1,
+                                46 => -1,
+                                47 => 2,
+                                _ => -2,
+                            });
                         }
                         (54..=59, _) => put(&mut b.wcs, code as u8 - 54)?,
                         (43 | 49, _) if fanuc => return Err(RefBlockError::OtherDialect),
@@ -1556,7 +1572,7 @@ pub fn reference_block_in(
                         value(parse_gcode_mm(number))?;
                     }
                     b'S' => b.s = Some(unitless(7)?),
-                    b'D' if !fanuc => d = Some(unitless(7)?),
+                    b'D' if !fanuc || g45_line => d = Some(unitless(7)?),
                     b'P' if dwell => {
                         if time.is_some() {
                             return Err(RefBlockError::Form);
@@ -1632,6 +1648,18 @@ pub fn reference_block_in(
     let ikr = b.xzikr[2..].iter().any(Option::is_some);
     let axes = b.xzikr[0].is_some() || b.xzikr[1].is_some();
     let u_w = b.from_u_w.contains(&true);
+    if let Some(times) = g45 {
+        // G45–G48: a line move and the register D, 1 … 32.
+        if ikr || !axes {
+            return Err(RefBlockError::Form);
+        }
+        match d.take() {
+            Some(v) if v % 10_000_000 == 0 && (1..=32).contains(&(v / 10_000_000)) => {
+                b.position_offset = Some((times, (v / 10_000_000) as u8));
+            }
+            _ => return Err(RefBlockError::Form),
+        }
+    }
     match b.special {
         // G28, G30: X Z (U W) a way point, nothing else.
         Some(280 | 300) if ikr => return Err(RefBlockError::Form),

@@ -866,6 +866,9 @@ impl Session {
             let inc = modal.incremental || b.incremental_z;
             target[1] = step(self.prog[1], z, inc, "Z beyond 99999.999999 mm")?;
         }
+        if let Some(po) = b.position_offset {
+            target = self.position_offset(po, &modal, &offsets, words, target, &b)?;
+        }
         let has_end = words.0.is_some() || words.1.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
         let a = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
@@ -1132,6 +1135,57 @@ impl Session {
             )),
         );
         Ok(())
+    }
+
+    /// Lecture 13's `G45`–`G48`: each axis move the block names, from the
+    /// programmed point to `target`, lengthened (shortened) by the
+    /// register's offset for that axis (geometry plus wear; X on the
+    /// radius), once or twice. A move of zero goes the offset's way, as if
+    /// it were positive (Fanuc's rule).
+    fn position_offset(
+        &self,
+        po: crate::gcode::PositionOffset,
+        modal: &Modal,
+        offsets: &Offsets,
+        words: (Option<Length>, Option<Length>),
+        mut target: [Length; 2],
+        b: &crate::gcode::Block,
+    ) -> Result<[Length; 2], Refusal<'static>> {
+        if !matches!(modal.motion, Motion::Rapid | Motion::Linear) {
+            return Err(Refusal::Missing("G45 to G48 move in a line: G00 or G01"));
+        }
+        if self.contour.active() || b.compensation.is_some() {
+            return Err(Refusal::Busy("G45 to G48 with nose compensation"));
+        }
+        let beyond = "G45 to G48: the move with its offset beyond 99999.999999 mm";
+        let k = offsets
+            .tools
+            .get(usize::from(po.register).wrapping_sub(1))
+            .and_then(|t| t.offset())
+            .ok_or(Refusal::Range(beyond))?;
+        let given = [words.0.is_some(), words.1.is_some()];
+        for axis in 0..2 {
+            let (Some(&on), Some(&k), Some(t), Some(&from)) = (
+                given.get(axis),
+                k.get(axis),
+                target.get_mut(axis),
+                self.prog.get(axis),
+            ) else {
+                continue;
+            };
+            if !on {
+                continue;
+            }
+            let m = t.checked_sub(from).ok_or(Refusal::Range(beyond))?;
+            let sign: i64 = if m < Length::ZERO { -1 } else { 1 };
+            let delta = k
+                .as_angstrom()
+                .checked_mul(i64::from(po.times) * sign)
+                .and_then(Length::from_angstrom)
+                .ok_or(Refusal::Range(beyond))?;
+            *t = t.checked_add(delta).ok_or(Refusal::Range(beyond))?;
+        }
+        Ok(target)
     }
 
     /// The tool selection and the offsets after a block's `G54`–`G59`,

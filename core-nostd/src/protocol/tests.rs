@@ -1452,3 +1452,79 @@ fn the_spindle_and_coolant_outputs_follow_the_program_and_status_reports_them() 
     assert_eq!(panel.outputs[5], out(Spindle::Off, 0, Coolant::Off));
     assert!(tell(&mut dev, &mut panel, "STATUS").ends_with(" SPINDLE=OFF S=0.000 COOLANT=OFF"));
 }
+
+#[test]
+fn g45_to_g48_lengthen_and_shorten_the_move_by_an_offset_register() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=FANUC");
+    // X on the diameter: 1 mm is 0.5 on the radius.
+    ask1(&mut dev, "TOOL N=5 X=1 Z=0.15 WZ=0.05");
+    let last =
+        |dev: &mut Device, line: &str| ask(dev, std::format!("{line}\n").as_bytes()).pop().unwrap();
+    assert!(last(&mut dev, "G01 F100 W0").starts_with("OK"));
+    let nz = |dev: &mut Device, line: &str| -> String {
+        let r = ask(dev, std::format!("{line}\n").as_bytes());
+        let last = r.last().unwrap().clone();
+        last.split(' ').take(3).collect::<Vec<_>>().join(" ")
+    };
+    // Z's offset is geometry plus wear: 0.2 mm, 20 impulses of 0.01.
+    for (line, want) in [
+        ("G45 W-10. D5", "OK NX=0 NZ=-1020"),
+        ("G46 W-10. D5", "OK NX=0 NZ=-980"),
+        ("G47 W-10. D5", "OK NX=0 NZ=-1040"),
+        ("G48 W-10. D5", "OK NX=0 NZ=-960"),
+        // A move of zero goes the offset's way.
+        ("G45 W0 D5", "OK NX=0 NZ=20"),
+        ("G46 W0 D5", "OK NX=0 NZ=-20"),
+        // U10 is 5 on the radius, with 0.5: 5.5, 1100 impulses of 0.005.
+        ("G45 U10. D5", "OK NX=1100 NZ=0"),
+        // Absolute words: the move from where the tool is.
+        ("G46 X0 D5", "OK NX=-1000 NZ=0"),
+        // One block only: the next move is as written.
+        ("W-1.", "OK NX=0 NZ=-100"),
+    ] {
+        assert_eq!(nz(&mut dev, line), want, "{line}");
+    }
+    let before = state(&mut dev);
+    for (line, why) in [
+        (
+            "G45 W-1.",
+            "ERR SYNTAX G45 to G48 need D: the offset register",
+        ),
+        (
+            "G45 W1. D33",
+            "ERR SYNTAX D (the offset register) must be 1 to 32",
+        ),
+        (
+            "G45 W1. D1.5",
+            "ERR SYNTAX D (the offset register) must be 1 to 32",
+        ),
+        (
+            "G45 D5",
+            "ERR SYNTAX G45 to G48 need X or Z (U or W): the move",
+        ),
+        (
+            "G45 W1. K1. D5",
+            "ERR SYNTAX G45 to G48 move in a line: X and Z (U and W)",
+        ),
+        (
+            "G45 G02 W1. D5",
+            "ERR SYNTAX G45 to G48 move in a line: G00 or G01",
+        ),
+        ("G45 G28 W1. D5", "ERR SYNTAX address given twice: G"),
+        ("G01 W1. D5", "ERR SYNTAX unknown address D"),
+        ("G45 G41 W1. D5", "ERR"),
+    ] {
+        let got = last(&mut dev, line);
+        assert!(got.starts_with(why), "{line}: {got}");
+    }
+    assert_eq!(state(&mut dev), before);
+    // ISO: D is also G96's limit; with G45 it names the register.
+    let mut iso = Device::new();
+    ask1(&mut iso, "TOOL N=2 Z=-0.3");
+    assert!(last(&mut iso, "G91 G00 Z0").starts_with("OK"));
+    assert_eq!(nz(&mut iso, "G45 Z-5 D2"), "OK NX=0 NZ=-470");
+    assert!(last(&mut iso, "G01 Z1 D2").starts_with(
+        "ERR SYNTAX D only with G96 (the spindle speed limit) or G45 to G48 (the offset register)"
+    ));
+}
