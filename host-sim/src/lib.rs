@@ -14,6 +14,9 @@
 //!   injector; [`soak`]: long faulted sessions against the reference;
 //! - [`reference_motion`]: the f64 reference of motion in time (planner and
 //!   step timer), written from `docs/motion.md`;
+//! - [`reference_trihedral`]: the trihedral-angle set-up built from three
+//!   edge vectors (dot and cross products), independent of the calculator;
+//! - [`table`]: what the calculators print: text, CSV or JSON;
 //! - [`reference_comp`]: the f64 reference of nose radius compensation
 //!   (G41/G42 contours), written from `docs/compensation.md`;
 //! - [`contour`]: random compensated contours and their block-by-block
@@ -46,7 +49,9 @@ pub mod reference_arc;
 pub mod reference_comp;
 pub mod reference_cone;
 pub mod reference_motion;
+pub mod reference_trihedral;
 pub mod reliable;
 pub mod scenario;
 pub mod soak;
 pub mod stream;
+pub mod table;
