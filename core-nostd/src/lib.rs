@@ -20,6 +20,8 @@
 //!   spindle, coolant, tool) and a block's feed and spindle speed.
 //! - [`outputs`]: the spindle's run, direction and speed (a PWM duty)
 //!   and the coolant, as the board drives them.
+//! - [`calc`]: the seeds' other calculators (deflection, wear, threading
+//!   speed, tapes, the trihedral-angle set-up), in `f64`.
 //! - [`cone`]: taper corrections for a tool nose radius (Krylenko, Nomura).
 //! - [`crc32`]: the CRC-32 that fingerprints a block's step sequence (`SEQ`).
 //! - [`protocol`]: the pendant line protocol, bytes in, reply lines out.
@@ -56,6 +58,7 @@
 #![warn(missing_docs)]
 
 pub mod arc;
+pub mod calc;
 pub mod comp;
 pub mod cone;
 pub mod crc32;

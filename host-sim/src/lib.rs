@@ -17,6 +17,7 @@
 //! - [`reference_trihedral`]: the trihedral-angle set-up built from three
 //!   edge vectors (dot and cross products), independent of the calculator;
 //! - [`table`]: what the calculators print: text, CSV or JSON;
+//! - [`calculators`]: `thread-speed`, `trihedral`, `deflection`, `wear`;
 //! - [`reference_comp`]: the f64 reference of nose radius compensation
 //!   (G41/G42 contours), written from `docs/compensation.md`;
 //! - [`contour`]: random compensated contours and their block-by-block
@@ -31,8 +32,10 @@
 //! - [`program`]: `host-sim run FILE`, a whole program through the
 //!   in-process device in virtual time (cycle time, travel, tools,
 //!   refusals, the path);
+//! - [`plot`]: `host-sim plot FILE`, the program drawn as an SVG picture;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
+pub mod calculators;
 pub mod check;
 pub mod compare;
 pub mod compensate;
@@ -42,6 +45,7 @@ pub mod device;
 pub mod dialect;
 pub mod expand;
 pub mod link;
+pub mod plot;
 pub mod program;
 pub mod qemu;
 pub mod reference;

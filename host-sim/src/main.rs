@@ -70,6 +70,201 @@ enum Command {
         #[arg(long, default_value = "auto")]
         dialect: String,
     },
+    /// Draw a G-code program as an SVG picture (Z to the right, X up, equal
+    /// scale, X ticks as diameters): the part as programmed, the tool tip
+    /// the device ran and the nose centre, rapids dashed, refused lines
+    /// marked; exit status 1 if the device refused a line.
+    Plot {
+        /// The G-code program.
+        file: std::path::PathBuf,
+        /// The SVG file to write (default: FILE with the extension .svg;
+        /// `-` for standard output).
+        #[arg(short, long, value_name = "OUT.svg")]
+        output: Option<std::path::PathBuf>,
+        /// The program's dialect: iso (LinuxCNC, grbl), fanuc (Fanuc/Haas
+        /// G-code system A), or auto (from its words).
+        #[arg(long, default_value = "auto")]
+        dialect: String,
+        /// X words are radii at the start (as LinuxCNC's G8), not diameters.
+        #[arg(long)]
+        radius: bool,
+        /// A file of setup requests sent before the program (`TOOL N=1
+        /// X=-2.5 Z=1.2 R=0.4 T=3`, `WORK G=54 Z=-120`), as for `run`.
+        #[arg(long, value_name = "FILE")]
+        tools: Option<std::path::PathBuf>,
+        /// Show only this window (mm, X a diameter), with the chords the
+        /// device cut the arcs into and its impulse steps.
+        #[arg(long, value_name = "Z0,X0,Z1,X1", allow_hyphen_values = true)]
+        zoom: Option<host_sim::plot::Window>,
+    },
+    /// The highest spindle speed a thread can be cut at: the ЭМ-907's rule
+    /// (modes G06–G09) and this controller's axis feed limit. Example:
+    /// `host-sim thread-speed 1.5`, `host-sim thread-speed 2 --mode G07 --cross`.
+    ThreadSpeed {
+        /// The thread's pitch, mm.
+        #[arg(value_name = "PITCH_MM")]
+        pitch: f64,
+        /// The ЭМ-907 mode: G06, G07, G08 or G09 (the pitch word ×1, ×2, ×4,
+        /// ×8; capped at 240, 480, 960, 1920 rpm); default the fastest the
+        /// pitch allows.
+        #[arg(long)]
+        mode: Option<String>,
+        /// A thread across (X, 0.005 mm impulses) rather than along Z.
+        #[arg(long)]
+        cross: bool,
+        /// The axis' feed limit for this controller's rule, mm/min (default
+        /// the power-on LIMITS: VZ 3000, VX 1500).
+        #[arg(long, value_name = "MM_PER_MIN")]
+        feed_limit: Option<f64>,
+        #[command(flatten)]
+        out: host_sim::table::OutArgs,
+    },
+    /// Set up a trihedral corner on a tilt-rotary table (Lyakun & Yurkevich,
+    /// exact spherical trigonometry): the cutter angle φ, the table's
+    /// rotation and tilt, the edges, the rows, Z min; `--gcode` prints the
+    /// program (a main program and a row subprogram). Example: `host-sim
+    /// trihedral 90 90 90 --step 0.5 --rows 20 --lengths 10,10,12`.
+    Trihedral {
+        /// Plane angle AOB (the base face), degrees; `-` when not given (then
+        /// a linear angle instead, `--linear`).
+        #[arg(allow_hyphen_values = true)]
+        aob: String,
+        /// Plane angle BOC, degrees, or `-`.
+        #[arg(allow_hyphen_values = true)]
+        boc: String,
+        /// Plane angle COA, degrees, or `-`.
+        #[arg(allow_hyphen_values = true)]
+        coa: String,
+        /// Linear (dihedral) angles at OA, OB, OC in degrees, `-` for one not
+        /// given: three angles in all fix the corner (e.g. `90 90 - --linear
+        /// -,90,-`).
+        #[arg(long, value_name = "OA,OB,OC")]
+        linear: Option<String>,
+        /// The step between rows in Z (h), mm.
+        #[arg(long, default_value_t = 0.5)]
+        step: f64,
+        /// The number of rows (КОН).
+        #[arg(long, default_value_t = 10)]
+        rows: u16,
+        /// The lengths milled along OA, OB, OC, mm.
+        #[arg(long, value_name = "LA,LB,LC", default_value = "10,10,10")]
+        lengths: String,
+        /// The radius of the fillet along OC left by pre-milling, mm.
+        #[arg(long, default_value_t = 0.0)]
+        fillet: f64,
+        /// The table's parameters L (tilt axis to the rotation axis) and m
+        /// (table surface to the tilt axis), mm.
+        #[arg(long, value_name = "L,M", default_value = "0,0")]
+        table: String,
+        /// E: the angle of ray OA to X, degrees.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        e: f64,
+        /// k_v: the quadrant of the base face, 1 to 4.
+        #[arg(long, default_value_t = 1)]
+        quadrant: u8,
+        /// The vertex in the part's frame, mm.
+        #[arg(
+            long,
+            value_name = "X,Y,Z",
+            default_value = "0,0,0",
+            allow_hyphen_values = true
+        )]
+        vertex: String,
+        /// The paper's proportional central angles, for comparison only.
+        #[arg(long)]
+        proportional: bool,
+        /// Print the program instead of the tables.
+        #[arg(long)]
+        gcode: bool,
+        #[command(flatten)]
+        out: host_sim::table::OutArgs,
+    },
+    /// Deflection of a part between centres and the "mirror image" pass
+    /// (Kosenko eq. 16–31, Tables 7–9): x, compliance Σ(x), the error of an
+    /// uncompensated pass, the depth and diameter to set; `--gcode` prints
+    /// the compensated generatrix (Z0 at the tailstock face). Example:
+    /// `host-sim deflection --section 29.8:100 --section 21.8:150 --depth 0.5
+    /// --feed 0.2 --hardness 220 --stiffness 4000,3000,10000`.
+    Deflection {
+        /// A section from the headstock: DIAMETER:LENGTH, mm (repeat for a
+        /// stepped shaft).
+        #[arg(long = "section", value_name = "D:L", required = true)]
+        sections: Vec<String>,
+        /// The reduced diameter by equal volume (eq. 31: thickened on one
+        /// side) rather than length-weighted (eq. 30).
+        #[arg(long)]
+        equal_volume: bool,
+        /// Young's modulus, kgf/mm².
+        #[arg(long, default_value_t = 21_000.0)]
+        modulus: f64,
+        /// Headstock, tailstock and saddle stiffness, kgf/mm.
+        #[arg(long, value_name = "JH,JT,JS")]
+        stiffness: String,
+        /// The depth of cut t, mm.
+        #[arg(long)]
+        depth: f64,
+        /// The feed S, mm/rev.
+        #[arg(long, default_value_t = 0.2)]
+        feed: f64,
+        /// The steel's hardness, HB.
+        #[arg(long, default_value_t = 200.0)]
+        hardness: f64,
+        /// The tool's approach angle φ, degrees (Table 8: 30, 45, 60, 75, 90).
+        #[arg(long, default_value_t = 90.0)]
+        approach: f64,
+        /// The nose radius, mm (Table 8).
+        #[arg(long, default_value_t = 1.0)]
+        nose: f64,
+        /// The radial force law P = C·t^x given directly, C in kgf, instead
+        /// of from the tables.
+        #[arg(long, value_name = "C,X")]
+        force: Option<String>,
+        /// The sampling step Δx, mm.
+        #[arg(long, default_value_t = 10.0)]
+        step: f64,
+        /// The spindle speed the printed program turns at, rpm.
+        #[arg(long, default_value_t = 400.0)]
+        rpm: f64,
+        /// Print the compensated pass as G-code instead of the table.
+        #[arg(long)]
+        gcode: bool,
+        #[command(flatten)]
+        out: host_sim::table::OutArgs,
+    },
+    /// Tool wear over a batch (Kosenko eq. 31–35): the cutting path per part,
+    /// the wear after Q parts, the parts between re-settings and until the
+    /// tool change, the radial wear from flank wear. Example: `host-sim wear
+    /// --section 40:120 --feed 0.2 --initial 5 --rate 8 --parts 50
+    /// --resetting 20,50`.
+    Wear {
+        /// A surface cut per part: DIAMETER:LENGTH, mm (repeat).
+        #[arg(long = "section", value_name = "D:L", required = true)]
+        sections: Vec<String>,
+        /// The feed S, mm/rev.
+        #[arg(long)]
+        feed: f64,
+        /// The initial wear u_initial, µm.
+        #[arg(long, default_value_t = 0.0)]
+        initial: f64,
+        /// The relative wear u0, µm/km (Table 14).
+        #[arg(long)]
+        rate: f64,
+        /// The parts Q made.
+        #[arg(long, default_value_t = 1)]
+        parts: u32,
+        /// The wear allowed before a re-setting and the tolerance δ, µm.
+        #[arg(long, value_name = "U,DELTA")]
+        resetting: Option<String>,
+        /// The wear at which the tool is changed, µm.
+        #[arg(long, value_name = "U")]
+        change_at: Option<f64>,
+        /// The flank wear h (mm) and the clearance angle (degrees), for the
+        /// radial wear u = h·tan α.
+        #[arg(long, value_name = "H,ALPHA")]
+        flank: Option<String>,
+        #[command(flatten)]
+        out: host_sim::table::OutArgs,
+    },
     /// Serve the in-process device for a terminal or another program.
     Serve {
         /// Serve on standard input and output.
@@ -209,6 +404,76 @@ fn compensate(
     }
 }
 
+/// `host-sim plot`: the picture written to a file (or standard output),
+/// refusals and remarks on stderr; exit 1 when the device refused a line
+/// (the picture marks it).
+fn plot(
+    file: &std::path::Path,
+    output: Option<std::path::PathBuf>,
+    dialect: &str,
+    radius: bool,
+    tools: Option<&std::path::Path>,
+    zoom: Option<host_sim::plot::Window>,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let f = file.display();
+    let text = std::fs::read_to_string(file).map_err(|e| format!("cannot read {f}: {e}"))?;
+    let (dialect, note) =
+        host_sim::dialect::choose(dialect, &text).map_err(|e| format!("{f}: {e}"))?;
+    if let Some(note) = note {
+        eprintln!("{f}: {note}");
+    }
+    let setup_text = match tools {
+        Some(path) => std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?,
+        None => String::new(),
+    };
+    let setup = host_sim::program::setup_lines(&setup_text);
+    let options = host_sim::plot::Options {
+        program: host_sim::program::Options {
+            dialect,
+            radius,
+            optional_stop: false,
+        },
+        zoom,
+    };
+    let paths = host_sim::plot::trace(&text, &options, &setup);
+    if let Some(e) = &paths.expand_error {
+        eprintln!("{f}:{e}");
+        return Ok(ExitCode::from(1));
+    }
+    let setup_name = tools.map_or(String::new(), |p| p.display().to_string());
+    for r in &paths.setup_refused {
+        eprintln!("{setup_name}:{}: {}", r.line, r.reply);
+    }
+    for m in &paths.refused {
+        eprintln!("{f}:{}: {}", m.line, m.reply);
+    }
+    for n in &paths.notes {
+        eprintln!("{f}: {n}");
+    }
+    let picture = host_sim::plot::render(&paths, &f.to_string(), zoom)?;
+    let out = output.unwrap_or_else(|| file.with_extension("svg"));
+    if out.as_os_str() == "-" {
+        std::io::stdout().write_all(picture.svg.as_bytes())?;
+    } else {
+        std::fs::write(&out, &picture.svg)
+            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        eprintln!(
+            "{f}: {} blocks drawn, {} refused: {}",
+            paths.tip.len(),
+            paths.refused.len(),
+            out.display()
+        );
+    }
+    Ok(
+        if paths.refused.is_empty() && paths.setup_refused.is_empty() {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::from(1)
+        },
+    )
+}
+
 fn check(file: &std::path::Path, dialect: &str) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let bytes = std::fs::read(file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
     let text = String::from_utf8_lossy(&bytes);
@@ -247,6 +512,150 @@ fn main() -> ExitCode {
             dialect,
         } => compensate(&file, rn, tip, !radius, &dialect),
         Command::Check { file, dialect } => check(&file, &dialect),
+        Command::Plot {
+            file,
+            output,
+            dialect,
+            radius,
+            tools,
+            zoom,
+        } => plot(&file, output, &dialect, radius, tools.as_deref(), zoom),
+        Command::ThreadSpeed {
+            pitch,
+            mode,
+            cross,
+            feed_limit,
+            out,
+        } => {
+            let limit = feed_limit.unwrap_or(if cross { 1500.0 } else { 3000.0 });
+            emit(
+                host_sim::calculators::thread_speed(pitch, mode.as_deref(), cross, limit)
+                    .map(|r| (r, String::new())),
+                out,
+                false,
+            )
+        }
+        Command::Trihedral {
+            aob,
+            boc,
+            coa,
+            linear,
+            step,
+            rows,
+            lengths,
+            fillet,
+            table,
+            e,
+            quadrant,
+            vertex,
+            proportional,
+            gcode,
+            out,
+        } => emit(
+            trihedral_args(
+                &[aob, boc, coa],
+                linear.as_deref(),
+                &lengths,
+                &table,
+                &vertex,
+            )
+            .and_then(|(angles, lengths, table, vertex)| {
+                host_sim::calculators::trihedral(
+                    angles,
+                    &host_sim::calculators::TrihedralJob {
+                        step_mm: step,
+                        rows,
+                        lengths_mm: lengths,
+                        fillet_mm: fillet,
+                        table,
+                        e_deg: e,
+                        quadrant,
+                        vertex,
+                        proportional,
+                    },
+                )
+            }),
+            out,
+            gcode,
+        ),
+        Command::Deflection {
+            sections,
+            equal_volume,
+            modulus,
+            stiffness,
+            depth,
+            feed,
+            hardness,
+            approach,
+            nose,
+            force,
+            step,
+            rpm,
+            gcode,
+            out,
+        } => emit(
+            (|| {
+                let job = host_sim::calculators::DeflectionJob {
+                    sections: sections
+                        .iter()
+                        .map(|s| host_sim::calculators::parse_section(s))
+                        .collect::<Result<_, _>>()?,
+                    equal_volume,
+                    modulus,
+                    stiffness: numbers::<3>("stiffness", &stiffness)?,
+                    depth_mm: depth,
+                    feed_mm_rev: feed,
+                    hardness_hb: hardness,
+                    approach_deg: approach,
+                    nose_mm: nose,
+                    force: force
+                        .as_deref()
+                        .map(|f| numbers::<2>("force", f).map(|[c, x]| (c, x)))
+                        .transpose()?,
+                    step_mm: step,
+                    rpm,
+                };
+                host_sim::calculators::deflection(&job)
+            })(),
+            out,
+            gcode,
+        ),
+        Command::Wear {
+            sections,
+            feed,
+            initial,
+            rate,
+            parts,
+            resetting,
+            change_at,
+            flank,
+            out,
+        } => emit(
+            (|| {
+                let job = host_sim::calculators::WearJob {
+                    sections: sections
+                        .iter()
+                        .map(|s| host_sim::calculators::parse_section(s))
+                        .collect::<Result<_, _>>()?,
+                    feed_mm_rev: feed,
+                    initial_um: initial,
+                    rate_um_per_km: rate,
+                    parts,
+                    resetting: resetting
+                        .as_deref()
+                        .map(|r| numbers::<2>("resetting", r).map(|[u, d]| (u, d)))
+                        .transpose()?,
+                    full_um: change_at,
+                    flank: flank
+                        .as_deref()
+                        .map(|f| numbers::<2>("flank", f).map(|[h, a]| (h, a)))
+                        .transpose()?,
+                };
+                host_sim::calculators::wear(&job).map(|r| (r, String::new()))
+            })(),
+            out,
+            false,
+        ),
         Command::Serve {
             stdio: _,
             pty: true,
@@ -779,4 +1188,86 @@ fn report_scenario(s: &Scenario, before: &Tally, after: &Tally) {
         after.events - before.events,
         after.mismatches.len() - before.mismatches.len()
     );
+}
+
+/// Prints a calculator's answer (or its program with `--gcode`); a domain
+/// error is named on standard error with exit status 1.
+fn emit(
+    result: Result<(host_sim::table::Report, String), String>,
+    out: host_sim::table::OutArgs,
+    program: bool,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    match result {
+        Ok((report, gcode)) => {
+            if program {
+                print!("{gcode}");
+            } else {
+                print!("{}", report.render(out.format()));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(e) => {
+            eprintln!("host-sim: {e}");
+            Ok(ExitCode::from(1))
+        }
+    }
+}
+
+/// `N` comma-separated numbers of option `what`.
+fn numbers<const N: usize>(what: &str, text: &str) -> Result<[f64; N], String> {
+    let values = text
+        .split(',')
+        .map(|t| {
+            t.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("--{what}: {t} is not a number"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    <[f64; N]>::try_from(values)
+        .map_err(|v| format!("--{what}: {} numbers given, {N} wanted ({text})", v.len()))
+}
+
+/// Three angles or `-` each.
+fn maybe_angles(what: &str, items: &[&str]) -> Result<[Option<f64>; 3], String> {
+    let mut out = [None; 3];
+    if items.len() != 3 {
+        return Err(format!(
+            "{what}: three angles wanted, `-` for one not given"
+        ));
+    }
+    for (slot, t) in out.iter_mut().zip(items) {
+        let t = t.trim();
+        if t != "-" {
+            *slot = Some(
+                t.parse::<f64>()
+                    .map_err(|_| format!("{what}: {t} is not an angle in degrees"))?,
+            );
+        }
+    }
+    Ok(out)
+}
+
+type TrihedralInputs = (host_sim::calculators::Angles, [f64; 3], [f64; 2], [f64; 3]);
+
+fn trihedral_args(
+    plane: &[String],
+    linear: Option<&str>,
+    lengths: &str,
+    table: &str,
+    vertex: &str,
+) -> Result<TrihedralInputs, String> {
+    let plane: Vec<&str> = plane.iter().map(String::as_str).collect();
+    let angles = host_sim::calculators::Angles {
+        plane: maybe_angles("plane angles", &plane)?,
+        linear: match linear {
+            Some(l) => maybe_angles("--linear", &l.split(',').collect::<Vec<_>>())?,
+            None => [None; 3],
+        },
+    };
+    Ok((
+        angles,
+        numbers::<3>("lengths", lengths)?,
+        numbers::<2>("table", table)?,
+        numbers::<3>("vertex", vertex)?,
+    ))
 }

@@ -40,7 +40,14 @@ pub enum Cell {
 impl Cell {
     fn plain(&self) -> String {
         match self {
-            Cell::Num(v, d) => format!("{v:.d$}"),
+            Cell::Num(v, d) => {
+                let t = format!("{v:.d$}");
+                // No "-0.000": a value that rounds to zero has no sign.
+                match t.strip_prefix('-') {
+                    Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
+                    _ => t,
+                }
+            }
             Cell::Int(n) => n.to_string(),
             Cell::Text(t) => t.clone(),
         }
@@ -183,7 +190,7 @@ impl Report {
                 for (i, w) in widths.iter().enumerate() {
                     let item = items.get(i).map_or("", String::as_str);
                     let pad = w - item.chars().count();
-                    let _ = write!(out, " {}{item}", " ".repeat(pad));
+                    let _ = write!(out, "  {}{item}", " ".repeat(pad));
                 }
                 let _ = writeln!(s, "{}", out.trim_end());
             };
@@ -280,9 +287,9 @@ mod tests {
         let t = sample().render(Format::Text);
         assert!(t.contains("  cone half-angle φ 35.26439°\n"), "{t}");
         assert!(t.contains("  n max             240 rpm\n"), "{t}");
-        assert!(t.contains("  x, mm   what\n"), "{t}");
-        assert!(t.contains("  200.0      c\n"), "{t}");
-        assert!(t.contains("   10.0 a, \"b\"\n"), "{t}");
+        assert!(t.contains("   x, mm    what\n"), "{t}");
+        assert!(t.contains("   200.0       c\n"), "{t}");
+        assert!(t.contains("    10.0  a, \"b\"\n"), "{t}");
     }
 
     #[test]

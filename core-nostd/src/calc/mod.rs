@@ -1,0 +1,8 @@
+//! The seeds' other calculators: what a machinist on an old lathe works
+//! out by hand from the same books (`SPEC.md` §11). Floating point (`f64`,
+//! `libm`) is fine here: nothing of it moves an axis.
+
+pub mod deflection;
+pub mod thread;
+pub mod trihedral;
+pub mod wear;
