@@ -4,7 +4,7 @@
 //! the core's (`core_nostd::calc`).
 
 use crate::table::{field, Cell, Report};
-use core_nostd::calc::{deflection, thread, trihedral, wear};
+use core_nostd::calc::{deflection, tape, thread, trihedral, wear};
 
 /// What a calculator says when its input is outside its domain.
 pub type CalcResult<T> = Result<T, String>;
@@ -483,4 +483,84 @@ pub fn parse_section(s: &str) -> Result<(f64, f64), String> {
             .map_err(|_| format!("section {s}: {t} is not a number of mm"))
     };
     Ok((num(d)?, num(l)?))
+}
+
+/// `tape verify FILE`: a BCK-5 listing (one frame per line as the seed
+/// prints them, Cyrillic or the Latin look-alikes) checked frame by frame
+/// (check digits, numbering) and tool by tool (Σ+ + Σ− = 0 on each axis);
+/// an ISO-7bit listing (blocks starting `N`) read block by block. The
+/// report lists every finding; the count decides the exit status.
+pub fn tape_verify(text: &str) -> (Report, usize) {
+    let mut r = Report::new("Tape verification");
+    r.columns = vec![field("line", "line", ""), field("finding", "finding", "")];
+    let iso = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .is_some_and(|l| l.starts_with(['N', 'n', ':', '%']));
+    let mut findings = 0usize;
+    if iso {
+        let mut blocks = 0;
+        for (n, line) in text.lines().enumerate() {
+            let line = line.trim();
+            if line.is_empty() || line == "%" {
+                continue;
+            }
+            match tape::Iso7Block::parse(line) {
+                Ok(_) => blocks += 1,
+                Err(e) => {
+                    findings += 1;
+                    r.rows
+                        .push(vec![Cell::Int(n as i64 + 1), Cell::Text(e.to_string())]);
+                }
+            }
+        }
+        r.value(
+            "format",
+            "format",
+            "",
+            Cell::Text("ISO-7bit (ЭМ-907)".into()),
+        );
+        r.value("blocks", "blocks read", "", Cell::Int(blocks));
+    } else {
+        let mut v = tape::Bck5Verifier::new();
+        let mut rows = Vec::new();
+        let mut push = |f: tape::Bck5Finding| {
+            let line = match f {
+                tape::Bck5Finding::Unreadable { line, .. }
+                | tape::Bck5Finding::CheckDigit { line, .. }
+                | tape::Bck5Finding::Numbering { line, .. } => i64::from(line),
+                tape::Bck5Finding::Closure { .. } => 0,
+            };
+            let at = if line > 0 {
+                Cell::Int(line)
+            } else {
+                Cell::Text("-".into())
+            };
+            rows.push(vec![at, Cell::Text(f.to_string())]);
+        };
+        for line in text.lines() {
+            v.line(line, &mut push);
+        }
+        let summary = v.finish(&mut push);
+        findings = summary.findings as usize;
+        r.rows = rows;
+        r.value(
+            "format",
+            "format",
+            "",
+            Cell::Text("BCK-5 (АТПр-2М12)".into()),
+        );
+        r.value(
+            "frames",
+            "frames read",
+            "",
+            Cell::Int(i64::from(summary.frames)),
+        );
+    }
+    r.value("findings", "findings", "", Cell::Int(findings as i64));
+    if findings == 0 {
+        r.columns.clear();
+    }
+    (r, findings)
 }

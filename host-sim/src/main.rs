@@ -265,6 +265,23 @@ enum Command {
         #[command(flatten)]
         out: host_sim::table::OutArgs,
     },
+    /// Check a punched-tape listing of the old controls: a BCK-5 tape of
+    /// the АТПр-2М12 (one frame per line as printed, e.g.
+    /// `2K002E212400D630000П75Ш26Н`; Cyrillic letters or the Latin
+    /// look-alikes, Ш as W and Я as R) for check digits, numbering and the
+    /// closure of each tool (Σ+ + Σ− = 0), or an ISO-7bit tape of the
+    /// ЭМ-907 (blocks starting N) block by block. Lists every failing frame
+    /// and tool; exit status 1 if there is any. Example: `host-sim tape
+    /// verify tape.txt`.
+    Tape {
+        /// What to do: `verify`.
+        #[arg(value_parser = ["verify"])]
+        action: String,
+        /// The tape listing.
+        file: std::path::PathBuf,
+        #[command(flatten)]
+        out: host_sim::table::OutArgs,
+    },
     /// Serve the in-process device for a terminal or another program.
     Serve {
         /// Serve on standard input and output.
@@ -656,6 +673,18 @@ fn main() -> ExitCode {
             out,
             false,
         ),
+        Command::Tape {
+            action: _,
+            file,
+            out,
+        } => match std::fs::read_to_string(&file) {
+            Ok(text) => {
+                let (report, findings) = host_sim::calculators::tape_verify(&text);
+                print!("{}", report.render(out.format()));
+                Ok(ExitCode::from(u8::from(findings > 0)))
+            }
+            Err(e) => Err(format!("cannot read {}: {e}", file.display()).into()),
+        },
         Command::Serve {
             stdio: _,
             pty: true,

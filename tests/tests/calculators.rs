@@ -143,3 +143,48 @@ fn wear_counts_parts_and_refuses_an_allowance_beyond_half_the_tolerance() {
     };
     assert!(calculators::wear(&bad).is_err());
 }
+
+#[test]
+fn the_seeds_bck5_tape_fails_exactly_where_it_was_misprinted() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/kosenko-table21.bck5"
+    ))
+    .unwrap();
+    let (r, findings) = calculators::tape_verify(&text);
+    let found: Vec<String> = r
+        .rows
+        .iter()
+        .map(|row| match &row[1] {
+            Cell::Text(t) => t.clone(),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    // Check digits of K000, K004, K007; the closure of the tools whose
+    // frames K011 (C01, both axes) and K021 (C02) break.
+    assert_eq!(findings, 6, "{found:#?}");
+    for (i, frame) in ["K000", "K004", "K007"].into_iter().enumerate() {
+        assert!(
+            found[i].starts_with(frame) && found[i].contains("check digit"),
+            "{found:#?}"
+        );
+    }
+    assert!(found[3].starts_with("tool C01 (K001-K011): E does not close"));
+    assert!(found[4].starts_with("tool C01 (K001-K011): D does not close"));
+    assert!(found[5].starts_with("tool C02 (K020-K024): E does not close"));
+    // The same tape with those slips mended passes.
+    let mended = text
+        .replace("0\tK000", "7\tK000")
+        .replace("D514800", "D504800")
+        .replace("8\tK007", "7\tK007");
+    let (_, left) = calculators::tape_verify(&mended);
+    assert!(left < findings, "{left}");
+    // A letter the code does not have is named with its column.
+    let (r, n) = calculators::tape_verify("5K001E000000D000000P00W00C01Q00H\n");
+    assert_eq!(n, 1);
+    assert!(
+        matches!(&r.rows[0][1], Cell::Text(t) if t.contains("column")),
+        "{:?}",
+        r.rows
+    );
+}

@@ -3,6 +3,7 @@
 //! `libm`) is fine here: nothing of it moves an axis.
 
 pub mod deflection;
+pub mod tape;
 pub mod thread;
 pub mod trihedral;
 pub mod wear;
