@@ -458,6 +458,12 @@ impl Tool {
         Tool { r, tip }
     }
 
+    /// The tip vector, nose centre to the theoretical tool tip, Å (X on the
+    /// radius, Z): what the tip code places where.
+    pub const fn tip_vector(&self) -> [i64; 2] {
+        self.tip
+    }
+
     /// The nose radius in ångström · 2¹⁶.
     const fn r(&self) -> i64 {
         self.r << FRAC

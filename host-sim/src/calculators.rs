@@ -298,12 +298,7 @@ pub struct DeflectionJob {
 /// compensated pass as G-code.
 pub fn deflection(job: &DeflectionJob) -> CalcResult<(Report, String)> {
     let e = |e: deflection::DeflectionError| e.to_string();
-    let sections = job
-        .sections
-        .iter()
-        .map(|&(d, l)| deflection::Section::new(d, l))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(e)?;
+    let sections = sections(&job.sections)?;
     let reduction = if job.equal_volume {
         deflection::Reduction::EqualVolume
     } else {
@@ -417,13 +412,7 @@ pub struct WearJob {
 /// re-settings and until the tool change, the radial wear from flank wear.
 pub fn wear(job: &WearJob) -> CalcResult<Report> {
     let e = |e: wear::WearError| e.to_string();
-    let de = |e: deflection::DeflectionError| e.to_string();
-    let sections = job
-        .sections
-        .iter()
-        .map(|&(d, l)| deflection::Section::new(d, l))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(de)?;
+    let sections = sections(&job.sections)?;
     let path = wear::CuttingPath::of_part(&sections, job.feed_mm_rev).map_err(e)?;
     let rate = wear::WearRate::new(job.initial_um, job.rate_um_per_km).map_err(e)?;
     let mut r = Report::new("Tool wear");
@@ -470,6 +459,15 @@ pub fn wear(job: &WearJob) -> CalcResult<Report> {
         );
     }
     Ok(r)
+}
+
+/// Checked sections from (diameter, length) pairs, mm.
+fn sections(pairs: &[(f64, f64)]) -> CalcResult<Vec<deflection::Section>> {
+    pairs
+        .iter()
+        .map(|&(d, l)| deflection::Section::new(d, l))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| e.to_string())
 }
 
 /// `D:L` or `DxL` (mm) as a section.

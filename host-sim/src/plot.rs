@@ -243,16 +243,12 @@ impl Nose {
     /// assert_eq!(Nose { r: 4_000_000, tip: 9 }.tip_vector(), [0, 0]);
     /// ```
     pub const fn tip_vector(&self) -> [i64; 2] {
-        let r = self.r;
-        match self.tip {
-            1 => [r, r],
-            2 => [r, -r],
-            3 => [-r, -r],
-            4 => [-r, r],
-            5 => [0, r],
-            6 => [r, 0],
-            7 => [0, -r],
-            8 => [-r, 0],
+        // The core's table; a radius or code out of range has no vector.
+        match (
+            core_nostd::length::Length::from_angstrom(self.r),
+            core_nostd::comp::TipCode::new(self.tip),
+        ) {
+            (Some(r), Some(tip)) => core_nostd::comp::Tool::new(r, tip).tip_vector(),
             _ => [0, 0],
         }
     }

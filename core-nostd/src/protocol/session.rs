@@ -1053,8 +1053,9 @@ impl Session {
         if self.aux.needs_rest(&aux) || b.dwell.is_some() || b.tool_change {
             self.machine.flush(&mut Sink::new(io, self.drive));
         }
+        let outputs = self.outputs_for(&aux, modal.units);
         if self.aux.needs_rest(&aux) {
-            let (was, now) = (self.outputs, self.outputs_for(&aux, modal.units));
+            let (was, now) = (self.outputs, outputs);
             self.switch_outputs(now, io);
             // A spindle that starts or changes speed gets up to it first.
             if now.spindle != Spindle::Off && (was.spindle != now.spindle || was.rpm != now.rpm) {
@@ -1066,8 +1067,7 @@ impl Session {
         }
         // The blocks carry the speed at their start (under G96 it follows
         // X block by block).
-        self.machine
-            .set_spindle(self.outputs_for(&aux, modal.units).rpm);
+        self.machine.set_spindle(outputs.rpm);
         // The DATA lines write X as this block reads it.
         self.cfg.diam = diam;
         let start = self.pos;
