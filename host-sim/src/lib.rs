@@ -56,6 +56,7 @@ pub mod reference_motion;
 pub mod reference_trihedral;
 pub mod reliable;
 pub mod scenario;
+pub mod send;
 pub mod soak;
 pub mod stream;
 pub mod table;

@@ -282,6 +282,19 @@ enum Command {
         #[command(flatten)]
         out: host_sim::table::OutArgs,
     },
+    /// Stream a G-code program to a board: a serial port (`--port
+    /// /dev/ttyUSB0`), the pty of `serve --pty`, or the firmware in QEMU
+    /// (`--qemu`). The program first runs on a model given the board's own
+    /// settings, tool table and position (`--dry-run` stops there); then
+    /// each line goes out as a reliable request with the board's queue kept
+    /// filled, every reply checked against the model. Keys: `!`/h/space
+    /// feed hold, `~`/c/r cycle start, q/Ctrl-C abort (hold to rest, then
+    /// reset), x/Ctrl-X reset (the program restarts at the line that did
+    /// not finish, the tool taken back along its path). Exit status 0 when
+    /// every line ran, 1 when the program cannot run (a refused line, a
+    /// reply not the model's), 3 when the link failed, 4 when aborted, 5
+    /// when the board lost its position.
+    Send(SendArgs),
     /// Serve the in-process device for a terminal or another program.
     Serve {
         /// Serve on standard input and output.
@@ -291,6 +304,44 @@ enum Command {
         #[arg(long)]
         pty: bool,
     },
+}
+
+#[derive(clap::Args)]
+struct SendArgs {
+    /// The G-code program.
+    file: std::path::PathBuf,
+    /// The board's serial port (or the pty `serve --pty` printed).
+    #[arg(long, value_name = "PATH", required_unless_present = "qemu")]
+    port: Option<String>,
+    /// Boot the firmware in QEMU (its step interrupt in virtual time) and
+    /// send to it.
+    #[arg(long, conflicts_with = "port")]
+    qemu: bool,
+    /// The program's dialect: iso (LinuxCNC, grbl), fanuc (Fanuc/Haas
+    /// G-code system A), or auto (from its words).
+    #[arg(long, default_value = "auto")]
+    dialect: String,
+    /// X words are radii at the start (as LinuxCNC's G8), not diameters.
+    #[arg(long)]
+    radius: bool,
+    /// A file of setup requests sent before the program (`TOOL N=1
+    /// X=-2.5 Z=1.2 R=0.4 T=3`, `WORK G=54 Z=-120`), as for `run`.
+    #[arg(long, value_name = "FILE")]
+    tools: Option<std::path::PathBuf>,
+    /// The optional stop switch on: M01 stops as M00 does.
+    #[arg(long)]
+    optional_stop: bool,
+    /// Check the whole program against the board's settings and stop
+    /// there: nothing moves.
+    #[arg(long)]
+    dry_run: bool,
+    /// How long to wait for a reply before asking again, ms.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(50..=60_000))]
+    timeout_ms: u64,
+    /// The feed the tool goes back along its path at after a reset,
+    /// mm/min.
+    #[arg(long, default_value = "250")]
+    return_feed: String,
 }
 
 #[derive(clap::Args, Clone)]
@@ -685,6 +736,7 @@ fn main() -> ExitCode {
             }
             Err(e) => Err(format!("cannot read {}: {e}", file.display()).into()),
         },
+        Command::Send(args) => send_program(&args),
         Command::Serve {
             stdio: _,
             pty: true,
@@ -742,6 +794,116 @@ fn serve_stdio() -> Result<ExitCode, Box<dyn std::error::Error>> {
         link.stdout.write_all(&out)?;
         link.stdout.flush()?;
     }
+}
+
+/// `host-sim send FILE`.
+fn send_program(args: &SendArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    use host_sim::send::{board_settings, Console, Halt, Plan, Sender};
+    let file = &args.file;
+    let f = file.display();
+    let text = std::fs::read_to_string(file).map_err(|e| format!("cannot read {f}: {e}"))?;
+    let (dialect, note) =
+        host_sim::dialect::choose(&args.dialect, &text).map_err(|e| format!("{f}: {e}"))?;
+    if let Some(note) = note {
+        eprintln!("{f}: {note}");
+    }
+    let options = host_sim::program::Options {
+        dialect,
+        radius: args.radius,
+        optional_stop: args.optional_stop,
+    };
+    let setup_text = match &args.tools {
+        Some(path) => std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?,
+        None => String::new(),
+    };
+    let setup = host_sim::program::setup_lines(&setup_text);
+    let timeout = Duration::from_millis(args.timeout_ms);
+    let mut qemu = None;
+    let client = if args.qemu {
+        let elf = host_sim::qemu::build_firmware("qemu-paced")?;
+        let q = qemu.insert(host_sim::qemu::Qemu::boot_paced(&elf)?);
+        eprintln!("board: {} in QEMU, USART1 on {}", elf.display(), q.pty());
+        q.connect(Duration::from_secs(60))?
+    } else {
+        let port = args.port.as_deref().unwrap_or_default();
+        Client::open(port, timeout).map_err(|e| format!("cannot open {port}: {e}"))?
+    };
+    let token = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(1, |d| d.subsec_nanos() | 1);
+    let halt = |h: Halt| -> Box<dyn std::error::Error> { h.to_string().into() };
+    let mut sender = Sender::new(client, timeout, token).map_err(halt)?;
+    sender.return_feed = args.return_feed.clone();
+    let settings = board_settings(&mut sender).map_err(halt)?;
+    let plan = Plan::build(&text, options, &settings, &setup).map_err(|e| format!("{f}: {e}"))?;
+    let setup_name = args
+        .tools
+        .as_ref()
+        .map_or(String::new(), |p| p.display().to_string());
+    for r in &plan.setup_refused {
+        eprintln!("{setup_name}:{}: {}", r.line, r.reply);
+    }
+    for r in &plan.refused {
+        eprintln!("{f}:{}: {}", r.line, r.reply);
+    }
+    println!(
+        "{f}: {} lines, {} step events, planned motion {}",
+        plan.lines.len(),
+        plan.events(),
+        host_sim::program::minutes(plan.total_us)
+    );
+    if !plan.refused.is_empty() || !plan.setup_refused.is_empty() {
+        println!("the board would refuse the lines above: nothing sent");
+        return Ok(ExitCode::from(1));
+    }
+    if args.dry_run {
+        println!("dry run: the board accepts every line; nothing sent");
+        return Ok(ExitCode::SUCCESS);
+    }
+    let report = {
+        let mut console = Console::new(plan.lines.len());
+        sender.send(&plan, &mut console)
+    };
+    drop(qemu);
+    println!(
+        "{} lines answered in {:.1} s ({:.0} lines/s); starved {}; {} restarts after a reset, {} requests sent again, {} reply lines dropped",
+        report.requests,
+        report.seconds,
+        report.requests as f64 / report.seconds.max(1e-9),
+        report
+            .starved
+            .map_or("-".to_string(), |n| n.to_string()),
+        report.resets,
+        report.retries,
+        report.dropped
+    );
+    if let Some((px, pz)) = report.registers {
+        println!(
+            "registers at the end: board PX={px} PZ={pz}, program PX={} PZ={}",
+            report.expected.0, report.expected.1
+        );
+    }
+    let code = match &report.halt {
+        None if report.registers == Some(report.expected) => {
+            println!("{f}: done");
+            0
+        }
+        None => {
+            println!("{f}: the board did not end where the program does");
+            1
+        }
+        Some(h) => {
+            eprintln!("{f}: {h}");
+            match h {
+                Halt::Refused(..) | Halt::Mismatch(..) => 1,
+                Halt::Link(_) | Halt::Board(_) => 3,
+                Halt::Aborted(_) => 4,
+                Halt::PowerLost => 5,
+            }
+        }
+    };
+    Ok(ExitCode::from(code))
 }
 
 fn serve_pty() -> Result<ExitCode, Box<dyn std::error::Error>> {

@@ -275,6 +275,26 @@ impl Session {
         &self.contour
     }
 
+    /// The modal G-code state (motion, distance, units, feed).
+    pub const fn modal(&self) -> &Modal {
+        &self.modal
+    }
+
+    /// The spindle, the coolant and the tool named, as programmed.
+    pub const fn aux(&self) -> &Aux {
+        &self.aux
+    }
+
+    /// Which work system, offset register and tool are in effect.
+    pub const fn selection(&self) -> &Selection {
+        &self.sel
+    }
+
+    /// The dialect G-code lines are read in.
+    pub const fn dialect(&self) -> Dialect {
+        self.dialect
+    }
+
     /// Exact commanded coordinates `(X radius, Z)` in machine coordinates
     /// (since power-on or `ZERO`; the offsets in effect included).
     pub const fn commanded(&self) -> (Length, Length) {
