@@ -33,6 +33,8 @@
 //!   in-process device in virtual time (cycle time, travel, tools,
 //!   refusals, the path);
 //! - [`plot`]: `host-sim plot FILE`, the program drawn as an SVG picture;
+//! - [`tape`]: `host-sim tape encode FILE`, a program punched as a BCK-5
+//!   or ISO-7bit tape;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod calculators;
@@ -60,3 +62,4 @@ pub mod send;
 pub mod soak;
 pub mod stream;
 pub mod table;
+pub mod tape;

@@ -265,20 +265,49 @@ enum Command {
         #[command(flatten)]
         out: host_sim::table::OutArgs,
     },
-    /// Check a punched-tape listing of the old controls: a BCK-5 tape of
-    /// the АТПр-2М12 (one frame per line as printed, e.g.
+    /// Punched tapes of the old controls. `verify FILE` checks a listing: a
+    /// BCK-5 tape of the АТПр-2М12 (one frame per line as printed, e.g.
     /// `2K002E212400D630000П75Ш26Н`; Cyrillic letters or the Latin
     /// look-alikes, Ш as W and Я as R) for check digits, numbering and the
     /// closure of each tool (Σ+ + Σ− = 0), or an ISO-7bit tape of the
-    /// ЭМ-907 (blocks starting N) block by block. Lists every failing frame
-    /// and tool; exit status 1 if there is any. Example: `host-sim tape
-    /// verify tape.txt`.
+    /// ЭМ-907 (blocks starting N) block by block; it lists every failing
+    /// frame and tool, exit status 1 if there is any. `encode FILE --format
+    /// bck5|iso7` punches a G-code program as it runs on this device
+    /// (machine coordinates, X on the radius): BCK-5 frames with check
+    /// digits, Е in 0.01 mm and Д in 0.005 mm impulses, feed codes nearest
+    /// S/0.6 Hz (S the feed, mm/min), Ш and В words, arcs as chords, each tool brought back to
+    /// its start; or ЭМ-907 blocks (X 0.005 mm, Z 0.01 mm impulses, F =
+    /// S·10³/l, arcs within one quadrant as G02/G03 with I, K). Set-up notes
+    /// go to stderr; what the tape cannot hold is named with its line, exit
+    /// status 1, and nothing is printed. Examples: `host-sim tape verify
+    /// tape.bck5`, `host-sim tape encode part.nc --format bck5 > part.bck5`,
+    /// `host-sim tape encode part.nc --format iso7 --punch`.
     Tape {
-        /// What to do: `verify`.
-        #[arg(value_parser = ["verify"])]
+        /// What to do: `verify` or `encode`.
+        #[arg(value_parser = ["verify", "encode"])]
         action: String,
-        /// The tape listing.
+        /// The tape listing (verify) or the G-code program (encode).
         file: std::path::PathBuf,
+        /// encode: the tape, `bck5` (АТПр-2М12) or `iso7` (ЭМ-907).
+        #[arg(long, value_parser = ["bck5", "iso7"])]
+        format: Option<String>,
+        /// encode, iso7: print each character as its row of holes (tracks 8
+        /// to 1, track 8 the even parity, `|` the feed holes between tracks
+        /// 3 and 4) instead of the text.
+        #[arg(long)]
+        punch: bool,
+        /// encode, bck5: the largest distance of an arc's chords from the
+        /// arc, mm (the control interpolates lines only).
+        #[arg(long, value_name = "MM", default_value = "0.01")]
+        chord: String,
+        /// encode: the program's dialect: iso (LinuxCNC, grbl), fanuc
+        /// (Fanuc/Haas G-code system A), or auto (from its words).
+        #[arg(long, default_value = "auto")]
+        dialect: String,
+        /// encode: X words are radii at the start (as LinuxCNC's G8), not
+        /// diameters.
+        #[arg(long)]
+        radius: bool,
         #[command(flatten)]
         out: host_sim::table::OutArgs,
     },
@@ -433,6 +462,62 @@ enum LinkKind {
     Pty,
     /// Direct calls into the in-process device.
     Local,
+}
+
+/// `host-sim tape encode`: the tape on stdout, notes on stderr; exit 1
+/// with every line the tape cannot hold (nothing printed then), 2 for a
+/// file that cannot be read or bad arguments.
+fn tape_encode(
+    file: &std::path::Path,
+    format: Option<&str>,
+    punch: bool,
+    chord: &str,
+    dialect: &str,
+    radius: bool,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let format = match format {
+        Some("bck5") => host_sim::tape::Format::Bck5,
+        Some("iso7") => host_sim::tape::Format::Iso7,
+        _ => return Err("tape encode: --format bck5 or --format iso7".into()),
+    };
+    if punch && format == host_sim::tape::Format::Bck5 {
+        return Err(
+            "tape encode: --punch shows the rows of the ISO-7bit tape (--format iso7)".into(),
+        );
+    }
+    let chord = core_nostd::length::Length::from_mm_str(chord)
+        .ok()
+        .filter(|l| l.as_angstrom() > 0)
+        .ok_or_else(|| format!("--chord {chord}: not a positive number of mm"))?;
+    let program = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let (dialect, note) = host_sim::dialect::choose(dialect, &program)
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+    if let Some(note) = note {
+        eprintln!("{}: {note}", file.display());
+    }
+    let job = host_sim::tape::Job {
+        format,
+        dialect,
+        radius,
+        chord,
+        punch,
+    };
+    match host_sim::tape::encode(&program, &job) {
+        Ok(tape) => {
+            for n in &tape.notes {
+                eprintln!("{}: {n}", file.display());
+            }
+            std::io::stdout().write_all(tape.text.as_bytes())?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(errors) => {
+            for e in &errors {
+                eprintln!("{}: {e}", file.display());
+            }
+            Ok(ExitCode::from(1))
+        }
+    }
 }
 
 /// `host-sim compensate`: the program on stdout, remarks and refusals on
@@ -725,17 +810,30 @@ fn main() -> ExitCode {
             false,
         ),
         Command::Tape {
-            action: _,
+            action,
             file,
+            format,
+            punch,
+            chord,
+            dialect,
+            radius,
             out,
-        } => match std::fs::read_to_string(&file) {
-            Ok(text) => {
-                let (report, findings) = host_sim::calculators::tape_verify(&text);
-                print!("{}", report.render(out.format()));
-                Ok(ExitCode::from(u8::from(findings > 0)))
+        } => {
+            if action == "encode" {
+                tape_encode(&file, format.as_deref(), punch, &chord, &dialect, radius)
+            } else if format.is_some() || punch {
+                Err("tape verify: --format and --punch are for tape encode".into())
+            } else {
+                match std::fs::read_to_string(&file) {
+                    Ok(text) => {
+                        let (report, findings) = host_sim::calculators::tape_verify(&text);
+                        print!("{}", report.render(out.format()));
+                        Ok(ExitCode::from(u8::from(findings > 0)))
+                    }
+                    Err(e) => Err(format!("cannot read {}: {e}", file.display()).into()),
+                }
             }
-            Err(e) => Err(format!("cannot read {}: {e}", file.display()).into()),
-        },
+        }
         Command::Send(args) => send_program(&args),
         Command::Serve {
             stdio: _,

@@ -3,7 +3,7 @@
 //! time, the travel, the tool changes, every block the device refused, and
 //! on request the path as the device ran it.
 
-use core_nostd::comp::MoveKind;
+use core_nostd::comp::{MoveKind, Origin};
 use core_nostd::gcode::{is_block, parse, Dialect, Units};
 use core_nostd::interleave::StepEvent;
 use core_nostd::protocol::{Device, Io};
@@ -73,6 +73,10 @@ pub struct Traced {
     pub to: [i64; 2],
     /// An arc's centre, Å.
     pub centre: Option<[i64; 2]>,
+    /// The line of the file its programmed block is on, from 1.
+    pub line: usize,
+    /// Its programmed block's place in [`program_lines`], from 0.
+    pub seq: usize,
 }
 
 impl Report {
@@ -150,6 +154,26 @@ pub fn setup_lines(text: &str) -> Vec<(usize, &str)> {
         .collect()
 }
 
+/// The lines the device is sent, each with its line index in the file
+/// (from 0): the file's own lines, or its macros, subprograms and
+/// parameters expanded when it has any.
+///
+/// # Errors
+/// Why the program cannot be expanded.
+pub fn program_lines(
+    text: &str,
+    dialect: Dialect,
+) -> Result<Vec<(usize, String)>, crate::expand::ExpandError> {
+    if crate::expand::needs_expansion(text) {
+        Ok(crate::expand::expand(text, dialect)?
+            .into_iter()
+            .map(|l| (l.source - 1, l.text))
+            .collect())
+    } else {
+        Ok(text.lines().map(str::to_owned).enumerate().collect())
+    }
+}
+
 /// Runs a program's text after setup requests, each with the line of the
 /// file it comes from ([`Report::setup_refused`]).
 pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Report {
@@ -171,22 +195,20 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
             report.setup_refused.push(Refused { line, reply });
         }
     }
-    // What the device should not interpret, the host expands first.
-    let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
-        match crate::expand::expand(text, options.dialect) {
-            Ok(lines) => lines.into_iter().map(|l| (l.source - 1, l.text)).collect(),
-            Err(e) => {
-                report.expand_error = Some(e);
-                return report;
-            }
+    let lines = match program_lines(text, options.dialect) {
+        Ok(lines) => lines,
+        Err(e) => {
+            report.expand_error = Some(e);
+            return report;
         }
-    } else {
-        text.lines().map(str::to_owned).enumerate().collect()
     };
     let mut units = Units::Mm;
     let mut tool = None;
     let mut at = [0i64; 2];
-    for (i, raw) in &lines {
+    // The last programmed motion block (line, place): a block sent one
+    // block late belongs to it.
+    let mut motion_block = (0, 0);
+    for (seq, (i, raw)) in lines.iter().enumerate() {
         let i = *i;
         let line = raw.trim_end_matches('\r');
         if line.trim().is_empty() {
@@ -209,7 +231,11 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
             report.stops.push((i + 1, format!("M{code:02}")));
         }
         // What the device read: the tool word and the unit.
+        let mut this_block = motion_block;
         if let Ok(b) = parse(line, options.dialect, units) {
+            if b.x.is_some() || b.z.is_some() {
+                this_block = (i + 1, seq);
+            }
             units = b.units.unwrap_or(units);
             if let Some(t) = b.tool {
                 if tool != Some(t.tool) {
@@ -229,6 +255,10 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
         // or one whose motion waits for the next block).
         let moves = dev.session().last_moves().clone();
         for m in &moves {
+            let (line, seq) = match m.origin {
+                Origin::Previous => motion_block,
+                Origin::Corner | Origin::Current => this_block,
+            };
             let (dx, dz) = ((m.to[0] - at[0]) as f64, (m.to[1] - at[1]) as f64);
             let mut block = String::new();
             let x = mm4(2 * m.to[0]);
@@ -247,6 +277,8 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
                         g: u8::from(!rapid),
                         to: m.to,
                         centre: None,
+                        line,
+                        seq,
                     });
                 }
                 MoveKind::Arc { centre, dir } => {
@@ -267,12 +299,15 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
                         g: if ccw { 3 } else { 2 },
                         to: m.to,
                         centre: Some(centre),
+                        line,
+                        seq,
                     });
                 }
             }
             report.trace.push(block);
             at = m.to;
         }
+        motion_block = this_block;
     }
     // The end: everything queued runs.
     let reply = request(&mut dev, &mut io, "SYNC");

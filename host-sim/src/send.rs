@@ -747,8 +747,12 @@ impl<L: ByteLink> Sender<L> {
         if state != "IDLE" {
             self.busy_at = Some(Instant::now());
         }
-        if self.aborting && (state != "RUN") && speed.parse::<f64>().unwrap_or(1.0) == 0.0 {
-            // At rest (held, or nothing running): the reset loses no step.
+        // At rest (held, or nothing running) the reset loses no step. A
+        // device that reports no latency issues its blocks in no time
+        // (`serve`): nothing is ever in motion there.
+        let board = words_value(body, "LAT").is_some();
+        let at_rest = state != "RUN" && speed.parse::<f64>().is_ok_and(|v| v == 0.0);
+        if self.aborting && (at_rest || !board) {
             let _ = self.link.send(&[0x18]);
         }
         let p = &mut self.progress;
