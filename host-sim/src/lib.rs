@@ -33,6 +33,9 @@
 //!   in-process device in virtual time (cycle time, travel, tools,
 //!   refusals, the path);
 //! - [`plot`]: `host-sim plot FILE`, the program drawn as an SVG picture;
+//! - [`report`]: `host-sim run FILE --report OUT.html`, one HTML page of the
+//!   run: its facts as tables, the picture, the speed along the path over
+//!   time;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod calculators;
@@ -55,6 +58,7 @@ pub mod reference_cone;
 pub mod reference_motion;
 pub mod reference_trihedral;
 pub mod reliable;
+pub mod report;
 pub mod scenario;
 pub mod soak;
 pub mod stream;
