@@ -35,6 +35,9 @@
 //! - [`plot`]: `host-sim plot FILE`, the program drawn as an SVG picture;
 //! - [`tape`]: `host-sim tape encode FILE`, a program punched as a BCK-5
 //!   or ISO-7bit tape;
+//! - [`report`]: `host-sim run FILE --report OUT.html`, one HTML page of the
+//!   run: its facts as tables, the picture, the speed along the path over
+//!   time;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
 pub mod calculators;
@@ -57,6 +60,7 @@ pub mod reference_cone;
 pub mod reference_motion;
 pub mod reference_trihedral;
 pub mod reliable;
+pub mod report;
 pub mod scenario;
 pub mod send;
 pub mod soak;

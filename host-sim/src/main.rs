@@ -29,7 +29,8 @@ enum Command {
     /// Compare the device with the f64 reference, bit for bit (the default);
     /// with a FILE, run that G-code program through the in-process device
     /// in virtual time and report its cycle time, travel, tool changes and
-    /// refusals.
+    /// refusals (with --report, also as an HTML page with the picture and
+    /// the speed along the path over time).
     Run(RunArgs),
     /// Boot the firmware in QEMU and compare it with the f64 reference over
     /// its serial link.
@@ -411,6 +412,14 @@ struct RunArgs {
     /// The optional stop switch on: M01 stops as M00 does.
     #[arg(long, requires = "file")]
     optional_stop: bool,
+    /// Also write one self-contained HTML page of the run (no scripts, no
+    /// other files): the facts printed here as tables (cycle time, travel,
+    /// step events, tools, program stops, refused lines with the device's
+    /// reason), the picture `plot` draws, and the speed along the path over
+    /// time as the device timed it (mm/min over s; rapids, feeds, the
+    /// commanded F, dwells).
+    #[arg(long, value_name = "OUT.html", requires = "file")]
+    report: Option<std::path::PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -427,6 +436,7 @@ impl Default for RunArgs {
             trace: false,
             tools: None,
             optional_stop: false,
+            report: None,
         }
     }
 }
@@ -1038,11 +1048,27 @@ fn run_program(
         None => String::new(),
     };
     let setup = host_sim::program::setup_lines(&setup_text);
-    let r = host_sim::program::run_setup(&text, options, &setup);
     let setup_name = args
         .tools
         .as_ref()
         .map_or(String::new(), |p| p.display().to_string());
+    // With a page asked for, the run it shows is the one reported here.
+    let (r, page) = match &args.report {
+        Some(out) => {
+            let (html, r) =
+                host_sim::report::build(&f.to_string(), &text, options, &setup, &setup_name)?;
+            (r, Some((out, html)))
+        }
+        None => (host_sim::program::run_setup(&text, options, &setup), None),
+    };
+    // The page is written after the text report, which comes first.
+    let write_page = || -> Result<(), String> {
+        match &page {
+            Some((out, html)) => std::fs::write(out, html)
+                .map_err(|e| format!("cannot write the report {}: {e}", out.display())),
+            None => Ok(()),
+        }
+    };
     if args.trace {
         for block in &r.trace {
             println!("{block}");
@@ -1050,6 +1076,7 @@ fn run_program(
     }
     if let Some(e) = &r.expand_error {
         eprintln!("{f}:{e}");
+        write_page()?;
         return Ok(ExitCode::from(1));
     }
     for refused in &r.setup_refused {
@@ -1103,6 +1130,10 @@ fn run_program(
             tools.join(", ")
         }
     ));
+    if let Some((out, html)) = &page {
+        write_page()?;
+        report(format!("report: {} ({} bytes)", out.display(), html.len()));
+    }
     Ok(if r.refused.is_empty() && r.setup_refused.is_empty() {
         ExitCode::SUCCESS
     } else {

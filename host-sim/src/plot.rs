@@ -296,9 +296,9 @@ enum Pass {
 
 /// A rectangle in (Z, X radius), mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Rect {
-    z: [f64; 2],
-    r: [f64; 2],
+pub(crate) struct Rect {
+    pub(crate) z: [f64; 2],
+    pub(crate) r: [f64; 2],
 }
 
 impl Rect {
@@ -647,7 +647,7 @@ pub fn trace(text: &str, options: &Options, setup: &[(usize, &str)]) -> Paths {
 // Geometry to polylines.
 
 /// A point in mm: (Z, X radius).
-type P = (f64, f64);
+pub(crate) type P = (f64, f64);
 
 fn mm(p: [i64; 2]) -> P {
     (p[1] as f64 / A_PER_MM, p[0] as f64 / A_PER_MM)
@@ -749,7 +749,7 @@ fn clip(a: P, b: P, r: &Rect) -> Option<(P, P)> {
 }
 
 /// A polyline cut to `r`: the pieces inside it.
-fn clipped(pts: &[P], r: &Rect) -> Vec<Vec<P>> {
+pub(crate) fn clipped(pts: &[P], r: &Rect) -> Vec<Vec<P>> {
     let mut out: Vec<Vec<P>> = Vec::new();
     let mut open = false;
     if let [only] = pts {
@@ -795,7 +795,8 @@ fn bounds<'a>(pts: impl Iterator<Item = &'a P>) -> Option<Rect> {
 }
 
 // ---------------------------------------------------------------------------
-// The SVG canvas: a plotters backend.
+// The SVG canvas: a plotters backend (the speed chart of `report` draws
+// on it too).
 
 /// How the next strokes are drawn, besides plotters' colour and width.
 #[derive(Clone, Debug, Default)]
@@ -818,11 +819,11 @@ struct Doc {
 /// plotting code keeps one to set the pen between plotters' calls.
 /// Coordinates are in user units of 1/[`UNITS_PER_PX`] pixel.
 #[derive(Clone, Debug)]
-struct Canvas(Rc<RefCell<Doc>>);
+pub(crate) struct Canvas(Rc<RefCell<Doc>>);
 
 impl Canvas {
     /// A picture `w` × `h` pixels, white.
-    fn new(w: u32, h: u32) -> Canvas {
+    pub(crate) fn new(w: u32, h: u32) -> Canvas {
         let k = UNITS_PER_PX as u32;
         let size = (w * k, h * k);
         let mut svg = String::new();
@@ -843,19 +844,19 @@ impl Canvas {
         })))
     }
 
-    fn pen(&self, class: &'static str, dash: Option<&'static [u32]>) {
+    pub(crate) fn pen(&self, class: &'static str, dash: Option<&'static [u32]>) {
         self.0.borrow_mut().pen = Pen {
             class: Some(class),
             dash,
         };
     }
 
-    fn plain(&self) {
+    pub(crate) fn plain(&self) {
         self.0.borrow_mut().pen = Pen::default();
     }
 
     /// The finished document.
-    fn finish(&self) -> String {
+    pub(crate) fn finish(&self) -> String {
         let mut doc = self.0.borrow_mut();
         let mut svg = std::mem::take(&mut doc.svg);
         svg.push_str("</svg>\n");
@@ -1184,45 +1185,45 @@ impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for PlotE
 }
 
 /// The picture's layout, in pixels.
-const WIDTH: u32 = 1400;
-const PANEL: u32 = 330;
+pub(crate) const WIDTH: u32 = 1400;
+pub(crate) const PANEL: u32 = 330;
 const TITLE: u32 = 56;
-const MARGIN: u32 = 14;
+pub(crate) const MARGIN: u32 = 14;
 /// Above the plotting area: the X axis's title, level (not turned, so that
 /// it reads as the ticks do).
 const X_TITLE: u32 = 24;
-const Y_LABELS: u32 = 78;
-const X_LABELS: u32 = 48;
+pub(crate) const Y_LABELS: u32 = 78;
+pub(crate) const X_LABELS: u32 = 48;
 const PLOT_W: u32 = WIDTH - PANEL - Y_LABELS - 2 * MARGIN;
 const PLOT_H_MIN: u32 = 420;
 const PLOT_H_MAX: u32 = 760;
 
 /// Colours and strokes of the layers.
 const PROGRAMMED: RGBColor = RGBColor(30, 30, 30);
-const TIP: RGBColor = RGBColor(31, 95, 191);
-const CENTRE: RGBColor = RGBColor(224, 112, 0);
+pub(crate) const TIP: RGBColor = RGBColor(31, 95, 191);
+pub(crate) const CENTRE: RGBColor = RGBColor(224, 112, 0);
 const REFUSED: RGBColor = RGBColor(208, 0, 0);
 const BLOCKS: RGBColor = RGBColor(142, 68, 173);
-const STEPS: RGBColor = RGBColor(0, 140, 120);
-const GRID: RGBColor = RGBColor(236, 236, 236);
-const DASH: &[u32] = &[9, 5];
+pub(crate) const STEPS: RGBColor = RGBColor(0, 140, 120);
+pub(crate) const GRID: RGBColor = RGBColor(236, 236, 236);
+pub(crate) const DASH: &[u32] = &[9, 5];
 const DASH_DOT: &[u32] = &[14, 4, 3, 4];
 
-const fn k(px: u32) -> u32 {
+pub(crate) const fn k(px: u32) -> u32 {
     px * UNITS_PER_PX as u32
 }
 
-const fn ki(px: i32) -> i32 {
+pub(crate) const fn ki(px: i32) -> i32 {
     px * UNITS_PER_PX
 }
 
 /// Sans-serif text `px` pixels high.
-fn font(px: u32) -> TextStyle<'static> {
+pub(crate) fn font(px: u32) -> TextStyle<'static> {
     TextStyle::from(("sans-serif", f64::from(k(px))).into_font())
 }
 
 /// The same, bold, in `color`.
-fn bold(px: u32, color: &RGBColor) -> TextStyle<'static> {
+pub(crate) fn bold(px: u32, color: &RGBColor) -> TextStyle<'static> {
     ("sans-serif", f64::from(k(px)))
         .into_font()
         .style(FontStyle::Bold)
@@ -1230,7 +1231,7 @@ fn bold(px: u32, color: &RGBColor) -> TextStyle<'static> {
 }
 
 /// The step of a 1-2-5 series at least `min`.
-fn nice_step(min: f64) -> f64 {
+pub(crate) fn nice_step(min: f64) -> f64 {
     let p = 10f64.powf(min.log10().floor());
     [1.0, 2.0, 5.0, 10.0]
         .into_iter()
@@ -1240,12 +1241,12 @@ fn nice_step(min: f64) -> f64 {
 }
 
 /// Decimals to print multiples of a 1-2-5 step.
-fn decimals(step: f64) -> usize {
+pub(crate) fn decimals(step: f64) -> usize {
     (-step.log10() - 1e-9).ceil().max(0.0) as usize
 }
 
 /// A tick value with `d` decimals, never `-0`.
-fn label(v: f64, d: usize) -> String {
+pub(crate) fn label(v: f64, d: usize) -> String {
     let s = format!("{v:.d$}");
     if s.trim_start_matches('-')
         .chars()
@@ -1258,7 +1259,7 @@ fn label(v: f64, d: usize) -> String {
 }
 
 /// The multiples of `step` within `[a, b]`.
-fn multiples(a: f64, b: f64, step: f64) -> Vec<f64> {
+pub(crate) fn multiples(a: f64, b: f64, step: f64) -> Vec<f64> {
     let (i0, i1) = ((a / step).ceil() as i64, (b / step).floor() as i64);
     (i0..=i1).map(|i| i as f64 * step).collect()
 }
@@ -1276,9 +1277,9 @@ struct Layer<'a> {
 /// own `WithKeyPoints` cannot take a label formatter over `f64`). It maps
 /// to the nearest user unit, not down to it as plotters' `f64` axes do.
 #[derive(Clone, Debug)]
-struct Axis {
-    range: [f64; 2],
-    ticks: Vec<f64>,
+pub(crate) struct Axis {
+    pub(crate) range: [f64; 2],
+    pub(crate) ticks: Vec<f64>,
 }
 
 impl Ranged for Axis {

@@ -4,8 +4,10 @@
 //! on request the path as the device ran it.
 
 use core_nostd::comp::{MoveKind, Origin};
-use core_nostd::gcode::{is_block, parse, Dialect, Units};
-use core_nostd::interleave::StepEvent;
+use core_nostd::gcode::{is_block, parse, Dialect, FeedMode, Motion, SpindleMode, Units};
+use core_nostd::interleave::{LinearBlock, StepEvent};
+use core_nostd::interp::{path_feed, Modal, SpindleState};
+use core_nostd::length::Length;
 use core_nostd::protocol::{Device, Io};
 use core_nostd::stepdir::DriveTiming;
 
@@ -86,6 +88,41 @@ impl Report {
     }
 }
 
+/// What the device did in time, in the order it did it (kept by
+/// [`run_timed`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Happening {
+    /// A linear block started (a line, or one chord of an arc); its step
+    /// events follow.
+    Block(LinearBlock),
+    /// A step event: its byte (bit0 X steps, bit1 Z steps, bit2 X
+    /// negative, bit3 Z negative) and its tick since its run began.
+    Event {
+        /// The event's byte.
+        bits: u8,
+        /// Ticks of the 1 MHz step clock since the run began.
+        tick: u64,
+    },
+    /// The run ended this many ticks after it began, the axes at rest.
+    RunEnd(u64),
+    /// A dwell of this many µs, the axes at rest (`G04`, or the spindle
+    /// getting up to speed).
+    Dwell(u64),
+}
+
+/// A program's motion in time, beside its [`Report`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Timeline {
+    /// Everything the device did in time, in order.
+    pub happenings: Vec<Happening>,
+    /// The commanded feed of each block of [`Report::path`], mm/min along
+    /// the path: `F` per minute, or `F` times the spindle's rpm under
+    /// `G97`; `None` for a rapid, and under `G96`, where the rpm follows X.
+    pub feeds: Vec<Option<f64>>,
+    /// The impulse prices (ångström): X on the radius, Z.
+    pub price: [i64; 2],
+}
+
 /// Sums what the device reports through its transport.
 #[derive(Default)]
 struct Tally {
@@ -94,20 +131,39 @@ struct Tally {
     dwell_us: u64,
     events: u64,
     stops: Vec<u8>,
+    /// Kept when asked for.
+    timeline: Option<Vec<Happening>>,
+}
+
+impl Tally {
+    fn keep(&mut self, h: Happening) {
+        if let Some(t) = self.timeline.as_mut() {
+            t.push(h);
+        }
+    }
 }
 
 impl Io for Tally {
     fn send(&mut self, line: &[u8]) {
         self.out.extend_from_slice(line);
     }
-    fn step(&mut self, _: StepEvent, _: u64, _: &DriveTiming) {
+    fn block_start(&mut self, block: &LinearBlock) {
+        self.keep(Happening::Block(*block));
+    }
+    fn step(&mut self, event: StepEvent, tick: u64, _: &DriveTiming) {
         self.events += 1;
+        self.keep(Happening::Event {
+            bits: event.bits(),
+            tick,
+        });
     }
     fn run_end(&mut self, ticks: u64) {
         self.run_ticks += ticks;
+        self.keep(Happening::RunEnd(ticks));
     }
     fn dwell(&mut self, us: u64) {
         self.dwell_us += us;
+        self.keep(Happening::Dwell(us));
     }
     fn program_stop(&mut self, code: u8) {
         // Cycle start, pressed at once.
@@ -177,9 +233,39 @@ pub fn program_lines(
 /// Runs a program's text after setup requests, each with the line of the
 /// file it comes from ([`Report::setup_refused`]).
 pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Report {
+    run_inner(text, options, setup, false).0
+}
+
+/// As [`run_setup`], keeping what the device did in time: every block
+/// started, step event with its tick, run end and dwell, and the commanded
+/// feed of every block run. The report is the same.
+pub fn run_timed(text: &str, options: Options, setup: &[(usize, &str)]) -> (Report, Timeline) {
+    run_inner(text, options, setup, true)
+}
+
+/// The commanded feed along the path, mm/min, as the device reads it
+/// (`None` under `G96`, or where it has none).
+fn commanded_feed(modal: &Modal, spindle: &SpindleState) -> Option<f64> {
+    if modal.feed_mode == FeedMode::PerRev && spindle.mode == SpindleMode::Surface {
+        return None;
+    }
+    let feed = path_feed(modal, spindle, Length::ZERO).ok()??;
+    Some(feed.mm_per_min().as_angstrom() as f64 / 1e7)
+}
+
+fn run_inner(
+    text: &str,
+    options: Options,
+    setup: &[(usize, &str)],
+    timed: bool,
+) -> (Report, Timeline) {
     let mut dev = Device::new();
-    let mut io = Tally::default();
+    let mut io = Tally {
+        timeline: timed.then(Vec::new),
+        ..Tally::default()
+    };
     let mut report = Report::default();
+    let mut timeline = Timeline::default();
     let settings = [
         format!("OPT DIALECT={}", options.dialect.as_str()),
         format!("CFG DIAM={}", u8::from(!options.radius)),
@@ -199,16 +285,24 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
         Ok(lines) => lines,
         Err(e) => {
             report.expand_error = Some(e);
-            return report;
+            return (report, timeline);
         }
     };
+    let cfg = *dev.session().config();
+    timeline.price = [cfg.hx.as_angstrom(), cfg.hz.as_angstrom()];
     let mut units = Units::Mm;
     let mut tool = None;
     let mut at = [0i64; 2];
     // The last programmed motion block (line, place): a block sent one
     // block late belongs to it.
     let mut motion_block = (0, 0);
+    // The modal feed and spindle as the device reads them, for the
+    // commanded feed of each block (the device's own is not reported).
+    let (mut modal, mut spindle) = (Modal::POWER_ON, SpindleState::POWER_ON);
+    let mut feed_now = None;
+    let mut element_feed = None;
     for (seq, (i, raw)) in lines.iter().enumerate() {
+        let mut element = false;
         let i = *i;
         let line = raw.trim_end_matches('\r');
         if line.trim().is_empty() {
@@ -237,6 +331,14 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
                 this_block = (i + 1, seq);
             }
             units = b.units.unwrap_or(units);
+            (modal, spindle) = (modal.after(&b), spindle.after(&b));
+            feed_now = if modal.motion == Motion::Rapid {
+                None
+            } else {
+                commanded_feed(&modal, &spindle)
+            };
+            element =
+                (b.x.is_some() || b.z.is_some()) && b.special.is_none() && b.set_work.is_none();
             if let Some(t) = b.tool {
                 if tool != Some(t.tool) {
                     tool = Some(t.tool);
@@ -259,6 +361,17 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
                 Origin::Previous => motion_block,
                 Origin::Corner | Origin::Current => this_block,
             };
+            // As the device: the element held back by compensation at its
+            // own feed, this block's and the corners between at this one's.
+            let feed = match m.origin {
+                Origin::Previous => element_feed,
+                Origin::Current => feed_now,
+                Origin::Corner => feed_now.or(element_feed),
+            };
+            timeline.feeds.push(match m.kind {
+                MoveKind::Line { rapid: true } => None,
+                _ => feed,
+            });
             let (dx, dz) = ((m.to[0] - at[0]) as f64, (m.to[1] - at[1]) as f64);
             let mut block = String::new();
             let x = mm4(2 * m.to[0]);
@@ -308,6 +421,9 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
             at = m.to;
         }
         motion_block = this_block;
+        if element {
+            element_feed = feed_now;
+        }
     }
     // The end: everything queued runs.
     let reply = request(&mut dev, &mut io, "SYNC");
@@ -315,7 +431,11 @@ pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Repor
     report.motion_us = io.run_ticks;
     report.dwell_us = io.dwell_us;
     report.events = io.events;
-    report
+    timeline.happenings = io.timeline.unwrap_or_default();
+    if !timed {
+        timeline.feeds.clear();
+    }
+    (report, timeline)
 }
 
 /// Microseconds as `m:ss.sss`.
