@@ -48,6 +48,13 @@ const BAUD: u32 = 115_200;
 /// made room, so nothing is dropped by this side.
 static RX: Mutex<RefCell<Deque<u8, 512>>> = Mutex::new(RefCell::new(Deque::new()));
 static RX_PAUSED: AtomicBool = AtomicBool::new(false);
+/// The link speaks grbl (thread mode sets it as the protocol switches).
+static GRBL: AtomicBool = AtomicBool::new(false);
+
+/// Tells the serial interrupt which real-time bytes the link has.
+pub fn set_grbl(on: bool) {
+    GRBL.store(on, Ordering::Relaxed);
+}
 
 /// Brings up clocks, pins, USART1 and TIM2. Returns the board's devices.
 pub fn init(dp: pac::Peripherals) -> Board {
@@ -293,10 +300,21 @@ fn USART1() {
             RX_PAUSED.store(true, Ordering::Release);
         } else {
             let byte = usart.dr().read().bits() as u8;
-            // Real-time bytes act here, ahead of every queued byte.
-            if let Some(rt) = core_nostd::protocol::Realtime::from_byte(byte) {
-                crate::motion::realtime(rt);
-                return;
+            // Real-time bytes act here, ahead of every queued byte. On a
+            // grbl link `?`, `!`, `~` are real-time too; its jog cancel
+            // holds here and, with the overrides, goes on in the queue to
+            // the protocol.
+            if GRBL.load(Ordering::Relaxed) {
+                use core_nostd::protocol::grbl::GrblRealtime;
+                match GrblRealtime::from_byte(byte) {
+                    Some(GrblRealtime::Common(rt)) => return crate::motion::realtime(rt, true),
+                    Some(GrblRealtime::JogCancel) => {
+                        crate::motion::realtime(core_nostd::protocol::Realtime::Hold, true)
+                    }
+                    _ => {}
+                }
+            } else if let Some(rt) = core_nostd::protocol::Realtime::from_byte(byte) {
+                return crate::motion::realtime(rt, false);
             }
             critical_section::with(|cs| {
                 if let Ok(mut q) = RX.borrow(cs).try_borrow_mut() {

@@ -40,6 +40,8 @@ pub struct Controller {
     asked: Option<u32>,
     /// The offsets kept across power cuts.
     pub storage: storage::Storage,
+    /// On a grbl link: what its status reports add.
+    pub grbl: Option<core_nostd::protocol::grbl::Extras>,
 }
 
 impl Controller {
@@ -52,6 +54,7 @@ impl Controller {
         supervisor::start(board.watchdog);
         Controller {
             storage,
+            grbl: None,
             serial: board.serial,
             view: StatusView {
                 hx: 0,
@@ -100,7 +103,12 @@ fn timing(asked: u32) -> Timing {
 /// Sends the `!STATUS` line a real-time byte asked for, if one did, while
 /// thread mode waits or works (it ends with `LAT= LATE=`, as the
 /// protocol's).
-fn answer_status(serial: &mut Serial, view: &StatusView, queued: usize) {
+fn answer_status(
+    serial: &mut Serial,
+    view: &StatusView,
+    queued: usize,
+    grbl: Option<&core_nostd::protocol::grbl::Extras>,
+) {
     if let Some(asked) = motion::take_status() {
         let issued = motion::issued().unwrap_or_default();
         let view = StatusView {
@@ -108,8 +116,17 @@ fn answer_status(serial: &mut Serial, view: &StatusView, queued: usize) {
             ..*view
         };
         let mut line = status_line("!STATUS", motion::motion(), issued, queued, &view);
-        timing(asked).write_to(&mut line);
-        serial.send(line.finish());
+        match grbl {
+            Some(extras) => {
+                let mut report = core_nostd::protocol::grbl::status_report(line.as_bytes(), extras);
+                report.push_bytes(b"\r\n");
+                serial.send(report.as_bytes());
+            }
+            None => {
+                timing(asked).write_to(&mut line);
+                serial.send(line.finish());
+            }
+        }
     }
 }
 
@@ -128,7 +145,12 @@ impl Io for Controller {
 
     fn pause(&mut self) {
         supervisor::beat();
-        answer_status(&mut self.serial, &self.view, self.queued);
+        answer_status(
+            &mut self.serial,
+            &self.view,
+            self.queued,
+            self.grbl.as_ref(),
+        );
     }
 
     fn dwell(&mut self, us: u64) {
@@ -165,12 +187,20 @@ impl Io for Controller {
 impl Background for Controller {
     fn start(&mut self, item: Item, drive: &DriveTiming) {
         let (serial, view, queued) = (&mut self.serial, self.view, self.queued);
-        let _ = motion::start(item, drive, || answer_status(serial, &view, queued));
+        let grbl = self.grbl;
+        let _ = motion::start(item, drive, || {
+            answer_status(serial, &view, queued, grbl.as_ref())
+        });
     }
 
     fn drain(&mut self) {
         while !motion::drained() {
-            answer_status(&mut self.serial, &self.view, self.queued);
+            answer_status(
+                &mut self.serial,
+                &self.view,
+                self.queued,
+                self.grbl.as_ref(),
+            );
             board::sleep_unless(|| motion::wanted() || motion::drained());
         }
     }

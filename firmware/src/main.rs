@@ -26,18 +26,22 @@ fn main() -> ! {
         // Real-time requests the serial interrupt acted on: the protocol's
         // part (the reset's report and session, a status line) first.
         if io.realtime(device) {
+            io.grbl = device.grbl_extras();
             continue;
         }
         // The step interrupt runs the last block started: the next one
         // starts now, window full or not.
         let feed = device.can_feed() && firmware::motion::hungry();
-        if feed {
+        if feed || device.cancel_pending() {
             device.poll(&mut io);
         }
         match io.serial.receive() {
             Some(byte) => {
                 io.storage.heard();
                 device.receive(byte, &mut io);
+                // The link may have switched protocol.
+                io.grbl = device.grbl_extras();
+                firmware::board::set_grbl(io.grbl.is_some());
             }
             None if feed => {}
             None => {

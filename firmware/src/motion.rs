@@ -386,11 +386,15 @@ pub fn motion() -> State {
 
 /// A real-time byte, from the serial interrupt: hold, resume and reset act
 /// on the step interrupt's state at once; every one asks thread mode for
-/// its line.
-pub fn realtime(rt: Realtime) {
+/// its line, but a hold and a resume on a grbl link (`quiet`: grbl answers
+/// neither).
+pub fn realtime(rt: Realtime, quiet: bool) {
     act(rt);
     if rt == Realtime::Resume {
         CYCLE_START.store(true, Ordering::Release);
+    }
+    if quiet && matches!(rt, Realtime::Hold | Realtime::Resume) {
+        return;
     }
     if rt == Realtime::Reset {
         WANTED.fetch_or(WANT_RESET, Ordering::AcqRel);

@@ -187,6 +187,23 @@ impl LocalDevice {
         self.runs
     }
 
+    /// Switches the link to the grbl 1.1 protocol (or back); returns the
+    /// banner it sends.
+    pub fn set_grbl(&mut self, on: bool) -> Vec<u8> {
+        let (mut events, mut starts, mut runs) = (Vec::new(), Vec::new(), 0);
+        let mut io = Collect {
+            out: Vec::new(),
+            events: &mut events,
+            starts: &mut starts,
+            runs: &mut runs,
+            operator: None,
+            stop_line: Vec::new(),
+            later: Vec::new(),
+        };
+        self.dev.set_grbl(on, &mut io);
+        io.out
+    }
+
     /// The underlying device (state inspection).
     pub fn device(&self) -> &Device {
         &self.dev

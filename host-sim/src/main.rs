@@ -333,6 +333,11 @@ enum Command {
         /// Serve on a new pseudo-terminal and print its path.
         #[arg(long)]
         pty: bool,
+        /// Speak the grbl 1.1 protocol from the start (for grbl senders:
+        /// Universal Gcode Sender, bCNC, CNCjs); `$PENDANT` switches to the
+        /// pendant protocol, its request `GRBL` back.
+        #[arg(long)]
+        grbl: bool,
     },
 }
 
@@ -848,8 +853,9 @@ fn main() -> ExitCode {
         Command::Serve {
             stdio: _,
             pty: true,
-        } => serve_pty(),
-        Command::Serve { .. } => serve_stdio(),
+            grbl,
+        } => serve_pty(grbl),
+        Command::Serve { grbl, .. } => serve_stdio(grbl),
     };
     match result {
         Ok(code) => code,
@@ -886,8 +892,11 @@ impl host_sim::device::Operator for Stdio {
     }
 }
 
-fn serve_stdio() -> Result<ExitCode, Box<dyn std::error::Error>> {
+fn serve_stdio(grbl: bool) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let mut device = LocalDevice::new();
+    if grbl {
+        std::io::stdout().write_all(&device.set_grbl(true))?;
+    }
     let mut link = Stdio {
         stdin: std::io::stdin().lock(),
         stdout: std::io::stdout().lock(),
@@ -1014,8 +1023,14 @@ fn send_program(args: &SendArgs) -> Result<ExitCode, Box<dyn std::error::Error>>
     Ok(ExitCode::from(code))
 }
 
-fn serve_pty() -> Result<ExitCode, Box<dyn std::error::Error>> {
-    let device = PtyDevice::start()?;
+fn serve_pty(grbl: bool) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let mut local = LocalDevice::new();
+    if grbl {
+        // A grbl sender resets the controller when it connects and reads
+        // the banner then.
+        local.set_grbl(true);
+    }
+    let device = PtyDevice::start_with(local)?;
     println!("device on {} (115200 8N1); Ctrl-C ends", device.path());
     std::io::stdout().flush()?;
     device.wait();

@@ -75,6 +75,8 @@ pub struct Plan {
     pub setup_refused: Vec<Refused>,
     /// X impulse price and Z impulse price, ångström; diameters.
     prices: (i64, i64, bool),
+    /// The program is in Fanuc's dialect.
+    fanuc: bool,
 }
 
 /// What the board reports of itself, as requests that give the model the
@@ -273,7 +275,10 @@ impl Plan {
         settings: &[String],
         setup: &[(usize, &str)],
     ) -> Result<Plan, String> {
-        let mut plan = Plan::default();
+        let mut plan = Plan {
+            fanuc: options.dialect == Dialect::Fanuc,
+            ..Plan::default()
+        };
         let mut dev = LocalDevice::recording();
         for s in settings {
             let r = final_line(&dev.request(s));
@@ -455,14 +460,27 @@ impl Plan {
             at = p;
             keep
         });
+        // One move at least, if only on the spot: a move makes the
+        // restored offsets the programmed point's, as the program had it.
+        if pts.is_empty() {
+            pts.push(at);
+        }
         pts
     }
 
-    /// A `MOVE` to registers `p` at `feed` mm/min (machine coordinates).
+    /// A feed move to registers `p` at `feed` mm/min in machine
+    /// coordinates (`G53`: whatever offsets are in effect).
     fn move_to(&self, p: (i64, i64), feed: &str) -> String {
         let (hx, hz, diam) = self.prices;
         let x = p.0 * hx * if diam { 2 } else { 1 };
-        format!("MOVE X={} Z={} F={feed}", exact_mm(x), exact_mm(p.1 * hz))
+        // Per minute: G94 in ISO, G98 in Fanuc's system A (whose G94 is a
+        // facing cycle).
+        let per_minute = if self.fanuc { "G98" } else { "G94" };
+        format!(
+            "G53 {per_minute} G01 X{} Z{} F{feed}",
+            exact_mm(x),
+            exact_mm(p.1 * hz)
+        )
     }
 
     /// The line whose motion includes event `e` (the line running).
@@ -951,14 +969,19 @@ impl<L: ByteLink> Sender<L> {
             stood.1,
             plan.events()
         ));
-        if let Some(l) = plan.lines.get(j) {
-            for s in &l.restore {
-                self.must(s, op, plan)?;
-            }
+        // The spindle and coolant as they were, then the tool back along its
+        // path (machine coordinates, per minute), then the program's modes
+        // again.
+        let restore = plan.lines.get(j).map_or(&[][..], |l| &l.restore[..]);
+        for s in restore {
+            self.must(s, op, plan)?;
         }
         for p in plan.retrace(e, target) {
             let mv = plan.move_to(p, &self.return_feed);
             self.must(&mv, op, plan)?;
+        }
+        for s in restore {
+            self.must(s, op, plan)?;
         }
         self.must("SYNC", op, plan)?;
         self.base = target;

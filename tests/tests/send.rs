@@ -75,8 +75,17 @@ impl Operator for Script {
 }
 
 fn plan_for<L: ByteLink>(sender: &mut Sender<L>, text: &str, options: Options) -> Plan {
+    plan_with(sender, text, options, &[])
+}
+
+fn plan_with<L: ByteLink>(
+    sender: &mut Sender<L>,
+    text: &str,
+    options: Options,
+    setup: &[(usize, &str)],
+) -> Plan {
     let settings = board_settings(sender).expect("the board's settings");
-    let plan = Plan::build(text, options, &settings, &[]).expect("the model runs the program");
+    let plan = Plan::build(text, options, &settings, setup).expect("the model runs the program");
     assert!(plan.refused.is_empty(), "{:?}", plan.refused);
     plan
 }
@@ -110,6 +119,33 @@ fn a_reset_in_the_middle_restarts_the_program_and_it_ends_where_it_should() {
     assert!(report.requests > plan.lines.len() as u64);
     let said = op.said.join("\n");
     assert!(said.contains("restarting at line"), "{said}");
+}
+
+#[test]
+fn a_restart_under_work_and_tool_offsets_goes_back_in_machine_coordinates() {
+    let device = PtyDevice::start().expect("pty");
+    let client = Client::open(device.path(), Duration::from_secs(5)).expect("open");
+    let mut sender = Sender::new(client, Duration::from_millis(300), 83).expect("session");
+    let text = program().replace("T1 M06\n", "T1 M06\nG43 H1\nG55\n");
+    let setup = [
+        (1, "WORK G=55 X=0 Z=-40"),
+        (2, "TOOL N=1 X=1.5 Z=2.25 R=0.4 T=3"),
+    ];
+    let plan = plan_with(&mut sender, &text, ISO, &setup);
+    let mut op = Script {
+        keys: vec![(100, Duration::ZERO, Key::Reset)],
+        ..Script::default()
+    };
+    let report = sender.send(&plan, &mut op);
+    assert!(report.halt.is_none(), "{:?} {:?}", report.halt, op.said);
+    assert_eq!(report.resets, 1);
+    assert_eq!(report.registers, Some(plan.end()));
+    // The offsets moved the program: machine = work + G55 (Z −40) + the
+    // tool's offset (Z +2.25), so Z ends 37.75 mm lower than the same
+    // program without them (0.01 mm impulses).
+    let mut plain = Sender::new(LocalLink::new(), Duration::from_millis(50), 84).expect("session");
+    let without = plan_for(&mut plain, &program(), ISO);
+    assert_eq!(plan.end().1, without.end().1 - 3775);
 }
 
 #[test]

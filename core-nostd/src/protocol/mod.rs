@@ -6,6 +6,7 @@
 //! reply line and every accepted motion block to an [`Io`].
 
 pub mod framing;
+pub mod grbl;
 pub mod reply;
 mod session;
 mod words;
@@ -228,6 +229,7 @@ pub const CHORDS_PER_PAUSE: u32 = 16;
 pub struct Device {
     rx: LineAssembler,
     session: Session,
+    grbl: grbl::Front,
 }
 
 impl Device {
@@ -236,6 +238,7 @@ impl Device {
         Device {
             rx: LineAssembler::new(),
             session: Session::new(),
+            grbl: grbl::Front::new(),
         }
     }
 
@@ -246,6 +249,7 @@ impl Device {
         Device {
             rx: LineAssembler::new(),
             session: Session::with_window(window),
+            grbl: grbl::Front::new(),
         }
     }
 
@@ -253,25 +257,103 @@ impl Device {
     /// line, or at once for a real-time byte (which leaves the line being
     /// received as it was).
     pub fn receive<I: Io>(&mut self, byte: u8, io: &mut I) {
-        if let Some(rt) = Realtime::from_byte(byte) {
-            self.session.realtime(rt, io);
-            return;
+        if self.grbl.on {
+            if let Some(rt) = grbl::GrblRealtime::from_byte(byte) {
+                return self.realtime_grbl(rt, io);
+            }
+        } else if let Some(rt) = Realtime::from_byte(byte) {
+            return self.realtime(rt, io);
         }
         match self.rx.push(byte) {
-            Some(Framed::Line) => self.session.handle_line(self.rx.line(), io),
-            Some(Framed::TooLong) => session::send_error(
-                io,
-                ErrorCode::LineTooLong,
-                format_args!("longer than {} bytes", framing::MAX_LINE),
-            ),
+            Some(Framed::Line) => self.line(io),
+            Some(Framed::TooLong) => {
+                let mut t = self.link(io);
+                session::send_error(
+                    &mut t,
+                    ErrorCode::LineTooLong,
+                    format_args!("longer than {} bytes", framing::MAX_LINE),
+                );
+                if self.grbl.on {
+                    t.answer();
+                }
+            }
             None => {}
         }
     }
 
+    /// The session's one way out to `io`, as the link speaks.
+    fn link<'a, I: Io>(&self, io: &'a mut I) -> grbl::Translate<'a, I> {
+        if self.grbl.on {
+            grbl::Translate::grbl(io, grbl::Extras::of(&self.session, &self.grbl))
+        } else {
+            grbl::Translate::pendant(io)
+        }
+    }
+
+    /// A complete line: the pendant's request, or grbl's line. The pendant
+    /// request `GRBL` switches the link to grbl (`OK GRBL=1`, then the
+    /// banner); grbl's `$PENDANT` switches back. Nothing else does: noise
+    /// on a pendant link never makes it speak grbl.
+    fn line<I: Io>(&mut self, io: &mut I) {
+        let line = self.rx.line();
+        if self.grbl.on {
+            grbl::line(&mut self.grbl, &mut self.session, line, io);
+        } else if line.eq_ignore_ascii_case(b"GRBL") {
+            let mut t = grbl::Translate::pendant(io);
+            session::send_ok(&mut t, Some(format_args!("GRBL=1")));
+            t.send(grbl::BANNER);
+            self.grbl.on = true;
+        } else {
+            self.session
+                .handle_line(line, &mut grbl::Translate::pendant(io));
+        }
+    }
+
+    /// Whether the link speaks grbl.
+    pub const fn grbl(&self) -> bool {
+        self.grbl.on
+    }
+
+    /// Switches the link to grbl (the banner first) or to the pendant
+    /// protocol.
+    pub fn set_grbl<I: Io>(&mut self, on: bool, io: &mut I) {
+        if on && !self.grbl.on {
+            io.send(grbl::BANNER);
+        }
+        self.grbl.on = on;
+    }
+
+    /// What a grbl status report adds to the session's status line (for a
+    /// transport that answers `?` itself while it waits).
+    pub fn grbl_extras(&self) -> Option<grbl::Extras> {
+        self.grbl
+            .on
+            .then(|| grbl::Extras::of(&self.session, &self.grbl))
+    }
+
+    /// A grbl real-time character, picked out by a transport or by
+    /// [`Device::receive`].
+    pub fn realtime_grbl<I: Io>(&mut self, rt: grbl::GrblRealtime, io: &mut I) {
+        grbl::realtime(&mut self.grbl, &mut self.session, rt, io);
+    }
+
     /// A board's stepper needs the next block: starts it if one is queued
-    /// (called between received bytes).
+    /// (called between received bytes). A cancelled jog is dropped here
+    /// once held at rest.
     pub fn poll<I: Io>(&mut self, io: &mut I) {
-        self.session.poll(io);
+        let mut t = grbl::Translate::pendant(io);
+        if self.grbl.cancel && self.session.held_or_idle(&mut t) {
+            self.grbl.cancel = false;
+            self.grbl.jogging = false;
+            self.session.cancel_motion(&mut t);
+        }
+        self.session.poll(&mut t);
+    }
+
+    /// A jog cancel waits for the axes to come to rest ([`Device::poll`]
+    /// finishes it).
+    pub const fn cancel_pending(&self) -> bool {
+        self.grbl.cancel
     }
 
     /// Whether [`Device::poll`] could start a block.
@@ -280,9 +362,13 @@ impl Device {
     }
 
     /// Acts on a real-time command and answers it (a transport that picks
-    /// real-time bytes out as they arrive hands them over here).
+    /// real-time bytes out as they arrive hands them over here); on a grbl
+    /// link, as grbl answers it.
     pub fn realtime<I: Io>(&mut self, rt: Realtime, io: &mut I) {
-        self.session.realtime(rt, io);
+        if self.grbl.on {
+            return self.realtime_grbl(grbl::GrblRealtime::Common(rt), io);
+        }
+        self.session.realtime(rt, &mut grbl::Translate::pendant(io));
     }
 
     /// Takes received bytes in order.

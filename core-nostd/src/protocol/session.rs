@@ -133,6 +133,9 @@ pub struct Session {
     prog: [Length; 2],
     /// Nose radius compensation.
     contour: Contour,
+    /// Feed override, percent (grbl's real-time 0x90–0x94): scales every
+    /// G-code feed read from now on.
+    feed_override: u8,
     /// The blocks the last G-code request sent.
     last_moves: Moves,
     /// The host's session token (`SESSION`); 0 after power-on.
@@ -229,6 +232,7 @@ impl Session {
             sel: Selection::POWER_ON,
             prog: [Length::ZERO; 2],
             contour: Contour::new(),
+            feed_override: 100,
             last_moves: Moves::new(),
             token: 0,
             block_delete: false,
@@ -1007,6 +1011,7 @@ impl Session {
         let now = if feeds {
             path_feed(&modal, &spindle, self.prog[0])
                 .map_err(|e| Refusal::Value("F", e.as_str()))?
+                .map(|f| self.overridden(f))
         } else {
             None
         };
@@ -1670,6 +1675,16 @@ impl Session {
         self.machine.poll(&mut Sink::new(io, self.drive));
     }
 
+    /// Whether the axes are at rest, held or with nothing to run (a
+    /// device without motion in the background always is).
+    pub fn held_or_idle<I: Io>(&self, io: &mut I) -> bool {
+        if io.background().is_none() {
+            return true;
+        }
+        let st = self.machine.status(&mut Sink::new(io, self.drive));
+        matches!(st.motion, Axes::Idle | Axes::Held)
+    }
+
     /// Whether [`Session::poll`] could start a block.
     pub fn can_feed(&self) -> bool {
         self.machine.can_feed()
@@ -1694,28 +1709,14 @@ impl Session {
     /// limits kept. Answered `!RESET DONE= OF= PX= PZ=`: the events of the
     /// block that was running that were issued, of how many.
     fn reset<I: Io>(&mut self, io: &mut I) {
-        let (found, issued): (Aborted, ImpulsePoint) =
-            self.machine.abort(&mut Sink::new(io, self.drive));
-        let cmd = [
-            // A register times its price is a position the machine holds.
-            Length::from_angstrom(i64::from(issued.x.get()) * self.cfg.hx.as_angstrom())
-                .unwrap_or(Length::ZERO),
-            Length::from_angstrom(i64::from(issued.z.get()) * self.cfg.hz.as_angstrom())
-                .unwrap_or(Length::ZERO),
-        ];
-        self.machine.set_point(point_q32(cmd));
-        self.cmd = cmd;
+        let (found, issued) = self.drop_motion(io);
         self.sel = Selection::POWER_ON;
-        self.prog = self.work_point(cmd);
-        self.pos = issued;
+        self.prog = self.work_point(self.cmd);
         self.modal = Modal::POWER_ON;
         self.aux = Aux::POWER_ON;
         // The board dropped its outputs with the motion; the session's
         // follow.
         self.switch_outputs(self.outputs_for(&self.aux, Units::Mm), io);
-        self.contour = Contour::new();
-        self.last_moves = Moves::new();
-        self.element_feed = None;
         self.token = 0;
         self.last_id = None;
         self.last_final.clear();
@@ -1730,6 +1731,54 @@ impl Session {
         );
         io.send(line.finish());
         self.share_view(io);
+    }
+
+    /// Everything queued and started dropped at once: the registers keep
+    /// the steps issued and the commanded point becomes theirs; nothing
+    /// waits for compensation.
+    fn drop_motion<I: Io>(&mut self, io: &mut I) -> (Aborted, ImpulsePoint) {
+        let (found, issued) = self.machine.abort(&mut Sink::new(io, self.drive));
+        let cmd = [
+            // A register times its price is a position the machine holds.
+            Length::from_angstrom(i64::from(issued.x.get()) * self.cfg.hx.as_angstrom())
+                .unwrap_or(Length::ZERO),
+            Length::from_angstrom(i64::from(issued.z.get()) * self.cfg.hz.as_angstrom())
+                .unwrap_or(Length::ZERO),
+        ];
+        self.machine.set_point(point_q32(cmd));
+        self.cmd = cmd;
+        self.pos = issued;
+        self.contour = Contour::new();
+        self.last_moves = Moves::new();
+        self.element_feed = None;
+        (found, issued)
+    }
+
+    /// A jog cancelled (grbl's 0x85), once held at rest: what is left of
+    /// it is dropped; the modal state, the offsets and the session stay.
+    pub fn cancel_motion<I: Io>(&mut self, io: &mut I) {
+        self.drop_motion(io);
+        self.prog = self.work_point(self.cmd);
+        self.share_view(io);
+    }
+
+    /// Sets the feed override, percent (10 … 200).
+    pub fn set_feed_override(&mut self, percent: u8) {
+        self.feed_override = percent.clamp(10, 200);
+    }
+
+    /// `feed` under the override.
+    fn overridden(&self, feed: Feed) -> Feed {
+        if self.feed_override == 100 {
+            return feed;
+        }
+        let scaled = div_round_half_away(
+            feed.mm_per_min().as_angstrom() * i64::from(self.feed_override),
+            100,
+        );
+        Length::from_angstrom(scaled)
+            .and_then(Feed::new)
+            .unwrap_or(feed)
     }
 
     /// The tool table, the work offsets and the stored positions.

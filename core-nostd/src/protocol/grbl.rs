@@ -1,0 +1,823 @@
+//! The grbl 1.1 serial protocol, a second front over the same session, so
+//! that the senders machinists already use (Universal Gcode Sender, bCNC,
+//! CNCjs, ioSender) stream to the controller unchanged.
+//!
+//! It translates at the edge and interprets nothing twice: a G-code line
+//! runs on the [`Session`] exactly as a pendant request does, and its
+//! pendant reply becomes `ok` or `error:N` (with a `[MSG:…]` line that says
+//! what and where); the session's status line becomes grbl's
+//! `<Idle|MPos:…|FS:…|WCO:…|Ov:…>`; a reset's report becomes the banner.
+//! The lathe is reported as grblHAL reports its lathe mode: `$32=2`,
+//! `LATHE` among the options, X as a diameter in diameter mode (`G7` in
+//! `$G`, `|D:1`) and Y always 0.
+//!
+//! What a grbl sender needs of the link: character counting against an RX
+//! buffer of [`RX_BUFFER`] bytes (the board's serial ring holds 512), `?`,
+//! `!`, `~` and Ctrl-X as real-time characters wherever they fall, 0x85
+//! jog cancel and the feed overrides 0x90–0x94. Rapid and spindle
+//! overrides are not implemented: their bytes are answered with a message
+//! and change nothing.
+
+use super::reply::ReplyLine;
+use super::{Io, Realtime, Session, StatusView, Timing, VERSION};
+use crate::interleave::{LinearBlock, StepEvent};
+use crate::machine::Background;
+use crate::outputs::Outputs;
+use crate::stepdir::DriveTiming;
+use core::fmt::Write;
+
+/// The RX buffer a sender may fill by character counting (`$I`'s `OPT`).
+pub const RX_BUFFER: usize = 128;
+/// Planner blocks (`$I`'s `OPT`: the queue less one, as grbl counts).
+pub const BLOCKS: usize = 63;
+/// The welcome line after a reset.
+pub const BANNER: &[u8] = b"\r\nGrbl 1.1h ['$' for help]\r\n";
+
+/// A real-time character of grbl.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GrblRealtime {
+    /// One of the pendant's real-time commands (`?`, `!`, `~`, Ctrl-X, and
+    /// the pendant's own 0x80–0x82).
+    Common(Realtime),
+    /// 0x85: stop a jog and drop what is left of it.
+    JogCancel,
+    /// 0x90–0x94: feed override to 100 %, +10, −10, +1, −1.
+    Feed(u8),
+    /// Rapid (0x95–0x97), spindle (0x99–0x9E) and coolant (0xA0, 0xA1)
+    /// overrides: not implemented.
+    Unsupported(u8),
+}
+
+impl GrblRealtime {
+    /// The real-time command a byte is in grbl mode, if it is one.
+    pub const fn from_byte(byte: u8) -> Option<GrblRealtime> {
+        match byte {
+            b'?' => Some(GrblRealtime::Common(Realtime::Status)),
+            b'!' => Some(GrblRealtime::Common(Realtime::Hold)),
+            b'~' => Some(GrblRealtime::Common(Realtime::Resume)),
+            0x85 => Some(GrblRealtime::JogCancel),
+            0x90..=0x94 => Some(GrblRealtime::Feed(byte)),
+            0x95..=0x97 | 0x99..=0x9E | 0xA0 | 0xA1 => Some(GrblRealtime::Unsupported(byte)),
+            _ => match Realtime::from_byte(byte) {
+                Some(rt) => Some(GrblRealtime::Common(rt)),
+                None => None,
+            },
+        }
+    }
+}
+
+/// The grbl front's own state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Front {
+    /// Whether the link speaks grbl.
+    pub on: bool,
+    /// The alarm in force (`ALARM:3` after a reset in motion), until `$X`.
+    pub alarm: Option<u8>,
+    /// Feed override, percent (10 … 200).
+    pub feed: u8,
+    /// A jog runs; a jog cancel waits for the axes to come to rest.
+    pub jogging: bool,
+    /// A jog cancel came: drop the rest once at rest.
+    pub cancel: bool,
+}
+
+impl Front {
+    /// Power-on: the pendant protocol, no alarm, 100 %.
+    pub const fn new() -> Front {
+        Front {
+            on: false,
+            alarm: None,
+            feed: 100,
+            jogging: false,
+            cancel: false,
+        }
+    }
+}
+
+impl Default for Front {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The value of `KEY=` in a pendant reply line.
+fn value<'a>(line: &'a [u8], key: &[u8]) -> Option<&'a [u8]> {
+    let mut words = line.split(|&b| b == b' ' || b == b'*');
+    words.find_map(|w| w.strip_prefix(key).and_then(|rest| rest.strip_prefix(b"=")))
+}
+
+/// A line ended without a checksum, as grbl ends its lines.
+fn finish(line: &mut ReplyLine) -> &[u8] {
+    line.push_bytes(b"\r\n");
+    line.as_bytes()
+}
+
+/// Writes `Å` as mm with 4 decimals (X doubled when `diameter`).
+fn write_mm(line: &mut ReplyLine, angstrom: i64, diameter: bool) {
+    let v = if diameter { 2 * angstrom } else { angstrom };
+    let _ = crate::length::write_mm4(line, crate::length::div_round_half_away(v, 1_000));
+}
+
+/// What the grbl link shows of the session's machine state, beside the
+/// status line: the work offset, the override, the mode.
+#[derive(Clone, Copy, Debug)]
+pub struct Extras {
+    /// Work zero in machine coordinates, Å, X on the radius (`WCO:`).
+    pub wco: [i64; 2],
+    /// X as a diameter.
+    pub diameter: bool,
+    /// Feed override, percent.
+    pub feed: u8,
+    /// A jog runs.
+    pub jogging: bool,
+    /// The alarm in force.
+    pub alarm: Option<u8>,
+}
+
+impl Extras {
+    /// Nothing to add (a pendant link).
+    pub const NONE: Extras = Extras {
+        wco: [0, 0],
+        diameter: false,
+        feed: 100,
+        jogging: false,
+        alarm: None,
+    };
+
+    /// The session's.
+    pub fn of(session: &Session, front: &Front) -> Extras {
+        let v = session
+            .offsets()
+            .vector(session.selection())
+            .unwrap_or([crate::length::Length::ZERO; 2]);
+        Extras {
+            wco: [v[0].as_angstrom(), v[1].as_angstrom()],
+            diameter: session.config().diam,
+            feed: front.feed,
+            jogging: front.jogging,
+            alarm: front.alarm,
+        }
+    }
+}
+
+/// A pendant status line (`STATUS`/`!STATUS`) as grbl's status report:
+/// `<Run|MPos:X,0.0000,Z|FS:F,S|WCO:…|Ov:…|D:1>`.
+pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
+    let mut line = ReplyLine::new();
+    let state = value(status, b"STATE").unwrap_or(b"IDLE");
+    let speed = value(status, b"V").unwrap_or(b"0");
+    let at_rest = speed.iter().all(|&b| b == b'0' || b == b'.');
+    let state: &[u8] = match (extras.alarm, state, value(status, b"STOP")) {
+        (Some(_), _, _) => b"Alarm",
+        (_, _, Some(_)) => b"Hold:0",
+        (_, b"HOLD", _) if at_rest => b"Hold:0",
+        (_, b"HOLD", _) => b"Hold:1",
+        (_, b"RUN", _) if extras.jogging => b"Jog",
+        (_, b"RUN", _) => b"Run",
+        _ => b"Idle",
+    };
+    line.push_bytes(b"<");
+    line.push_bytes(state);
+    line.push_bytes(b"|MPos:");
+    line.push_bytes(value(status, b"X").unwrap_or(b"0.0000"));
+    line.push_bytes(b",0.0000,");
+    line.push_bytes(value(status, b"Z").unwrap_or(b"0.0000"));
+    line.push_bytes(b"|FS:");
+    line.push_bytes(speed);
+    line.push_bytes(b",");
+    line.push_bytes(value(status, b"S").unwrap_or(b"0"));
+    line.push_bytes(b"|WCO:");
+    write_mm(&mut line, extras.wco[0], extras.diameter);
+    line.push_bytes(b",0.0000,");
+    write_mm(&mut line, extras.wco[1], false);
+    let _ = write!(
+        line,
+        "|Ov:{},100,100|D:{}>",
+        extras.feed,
+        u8::from(extras.diameter)
+    );
+    line
+}
+
+/// The grbl error code for a pendant refusal `ERR <CODE> …`.
+pub fn error_code(reply: &[u8]) -> u8 {
+    let code = reply
+        .strip_prefix(b"ERR ")
+        .and_then(|r| r.split(|&b| b == b' ').next())
+        .unwrap_or(b"");
+    match code {
+        // Expected command letter / bad number / unsupported command /
+        // invalid target / line too long / travel exceeded.
+        b"SYNTAX" | b"CHECKSUM" => 1,
+        b"VALUE" if names_feed(reply) => 22,
+        b"UNKNOWN" | b"VALUE" => 20,
+        b"GEOMETRY" => 33,
+        b"LINE_TOO_LONG" => 11,
+        b"RANGE" => 15,
+        _ => 20,
+    }
+}
+
+/// Whether a refusal is about the feed word (` F` in its text).
+fn names_feed(reply: &[u8]) -> bool {
+    reply
+        .iter()
+        .zip(reply.iter().skip(1))
+        .any(|(&a, &b)| a == b' ' && b == b'F')
+}
+
+/// The one [`Io`] the session answers through (so that its code exists
+/// once on the board): on a pendant link every call passes through; on a
+/// grbl link motion passes through and reply lines turn into grbl's.
+pub struct Translate<'a, I: Io + ?Sized> {
+    inner: &'a mut I,
+    grbl: bool,
+    /// A query of the front's own: the final line is kept, nothing sent.
+    capture: bool,
+    extras: Extras,
+    /// Status lines pass (a `?`), or are dropped (the answer to `!`, `~`).
+    pub statuses: bool,
+    /// The final line of the request: `None` before it came.
+    pub outcome: Option<Result<(), u8>>,
+    /// A refusal's text, for its `[MSG:…]` line (a query's final line).
+    pub message: ReplyLine,
+    /// A reset came, with a block running (`OF` > 0).
+    pub reset: Option<bool>,
+}
+
+impl<'a, I: Io + ?Sized> Translate<'a, I> {
+    /// Every call through to `inner` unchanged: the pendant protocol.
+    pub fn pendant(inner: &'a mut I) -> Self {
+        Self::grbl(inner, Extras::NONE).plain()
+    }
+
+    fn plain(mut self) -> Self {
+        self.grbl = false;
+        self
+    }
+
+    /// Around `inner`, speaking grbl.
+    pub fn grbl(inner: &'a mut I, extras: Extras) -> Self {
+        Translate {
+            inner,
+            grbl: true,
+            capture: false,
+            extras,
+            statuses: true,
+            outcome: None,
+            message: ReplyLine::new(),
+            reset: None,
+        }
+    }
+
+    /// Sends a plain grbl line.
+    pub fn line(&mut self, text: &[u8]) {
+        let mut l = ReplyLine::new();
+        l.push_bytes(text);
+        self.inner.send(finish(&mut l));
+    }
+
+    /// Sends `ok`, or `[MSG:…]` and `error:N`, for the request's outcome.
+    pub fn answer(&mut self) {
+        match self.outcome {
+            Some(Err(code)) => {
+                let mut m = ReplyLine::new();
+                m.push_bytes(b"[MSG:");
+                m.push_bytes(self.message.as_bytes());
+                m.push_bytes(b"]");
+                self.inner.send(finish(&mut m));
+                let mut e = ReplyLine::new();
+                let _ = write!(e, "error:{code}");
+                self.inner.send(finish(&mut e));
+            }
+            _ => self.inner.send(b"ok\r\n"),
+        }
+    }
+}
+
+impl<I: Io + ?Sized> Io for Translate<'_, I> {
+    fn send(&mut self, line: &[u8]) {
+        if !self.grbl {
+            return self.inner.send(line);
+        }
+        if self.capture {
+            if line.starts_with(b"OK") || line.starts_with(b"ERR") {
+                self.message = ReplyLine::new();
+                self.message.push_bytes(line);
+            }
+            return;
+        }
+        // Without the `*HH` and CRLF.
+        let body = line
+            .iter()
+            .rposition(|&b| b == b'*')
+            .and_then(|i| line.get(..i))
+            .unwrap_or(line);
+        if body.starts_with(b"OK") {
+            self.outcome = Some(Ok(()));
+        } else if body.starts_with(b"ERR ") {
+            self.outcome = Some(Err(error_code(body)));
+            self.message = ReplyLine::new();
+            self.message.push_bytes(body.get(4..).unwrap_or(b""));
+        } else if body.starts_with(b"!STATUS") {
+            if self.statuses {
+                let mut l = status_report(body, &self.extras);
+                self.inner.send(finish(&mut l));
+            }
+        } else if body.starts_with(b"!RESET") {
+            let running = value(body, b"OF").is_some_and(|v| v != b"0");
+            self.reset = Some(running);
+        }
+        // `DATA` lines and the rest: not grbl's.
+    }
+    fn run_start(&mut self) {
+        self.inner.run_start();
+    }
+    fn block_start(&mut self, block: &LinearBlock) {
+        self.inner.block_start(block);
+    }
+    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
+        self.inner.step(event, tick, drive);
+    }
+    fn run_end(&mut self, ticks: u64) {
+        self.inner.run_end(ticks);
+    }
+    fn background(&mut self) -> Option<&mut dyn Background> {
+        self.inner.background()
+    }
+    fn view(&mut self, view: &StatusView) {
+        self.inner.view(view);
+    }
+    fn pause(&mut self) {
+        self.inner.pause();
+    }
+    fn dwell(&mut self, us: u64) {
+        self.inner.dwell(us);
+    }
+    fn program_stop(&mut self, code: u8) {
+        self.inner.program_stop(code);
+    }
+    fn stop_status(&mut self, line: &[u8]) {
+        if !self.grbl {
+            return self.inner.stop_status(line);
+        }
+        let body = line
+            .iter()
+            .rposition(|&b| b == b'*')
+            .and_then(|i| line.get(..i))
+            .unwrap_or(line);
+        let mut l = status_report(body, &self.extras);
+        self.inner.stop_status(finish(&mut l));
+    }
+    fn outputs(&mut self, outputs: &Outputs) {
+        self.inner.outputs(outputs);
+    }
+    fn timing(&mut self) -> Option<Timing> {
+        self.inner.timing()
+    }
+}
+
+/// Runs a pendant request that moves nothing and returns its final line.
+fn query<I: Io + ?Sized>(
+    session: &mut Session,
+    t: &mut Translate<'_, I>,
+    request: &[u8],
+) -> ReplyLine {
+    let saved = (t.capture, t.outcome);
+    t.capture = true;
+    session.handle_line(request, t);
+    let line = core::mem::take(&mut t.message);
+    (t.capture, t.outcome) = saved;
+    line
+}
+
+/// `$$`: the settings a grbl sender knows, with this controller's values.
+/// Settable: `$0` (step pulse, µs), `$11` (junction deviation, mm), `$30`
+/// (the spindle's top speed, rpm), `$110`/`$112` (rapid rates X, Z,
+/// mm/min), `$120`/`$122` (accelerations X, Z, mm/s²).
+const SETTINGS: [(u16, &[u8], &[u8]); 7] = [
+    (0, b"DRIVE", b"PULSE"),
+    (11, b"LIMITS", b"JD"),
+    (30, b"AUX", b"SMAX"),
+    (110, b"LIMITS", b"VX"),
+    (112, b"LIMITS", b"VZ"),
+    (120, b"LIMITS", b"AX"),
+    (122, b"LIMITS", b"AZ"),
+];
+/// Reported, fixed: `$13` report in mm, `$22` no homing cycle (these
+/// lathes have no home switches), `$32` lathe mode (grblHAL's 2).
+const FIXED: [(u16, u8); 3] = [(13, 0), (22, 0), (32, 2)];
+
+fn settings<I: Io + ?Sized>(session: &mut Session, io: &mut Translate<'_, I>) {
+    for (n, command, key) in SETTINGS {
+        let reply = query(session, io, command);
+        let mut l = ReplyLine::new();
+        let _ = write!(l, "${n}=");
+        l.push_bytes(value(reply.as_bytes(), key).unwrap_or(b"0"));
+        io.inner.send(finish(&mut l));
+    }
+    for (n, v) in FIXED {
+        let mut l = ReplyLine::new();
+        let _ = write!(l, "${n}={v}");
+        io.inner.send(finish(&mut l));
+    }
+    // Steps per mm: one over the impulse price (X on the radius).
+    let cfg = session.config();
+    for (n, h) in [(100, cfg.hx.as_angstrom()), (102, cfg.hz.as_angstrom())] {
+        let mut l = ReplyLine::new();
+        let _ = write!(l, "${n}=");
+        // 10⁷/h steps per mm, to 3 decimals.
+        let milli = crate::length::div_round_half_away(10_000_000_000, h.max(1));
+        let _ = write!(l, "{}.{:03}", milli / 1000, milli % 1000);
+        io.inner.send(finish(&mut l));
+    }
+}
+
+/// `$n=value`: the setting through its pendant request.
+fn set<I: Io + ?Sized>(session: &mut Session, n: &[u8], v: &[u8], io: &mut Translate<'_, I>) {
+    let found = SETTINGS
+        .iter()
+        .find(|(k, _, _)| {
+            let mut digits = ReplyLine::new();
+            let _ = write!(digits, "{k}");
+            digits.as_bytes() == n
+        })
+        .copied();
+    let Some((_, command, key)) = found else {
+        io.outcome = Some(Err(3));
+        io.message = ReplyLine::new();
+        io.message.push_bytes(b"setting not settable here: ");
+        io.message.push_bytes(n);
+        return;
+    };
+    let mut req = ReplyLine::new();
+    req.push_bytes(command);
+    req.push_bytes(b" ");
+    req.push_bytes(key);
+    req.push_bytes(b"=");
+    req.push_bytes(v);
+    let request = ReplyLine::clone(&req);
+    session.handle_line(request.as_bytes(), io);
+}
+
+/// `$#`: work offsets, the stored positions, the G92 shift.
+fn offsets<I: Io + ?Sized>(session: &Session, io: &mut Translate<'_, I>) {
+    let o = session.offsets();
+    let diameter = session.config().diam;
+    let mut put = |name: &[u8], p: [crate::length::Length; 2]| {
+        let mut l = ReplyLine::new();
+        l.push_bytes(b"[");
+        l.push_bytes(name);
+        l.push_bytes(b":");
+        write_mm(&mut l, p[0].as_angstrom(), diameter);
+        l.push_bytes(b",0.0000,");
+        write_mm(&mut l, p[1].as_angstrom(), false);
+        l.push_bytes(b"]");
+        io.inner.send(finish(&mut l));
+    };
+    let names: [&[u8]; 6] = [b"G54", b"G55", b"G56", b"G57", b"G58", b"G59"];
+    for (name, w) in names.iter().zip(o.work.iter()) {
+        put(name, *w);
+    }
+    put(b"G28", o.reference[0]);
+    put(b"G30", o.reference[1]);
+    put(b"G92", o.shift);
+    io.line(b"[TLO:0.0000]");
+    io.line(b"[PRB:0.0000,0.0000,0.0000:0]");
+}
+
+/// `$G`: the modal state, grblHAL's lathe words included.
+fn modes<I: Io + ?Sized>(session: &Session, io: &mut Translate<'_, I>) {
+    use crate::gcode::{Coolant, FeedMode, Spindle, SpindleMode, Units};
+    let m = session.modal();
+    let aux = session.aux();
+    let mut l = ReplyLine::new();
+    let _ = write!(
+        l,
+        "[GC:G{} G{} {} G18 {} {} {} {} {} {} T{}",
+        match m.motion {
+            crate::gcode::Motion::Rapid => 0,
+            crate::gcode::Motion::Linear => 1,
+            crate::gcode::Motion::ArcCw => 2,
+            crate::gcode::Motion::ArcCcw => 3,
+        },
+        54 + session.selection().wcs,
+        if session.config().diam { "G7" } else { "G8" },
+        if m.units == Units::Inch { "G20" } else { "G21" },
+        if m.incremental { "G91" } else { "G90" },
+        if m.feed_mode == FeedMode::PerRev {
+            "G95"
+        } else {
+            "G94"
+        },
+        if aux.spindle.mode == SpindleMode::Surface {
+            "G96"
+        } else {
+            "G97"
+        },
+        match aux.spindle.turning {
+            Spindle::Cw => "M3",
+            Spindle::Ccw => "M4",
+            Spindle::Off => "M5",
+        },
+        match aux.coolant {
+            Coolant::Mist => "M7",
+            Coolant::Flood => "M8",
+            Coolant::Off => "M9",
+        },
+        session.selection().loaded,
+    );
+    l.push_bytes(b" F");
+    let _ = write!(l, "{}", m.feed.unwrap_or(crate::length::Length::ZERO));
+    l.push_bytes(b" S");
+    let _ = write!(
+        l,
+        "{}",
+        aux.spindle.s.unwrap_or(crate::length::Length::ZERO)
+    );
+    l.push_bytes(b"]");
+    io.inner.send(finish(&mut l));
+}
+
+/// `$J=…`: a jog as a `MOVE` in machine coordinates (G90 words are work
+/// coordinates unless `G53`; G91 an increment; mm only; `F` required).
+fn jog<I: Io + ?Sized>(session: &mut Session, words: &[u8], io: &mut Translate<'_, I>) -> bool {
+    let refuse = |io: &mut Translate<'_, I>, code: u8, why: &[u8]| {
+        io.outcome = Some(Err(code));
+        io.message = ReplyLine::new();
+        io.message.push_bytes(b"$J: ");
+        io.message.push_bytes(why);
+        false
+    };
+    let (mut inc, mut machine) = (false, false);
+    let mut axes: [Option<crate::length::Length>; 2] = [None, None];
+    let mut feed = None;
+    let mut rest = words;
+    while let Some((&first, tail)) = rest.split_first() {
+        let letter = first.to_ascii_uppercase();
+        let len = tail
+            .iter()
+            .position(|b| !(b.is_ascii_digit() || matches!(b, b'.' | b'-' | b'+')))
+            .unwrap_or(tail.len());
+        let (digits, after) = (
+            tail.get(..len).unwrap_or(b""),
+            tail.get(len..).unwrap_or(b""),
+        );
+        let number = core::str::from_utf8(digits).unwrap_or("");
+        rest = after;
+        match (letter, number) {
+            (b' ', _) => continue,
+            (b'G', "90") => inc = false,
+            (b'G', "91") => inc = true,
+            (b'G', "53") => machine = true,
+            (b'G', "21") => {}
+            (b'G', "20") => return refuse(io, 20, b"inches are not jogged here: G21"),
+            (b'X' | b'Z' | b'F', n) => match crate::length::Length::from_gcode_mm(n) {
+                Ok(v) if letter == b'X' => axes[0] = Some(v),
+                Ok(v) if letter == b'Z' => axes[1] = Some(v),
+                Ok(v) => feed = Some(v),
+                Err(_) => return refuse(io, 2, b"bad number"),
+            },
+            _ => return refuse(io, 20, b"only X, Z, F, G20/G21, G90/G91, G53"),
+        }
+    }
+    let Some(f) = feed else {
+        return refuse(io, 22, b"F is required");
+    };
+    if axes == [None, None] {
+        return refuse(io, 26, b"no axis word");
+    }
+    // `MOVE` takes work coordinates (as `POS` prints them): a G53 target
+    // less the offsets in effect (X on the diameter when the words are
+    // diameters).
+    let wco = if machine && !inc {
+        let w = Extras::of(session, &Front::new()).wco;
+        [-w[0], -w[1]]
+    } else {
+        [0, 0]
+    };
+    let diameter = session.config().diam;
+    let mut req = ReplyLine::new();
+    req.push_bytes(b"MOVE");
+    let shifts = [if diameter { 2 * wco[0] } else { wco[0] }, wco[1]];
+    for ((a, name), shift) in axes.iter().zip([b" X=", b" Z="]).zip(shifts) {
+        if let Some(v) = a {
+            req.push_bytes(name);
+            write_exact(&mut req, v.as_angstrom() + shift);
+        }
+    }
+    if inc {
+        req.push_bytes(b" INC=1");
+    }
+    req.push_bytes(b" F=");
+    write_exact(&mut req, f.as_angstrom());
+    let request = ReplyLine::clone(&req);
+    session.handle_line(request.as_bytes(), io);
+    io.outcome == Some(Ok(()))
+}
+
+/// Å as an exact decimal of mm.
+fn write_exact(line: &mut ReplyLine, a: i64) {
+    if a < 0 {
+        line.push_bytes(b"-");
+    }
+    let u = a.unsigned_abs();
+    let _ = write!(line, "{}", u / 10_000_000);
+    let frac = u % 10_000_000;
+    if frac != 0 {
+        let mut digits = [b'0'; 7];
+        let mut f = frac;
+        for d in digits.iter_mut().rev() {
+            *d = b'0' + (f % 10) as u8;
+            f /= 10;
+        }
+        let len = 7 - digits.iter().rev().take_while(|&&d| d == b'0').count();
+        line.push_bytes(b".");
+        line.push_bytes(digits.get(..len).unwrap_or(&[]));
+    }
+}
+
+/// Runs one line received in grbl mode. Returns whether the link goes
+/// back to the pendant protocol (`$PENDANT`).
+pub fn line<I: Io + ?Sized>(
+    front: &mut Front,
+    session: &mut Session,
+    text: &[u8],
+    io: &mut I,
+) -> bool {
+    let extras = Extras::of(session, front);
+    let mut t = Translate::grbl(io, extras);
+    let trimmed = trim(text);
+    let upper = |i: usize| trimmed.get(i).map(u8::to_ascii_uppercase);
+    if trimmed.first() == Some(&b'$') {
+        t.outcome = Some(Ok(()));
+        match (upper(1), trimmed.len()) {
+            (None, _) => t.line(b"[HLP:$$ $# $G $I $N $x=val $J=line $X $H $PENDANT ~ ! ? ctrl-x]"),
+            (Some(b'$'), 2) => settings(session, &mut t),
+            (Some(b'#'), 2) => offsets(session, &mut t),
+            (Some(b'G'), 2) => modes(session, &mut t),
+            (Some(b'I'), 2) => {
+                let mut l = ReplyLine::new();
+                let _ = write!(l, "[VER:1.1h.{VERSION}:lathe-retrofit]");
+                t.inner.send(finish(&mut l));
+                let mut l = ReplyLine::new();
+                let _ = write!(l, "[OPT:VNM,{BLOCKS},{RX_BUFFER}]");
+                t.inner.send(finish(&mut l));
+                t.line(b"[NEWOPT:LATHE]");
+                t.line(b"[FIRMWARE:lathe-retrofit]");
+            }
+            (Some(b'N'), 2) => {
+                t.line(b"$N0=");
+                t.line(b"$N1=");
+            }
+            (Some(b'X'), 2) => {
+                front.alarm = None;
+                t.line(b"[MSG:Caution: Unlocked]");
+            }
+            (Some(b'H'), 2) => {
+                t.outcome = Some(Err(5));
+                t.message
+                    .push_bytes(b"no homing cycle: these lathes have no home switches");
+            }
+            (Some(b'J'), _) if upper(2) == Some(b'=') => {
+                if let Some(a) = front.alarm {
+                    t.outcome = Some(Err(9));
+                    let _ = write!(t.message, "alarm {a}: $X to unlock");
+                } else if jog(session, trimmed.get(3..).unwrap_or(b""), &mut t) {
+                    front.jogging = true;
+                }
+            }
+            _ if trimmed.eq_ignore_ascii_case(b"$PENDANT") => {
+                t.answer();
+                front.on = false;
+                return true;
+            }
+            _ => match trimmed.iter().position(|&b| b == b'=') {
+                Some(eq)
+                    if trimmed
+                        .get(1..eq)
+                        .is_some_and(|n| !n.is_empty() && n.iter().all(u8::is_ascii_digit)) =>
+                {
+                    let n = trimmed.get(1..eq).unwrap_or(b"");
+                    let v = trim(trimmed.get(eq + 1..).unwrap_or(b""));
+                    set(session, n, v, &mut t);
+                }
+                _ => {
+                    t.outcome = Some(Err(3));
+                    t.message.push_bytes(b"not a $ command of this controller");
+                }
+            },
+        }
+    } else if trimmed.is_empty() {
+        t.outcome = Some(Ok(()));
+    } else if let Some(a) = front.alarm {
+        t.outcome = Some(Err(9));
+        let _ = write!(t.message, "alarm {a}: $X to unlock");
+    } else {
+        front.jogging = false;
+        session.handle_line(text, &mut t);
+    }
+    t.answer();
+    false
+}
+
+fn trim(text: &[u8]) -> &[u8] {
+    let start = text
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(text.len());
+    let end = text
+        .iter()
+        .rposition(|b| !b.is_ascii_whitespace())
+        .map_or(start, |e| e + 1);
+    text.get(start..end).unwrap_or(&[])
+}
+
+/// Acts on a grbl real-time character.
+pub fn realtime<I: Io + ?Sized>(
+    front: &mut Front,
+    session: &mut Session,
+    rt: GrblRealtime,
+    io: &mut I,
+) {
+    let extras = Extras::of(session, front);
+    let mut t = Translate::grbl(io, extras);
+    match rt {
+        GrblRealtime::Common(Realtime::Status) => session.realtime(Realtime::Status, &mut t),
+        GrblRealtime::Common(Realtime::Reset) => {
+            t.statuses = false;
+            session.realtime(Realtime::Reset, &mut t);
+            front.jogging = false;
+            front.cancel = false;
+            front.feed = 100;
+            session.set_feed_override(100);
+            if t.reset == Some(true) {
+                // Stopped at once in motion: a drive may have lost steps.
+                front.alarm = Some(3);
+                t.line(b"ALARM:3");
+            }
+            t.inner.send(BANNER);
+            if front.alarm.is_some() {
+                t.line(b"[MSG:'$H'|'$X' to unlock]");
+            }
+        }
+        GrblRealtime::Common(rt) => {
+            t.statuses = false;
+            session.realtime(rt, &mut t);
+        }
+        GrblRealtime::JogCancel => {
+            if front.jogging {
+                t.statuses = false;
+                session.realtime(Realtime::Hold, &mut t);
+                front.cancel = true;
+            }
+        }
+        GrblRealtime::Feed(byte) => {
+            let f = i16::from(front.feed);
+            let next = match byte {
+                0x90 => 100,
+                0x91 => f + 10,
+                0x92 => f - 10,
+                0x93 => f + 1,
+                _ => f - 1,
+            };
+            front.feed = next.clamp(10, 200) as u8;
+            session.set_feed_override(front.feed);
+        }
+        GrblRealtime::Unsupported(_) => {
+            t.line(b"[MSG:rapid, spindle and coolant overrides are not implemented]")
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_status_line_becomes_a_report() {
+        let extras = Extras {
+            wco: [5_000_000, -1_200_000_000],
+            diameter: true,
+            feed: 100,
+            jogging: false,
+            alarm: None,
+        };
+        let r = status_report(
+            b"!STATUS STATE=RUN PX=1 PZ=2 X=10.0000 Z=-5.0000 V=200.0000 Q=3 STARVED=0 SPINDLE=CW S=800.000 COOLANT=OFF",
+            &extras,
+        );
+        assert_eq!(
+            r.as_bytes(),
+            b"<Run|MPos:10.0000,0.0000,-5.0000|FS:200.0000,800.000|WCO:1.0000,0.0000,-120.0000|Ov:100,100,100|D:1>"
+        );
+    }
+
+    #[test]
+    fn refusals_map_to_grbl_codes() {
+        assert_eq!(error_code(b"ERR GEOMETRY arc radii differ"), 33);
+        assert_eq!(error_code(b"ERR VALUE F must come to 0.001"), 22);
+        assert_eq!(error_code(b"ERR SYNTAX not a G-code line"), 1);
+    }
+}

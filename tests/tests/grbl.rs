@@ -1,0 +1,211 @@
+//! The grbl 1.1 protocol: the controller as grbl senders see it, and a real
+//! sender (grbl-streamer, from PyPI) streaming a lathe program by character
+//! counting to `serve --grbl` and to the firmware in QEMU.
+
+use host_sim::device::LocalDevice;
+use host_sim::link::PtyDevice;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+fn text(dev: &mut LocalDevice, bytes: &[u8]) -> String {
+    String::from_utf8_lossy(&dev.feed(bytes)).into_owned()
+}
+
+fn grbl_device() -> LocalDevice {
+    let mut dev = LocalDevice::new();
+    let banner = String::from_utf8_lossy(&dev.set_grbl(true)).into_owned();
+    assert_eq!(banner, "\r\nGrbl 1.1h ['$' for help]\r\n");
+    dev
+}
+
+#[test]
+fn a_sender_reads_what_it_expects_of_grbl() {
+    let mut dev = grbl_device();
+    let info = text(&mut dev, b"$I\n");
+    assert!(info.contains("[VER:1.1h."), "{info}");
+    assert!(info.contains("[OPT:VNM,63,128]"), "{info}");
+    assert!(info.contains("[NEWOPT:LATHE]"), "{info}");
+    assert!(info.ends_with("ok\r\n"));
+    let settings = text(&mut dev, b"$$\n");
+    // Steps per mm are one over the impulse price: 0.005 mm on X (radius),
+    // 0.01 mm on Z; lathe mode as grblHAL's $32=2.
+    for want in [
+        "$100=200.000\r\n",
+        "$102=100.000\r\n",
+        "$32=2\r\n",
+        "$110=1500.0000\r\n",
+    ] {
+        assert!(settings.contains(want), "{want}: {settings}");
+    }
+    assert_eq!(text(&mut dev, b"$110=2000\n"), "ok\r\n");
+    assert!(text(&mut dev, b"$$\n").contains("$110=2000.0000\r\n"));
+    // A setting this controller does not have is named and changes nothing.
+    let bad = text(&mut dev, b"$1=25\n");
+    assert!(
+        bad.starts_with("[MSG:") && bad.ends_with("error:3\r\n"),
+        "{bad}"
+    );
+    let modes = text(&mut dev, b"$G\n");
+    assert!(
+        modes.starts_with("[GC:G0 G54 G7 G18 G21 G90 G94 G97 M5 M9"),
+        "{modes}"
+    );
+    let offsets = text(&mut dev, b"$#\n");
+    assert!(offsets.contains("[G54:0.0000,0.0000,0.0000]"), "{offsets}");
+    assert!(offsets.contains("[PRB:"), "{offsets}");
+    // No homing switches on these lathes: grbl's "homing not enabled".
+    assert!(text(&mut dev, b"$H\n").ends_with("error:5\r\n"));
+}
+
+#[test]
+fn g_code_lines_answer_ok_or_error_with_the_reason() {
+    let mut dev = grbl_device();
+    assert_eq!(text(&mut dev, b"G21 G90 G94\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"G01 X20 Z-5 F200\n"), "ok\r\n");
+    let refused = text(&mut dev, b"G01 X20 Q7\n");
+    assert!(
+        refused.starts_with("[MSG:") && refused.contains('Q') && refused.ends_with("error:1\r\n"),
+        "{refused}"
+    );
+    // A feed never set: grbl's error 22.
+    let mut fresh = grbl_device();
+    assert!(text(&mut fresh, b"G01 X5\n").ends_with("error:22\r\n"));
+    // The refused line moved nothing: the status shows the programmed point
+    // once the queue has run (M30 ends the program).
+    assert_eq!(text(&mut dev, b"M30\n"), "ok\r\n");
+    let status = text(&mut dev, b"?");
+    assert!(
+        status.starts_with("<Idle|MPos:20.0000,0.0000,-5.0000|FS:"),
+        "{status}"
+    );
+    assert!(status.contains("|Ov:100,100,100|D:1>"), "{status}");
+}
+
+#[test]
+fn real_time_characters_act_inside_a_line_and_reset_gives_the_banner() {
+    let mut dev = grbl_device();
+    // `?` in the middle of a line is answered at once; the line is intact.
+    let out = text(&mut dev, b"G21 G9?0\n");
+    assert!(out.starts_with("<Idle|"), "{out}");
+    assert!(out.ends_with("ok\r\n"), "{out}");
+    let reset = text(&mut dev, &[0x18]);
+    assert!(reset.contains("Grbl 1.1h ['$' for help]"), "{reset}");
+    // Feed override: 0x91 is +10 %, shown in the report.
+    let _ = text(&mut dev, &[0x91, 0x91]);
+    assert!(text(&mut dev, b"?").contains("|Ov:120,100,100|"));
+    // Rapid and spindle overrides are not implemented: said, not ignored.
+    assert!(text(&mut dev, &[0x96]).starts_with("[MSG:"));
+}
+
+#[test]
+fn a_jog_moves_in_work_coordinates_and_pendant_requests_still_work() {
+    let mut dev = grbl_device();
+    assert_eq!(text(&mut dev, b"G10 L2 P1 X0 Z-100\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"$J=G90 G21 X10 Z5 F500\n"), "ok\r\n");
+    assert!(text(&mut dev, b"$J=G91 X1\n").ends_with("error:22\r\n"));
+    // Back to the pendant protocol: its requests, CRC words included.
+    assert_eq!(text(&mut dev, b"$PENDANT\n"), "ok\r\n");
+    let sync = text(&mut dev, b"SYNC\r\n");
+    assert!(sync.starts_with("OK EV="), "{sync}");
+    let pos = text(&mut dev, b"POS\r\n");
+    // X10 on the diameter, Z5 in G54 whose zero is at Z-100.
+    assert!(pos.starts_with("OK PX=1000 PZ=-9500 "), "{pos}");
+    // `GRBL` switches again, with the banner.
+    let again = text(&mut dev, b"GRBL\r\n");
+    assert!(
+        again.starts_with("OK GRBL=1*") && again.contains("Grbl 1.1h"),
+        "{again}"
+    );
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Whether python3 with grbl-streamer is here (CI installs it).
+fn sender_available() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import grbl_streamer"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs python3 with grbl-streamer (pip install grbl-streamer)"
+        );
+        eprintln!("grbl-streamer not installed: the real-sender test skipped");
+    }
+    ok
+}
+
+/// Runs the sender on `port` with `program`; its JSON summary.
+fn stream(port: &str, program: &Path) -> String {
+    let out = Command::new("python3")
+        .arg(root().join("tests/senders/grbl_streamer_run.py"))
+        .arg(port)
+        .arg(program)
+        .output()
+        .expect("python3");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+fn number(json: &str, key: &str) -> i64 {
+    json.split(&format!("\"{key}\": "))
+        .nth(1)
+        .and_then(|s| s.split([',', '}']).next())
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{key} in {json}"))
+}
+
+fn check_run(json: &str) {
+    assert!(json.contains("\"errors\": []"), "{json}");
+    assert!(json.contains("\"alarms\": []"), "{json}");
+    assert!(json.contains("\"finished\": true"), "{json}");
+    // Every line was answered `ok`, the buffer was filled by counting.
+    assert_eq!(number(json, "processed"), number(json, "lines"), "{json}");
+    assert!(number(json, "max_fill") >= 50, "{json}");
+    // The program ends at X60 Z20.
+    assert!(json.contains("\"position\": [60.0, 0.0, 20.0]"), "{json}");
+}
+
+#[test]
+fn a_real_grbl_sender_streams_a_program_to_serve() {
+    if !sender_available() {
+        return;
+    }
+    let mut local = LocalDevice::new();
+    local.set_grbl(true);
+    let device = PtyDevice::start_with(local).expect("pty");
+    let json = stream(device.path(), &root().join("examples/iso-shaft.nc"));
+    check_run(&json);
+}
+
+#[test]
+fn a_real_grbl_sender_streams_to_the_firmware_with_a_hold_in_the_middle() {
+    if !sender_available() || !host_sim::qemu::qemu_or_skip() {
+        return;
+    }
+    let elf = host_sim::qemu::build_firmware("qemu-paced").expect("firmware");
+    let mut qemu = host_sim::qemu::Qemu::boot_paced(&elf).expect("boot");
+    // The board starts with the pendant protocol: one `GRBL` request
+    // switches it (a sender's first `$` line would too).
+    {
+        let mut c = qemu.connect(Duration::from_secs(30)).expect("connect");
+        c.write_raw(b"GRBL\r\n").expect("switch");
+        let ok = c.read_line().expect("reply");
+        assert!(ok.starts_with("OK GRBL=1"), "{ok}");
+    }
+    let json = stream(qemu.pty(), &root().join("examples/iso-shaft.nc"));
+    check_run(&json);
+    // The sender saw the program run and hold in time.
+    for state in ["\"Run\"", "\"Hold:"] {
+        assert!(json.contains(state), "{state}: {json}");
+    }
+}
