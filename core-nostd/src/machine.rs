@@ -275,6 +275,21 @@ impl Machine {
         }
     }
 
+    /// Starts every queued block now and ends the run at rest after them,
+    /// without waiting for them to be issued (a flush that returns).
+    pub fn release<S: StepSink>(&mut self, sink: &mut S) {
+        while self.start_one(sink) {}
+        if let Some(ticks) = self.planner.end_run() {
+            self.start_item(Item::RunEnd(ticks), sink);
+        }
+    }
+
+    /// Whether blocks are queued with no run under way: they start with a
+    /// full window, at a flush, or at [`Machine::release`].
+    pub fn waiting(&self) -> bool {
+        !self.planner.in_run() && self.planner.queued() > 0
+    }
+
     /// A flush, then `events` at a fixed rate as a run of their own (the
     /// ЭМ-907's direct arc), ending at point `end`.
     pub fn fixed_rate<S: StepSink>(

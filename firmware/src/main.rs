@@ -7,6 +7,9 @@ use core_nostd::protocol::Device;
 use cortex_m_rt::entry;
 use firmware::{board, Controller};
 
+/// How long a grbl link stays quiet before what it queued starts, µs.
+const QUIET_US: u32 = 50_000;
+
 #[entry]
 fn main() -> ! {
     // The device (its look-ahead queue the largest part) in static memory,
@@ -21,6 +24,7 @@ fn main() -> ! {
         core_nostd::protocol::VERSION,
         board::SYSCLK_HZ
     );
+    let mut heard = board::ticks();
     loop {
         firmware::supervisor::beat();
         // Real-time requests the serial interrupt acted on: the protocol's
@@ -37,6 +41,7 @@ fn main() -> ! {
         }
         match io.serial.receive() {
             Some(byte) => {
+                heard = board::ticks();
                 io.storage.heard();
                 device.receive(byte, &mut io);
                 // The link may have switched protocol.
@@ -44,6 +49,13 @@ fn main() -> ! {
                 firmware::board::set_grbl(io.grbl.is_some());
             }
             None if feed => {}
+            // A grbl link quiet for 50 ms: what it queued starts (no sleep
+            // meanwhile; the wait is short).
+            None if device.waiting() => {
+                if board::ticks().wrapping_sub(heard) >= QUIET_US {
+                    device.quiet(&mut io);
+                }
+            }
             None => {
                 // Changed offsets go to flash once all is quiet.
                 let idle = io.idle();

@@ -187,6 +187,32 @@ impl LocalDevice {
         self.runs
     }
 
+    /// The link has been quiet: on a grbl link what is queued starts
+    /// ([`Device::quiet`]); returns the reply bytes (none).
+    pub fn quiet(&mut self) -> Vec<u8> {
+        if !self.dev.waiting() {
+            return Vec::new();
+        }
+        let before = self.events.len();
+        let mut io = Collect {
+            out: Vec::new(),
+            events: &mut self.events,
+            starts: &mut self.starts,
+            runs: &mut self.runs,
+            operator: None,
+            stop_line: Vec::new(),
+            later: Vec::new(),
+        };
+        self.dev.quiet(&mut io);
+        let out = io.out;
+        self.issued += (self.events.len() - before) as u64;
+        if !self.record {
+            self.events.clear();
+            self.starts.clear();
+        }
+        out
+    }
+
     /// Switches the link to the grbl 1.1 protocol (or back); returns the
     /// banner it sends.
     pub fn set_grbl(&mut self, on: bool) -> Vec<u8> {

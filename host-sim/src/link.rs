@@ -308,7 +308,14 @@ impl PtyDevice {
                                 std::thread::sleep(Duration::from_millis(1));
                             }
                         }
-                        Err(e) if e.kind() == io::ErrorKind::TimedOut => {}
+                        // Quiet for the read's 20 ms: a grbl link's queued
+                        // blocks start.
+                        Err(e) if e.kind() == io::ErrorKind::TimedOut => {
+                            let out = device.quiet();
+                            if !out.is_empty() {
+                                let _ = master.write_all(&out);
+                            }
+                        }
                         // No slave open (EIO) or a passing error: wait and retry.
                         Err(_) => std::thread::sleep(Duration::from_millis(5)),
                     }

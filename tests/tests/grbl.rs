@@ -119,6 +119,38 @@ fn a_jog_moves_in_work_coordinates_and_pendant_requests_still_work() {
     );
 }
 
+/// The run time `SYNC` reports of a long feed move, with `override_bytes`
+/// sent first.
+fn feed_time(override_bytes: &[u8]) -> f64 {
+    let mut dev = grbl_device();
+    let _ = text(&mut dev, override_bytes);
+    assert_eq!(text(&mut dev, b"G21 G90 G94 G01 Z-100 F100\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"$PENDANT\n"), "ok\r\n");
+    let sync = text(&mut dev, b"SYNC\r\n");
+    let ticks: f64 = sync
+        .split(" T=")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .expect(&sync);
+    ticks / 1e6
+}
+
+#[test]
+fn the_feed_override_scales_the_feed_of_what_is_read_after_it() {
+    // 100 mm at F100 is a minute; at 150 % (five +10 % steps) two thirds of
+    // it, within the ramps (150 mm/s² on Z: a few ms).
+    let plain = feed_time(b"");
+    let fast = feed_time(&[0x91; 5]);
+    let slow = feed_time(&[0x92; 5]);
+    assert!((plain - 60.0).abs() < 0.05, "{plain}");
+    assert!((fast - 40.0).abs() < 0.05, "{fast}");
+    assert!((slow - 120.0).abs() < 0.05, "{slow}");
+    // 0x90 puts it back to 100 %.
+    let back = feed_time(&[0x91, 0x91, 0x90]);
+    assert!((back - plain).abs() < 1e-9);
+}
+
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
@@ -176,6 +208,24 @@ fn check_run(json: &str) {
 }
 
 #[test]
+fn a_line_typed_alone_moves_once_the_link_is_quiet() {
+    let mut local = LocalDevice::new();
+    local.set_grbl(true);
+    let device = PtyDevice::start_with(local).expect("pty");
+    let mut c = host_sim::link::Client::open(device.path(), Duration::from_secs(5)).expect("open");
+    c.write_raw(b"G21 G90 G94 G01 X10 Z-5 F200\n")
+        .expect("line");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(200));
+    c.write_raw(b"?").expect("status");
+    let report = c.read_line().expect("report");
+    assert!(
+        report.starts_with("<Idle|MPos:10.0000,0.0000,-5.0000|"),
+        "{report}"
+    );
+}
+
+#[test]
 fn a_real_grbl_sender_streams_a_program_to_serve() {
     if !sender_available() {
         return;
@@ -208,4 +258,28 @@ fn a_real_grbl_sender_streams_to_the_firmware_with_a_hold_in_the_middle() {
     for state in ["\"Run\"", "\"Hold:"] {
         assert!(json.contains(state), "{state}: {json}");
     }
+    // A reset while the axes move: they stop at once, a drive may have
+    // lost steps, so the board is locked until `$X`.
+    let mut c = host_sim::link::Client::open(qemu.pty(), Duration::from_secs(10)).expect("open");
+    c.write_raw(b"G91 G01 Z-20 F600\n").expect("move");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(500));
+    c.write_raw(&[0x18]).expect("reset");
+    let mut lines = Vec::new();
+    while !lines.iter().any(|l: &String| l.starts_with("[MSG:'$H'")) {
+        lines.push(c.read_line().expect("reset lines"));
+    }
+    assert_eq!(lines[0], "ALARM:3", "{lines:?}");
+    assert!(
+        lines.iter().any(|l| l.starts_with("Grbl 1.1h")),
+        "{lines:?}"
+    );
+    c.write_raw(b"G01 Z0\n").expect("locked");
+    assert!(c.read_line().expect("msg").starts_with("[MSG:alarm 3"));
+    assert_eq!(c.read_line().expect("error"), "error:9");
+    c.write_raw(b"$X\n").expect("unlock");
+    assert_eq!(c.read_line().expect("msg"), "[MSG:Caution: Unlocked]");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    c.write_raw(b"?").expect("status");
+    assert!(c.read_line().expect("report").starts_with("<Idle|"));
 }

@@ -350,6 +350,22 @@ impl Device {
         self.session.poll(&mut t);
     }
 
+    /// Whether a grbl link has blocks waiting to start: when the link has
+    /// been quiet a while, [`Device::quiet`] starts them.
+    pub fn waiting(&self) -> bool {
+        self.grbl.on && self.session.waiting()
+    }
+
+    /// The link has been quiet (about 50 ms without a byte): on a grbl
+    /// link the queued blocks start now, as grbl plans with what it has —
+    /// a line typed alone, a jog, the end of a stream. The pendant protocol
+    /// waits for its window or a flush (`SYNC`), as before.
+    pub fn quiet<I: Io>(&mut self, io: &mut I) {
+        if self.waiting() {
+            self.session.release(&mut grbl::Translate::pendant(io));
+        }
+    }
+
     /// A jog cancel waits for the axes to come to rest ([`Device::poll`]
     /// finishes it).
     pub const fn cancel_pending(&self) -> bool {

@@ -1685,6 +1685,17 @@ impl Session {
         matches!(st.motion, Axes::Idle | Axes::Held)
     }
 
+    /// Starts the queued blocks now, the run ending at rest after them
+    /// (the link has gone quiet: grbl plans with what it has).
+    pub fn release<I: Io>(&mut self, io: &mut I) {
+        self.machine.release(&mut Sink::new(io, self.drive));
+    }
+
+    /// Whether blocks wait with no run under way.
+    pub fn waiting(&self) -> bool {
+        self.machine.waiting()
+    }
+
     /// Whether [`Session::poll`] could start a block.
     pub fn can_feed(&self) -> bool {
         self.machine.can_feed()
