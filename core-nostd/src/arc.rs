@@ -30,6 +30,8 @@ use crate::impulse::{ImpulsePrice, Impulses, RangeError, MAX_BLOCK_IMPULSES, MAX
 use crate::interleave::{ImpulsePoint, StepEvent};
 use crate::length::Length;
 use crate::trig::{atan2, isqrt, sin_cos_arcsec};
+use crate::wide::{checked_divrem_i128, divrem_u128};
+use core::num::NonZeroU128;
 
 /// The most chords one arc may be cut into.
 pub const MAX_CHORDS: u32 = 10_000;
@@ -154,8 +156,7 @@ pub fn centre_from_radius(
     };
     // Left of (dz, dx) in the (Z, X) plane is (−dx, dz).
     let round = |n: i128, d: i128| -> Option<i64> {
-        let q = n.checked_div(d)?;
-        let r = n.checked_rem(d)?;
+        let (q, r) = checked_divrem_i128(n, d)?;
         let q = if 2 * r.unsigned_abs() >= d.unsigned_abs() {
             q + n.signum() * d.signum()
         } else {
@@ -229,8 +230,8 @@ impl ChordPlan {
         };
         let step = u128::from(dphi) << 64;
         // step ≥ 2⁶⁴: the division is defined.
-        let n = match (sweep * 1_296_000 + step - 1).checked_div(step) {
-            Some(n) => n,
+        let n = match NonZeroU128::new(step) {
+            Some(step) => divrem_u128(sweep * 1_296_000 + step.get() - 1, step).0,
             None => return Err(ArcError::Range("chord angle below one arc-second")),
         };
         if n > u128::from(MAX_CHORDS) {
@@ -318,7 +319,7 @@ impl ChordPlan {
 fn quantize_q62(p: i128, h: ImpulsePrice) -> Result<Impulses, RangeError> {
     let d = i128::from(h.as_angstrom()) << 62;
     // A price is at least 10 Å: d > 0.
-    let (Some(q), Some(r)) = (p.checked_div(d), p.checked_rem(d)) else {
+    let Some((q, r)) = checked_divrem_i128(p, d) else {
         return Err(RangeError);
     };
     let n = if 2 * r.unsigned_abs() >= d.unsigned_abs() {
@@ -481,7 +482,10 @@ fn feed_word(s: Length, r_q20: u128) -> u64 {
     }
     // S·1000/R with S and R in the same unit: (s·1000·2²⁰)/r_q20.
     let num = (s * 1000) << 20;
-    (2 * num + r_q20).checked_div(2 * r_q20).unwrap_or(0) as u64
+    match NonZeroU128::new(2 * r_q20) {
+        Some(d) => divrem_u128(2 * num + r_q20, d).0 as u64,
+        None => 0,
+    }
 }
 
 /// The ЭМ-907 feed word of a linear block, `F = S·10³/l`, `l` the block's

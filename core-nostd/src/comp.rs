@@ -43,6 +43,7 @@ use crate::arc::ArcDir;
 use crate::gcode::{Compensation, Corner};
 use crate::length::{Length, LENGTH_LIMIT};
 use crate::trig::{atan2, isqrt, PI_Q61};
+use crate::wide::checked_divrem_i128;
 
 /// Fractional bits of an ångström in corner arithmetic.
 const FRAC: u32 = 16;
@@ -313,8 +314,8 @@ const fn mul(a: i64, b: i64) -> i128 {
 /// `a / b` truncated; 0 where the quotient does not exist (callers have
 /// excluded `b = 0`).
 const fn div(a: i128, b: i128) -> i128 {
-    match a.checked_div(b) {
-        Some(q) => q,
+    match checked_divrem_i128(a, b) {
+        Some((q, _)) => q,
         None => 0,
     }
 }

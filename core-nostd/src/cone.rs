@@ -14,6 +14,8 @@
 
 use crate::length::Length;
 use crate::trig::{sin_cos_raw, Turn, FULL_TURN_UAS};
+use crate::wide::{checked_divrem_i128, divrem_i128};
+use core::num::NonZeroU128;
 
 /// Why an angle word was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -118,12 +120,18 @@ pub struct ConeValue(i128);
 /// 10⁻² Å = 10⁻⁹ mm, far above the computation's error.
 const NEAR_TIE: i128 = (1i128 << 62) / 100;
 
+/// 0.0001 mm in ångström · 2⁶², the printed unit.
+const UNIT: NonZeroU128 = match NonZeroU128::new(1000 << 62) {
+    Some(u) => u,
+    None => NonZeroU128::MIN,
+};
+
 impl ConeValue {
     /// The value in units of 0.0001 mm, rounded half away from zero (the
     /// printed figure).
     pub fn tenth_um(self) -> i64 {
         let unit = 1000i128 << 62;
-        let (q, r) = (self.0 / unit, self.0 % unit);
+        let (q, r) = divrem_i128(self.0, UNIT);
         let q = if 2 * r.abs() >= unit {
             q + self.0.signum()
         } else {
@@ -135,7 +143,10 @@ impl ConeValue {
     /// Whether the exact value may lie on the other side of a printing tie.
     pub fn near_tie(self) -> bool {
         let unit = 1000i128 << 62;
-        let r = self.0.rem_euclid(unit);
+        let r = match divrem_i128(self.0, UNIT) {
+            (_, r) if r < 0 => r + unit,
+            (_, r) => r,
+        };
         (r - unit / 2).abs() <= NEAR_TIE
     }
 
@@ -159,9 +170,10 @@ pub struct Cone {
 /// tan(θ) for 0 ≤ θ < 90°, Q62.
 fn tan_q62(a: Turn) -> i128 {
     let (s, c) = sin_cos_raw(a);
-    (i128::from(s) << 62)
-        .checked_div(i128::from(c))
-        .unwrap_or(0)
+    match checked_divrem_i128(i128::from(s) << 62, i128::from(c)) {
+        Some((q, _)) => q,
+        None => 0,
+    }
 }
 
 /// The corrections for taper angle `alpha` and nose radius `r`.

@@ -35,8 +35,9 @@ use crate::interleave::LinearBlock;
 use crate::length::{Length, ANGSTROM_PER_MM};
 use crate::step::{Cruise, Ramp, TickRate, TimedBlock, HALF, TIE};
 use crate::trig::isqrt;
-use crate::wide::{mul_div, mul_shr, shl_div, sqrt_shl, U256};
+use crate::wide::{divrem_u128, mul_div, mul_shr, shl_div, sqrt_shl, U256};
 use core::fmt;
+use core::num::NonZeroU128;
 use heapless::Deque;
 
 /// The look-ahead window of the device, in blocks.
@@ -511,7 +512,9 @@ impl Block {
             return 0;
         }
         let h = u128::from(self.lead_price) << 64;
-        ((at - self.lead_first) / h.max(1))
+        let h = NonZeroU128::new(h).unwrap_or(NonZeroU128::MIN);
+        divrem_u128(at - self.lead_first, h)
+            .0
             .saturating_add(1)
             .min(u128::from(self.count)) as u32
     }
@@ -866,6 +869,7 @@ pub(crate) fn profile(b: &Block, e2: u128, x2: u128, start: u128) -> TimedBlock 
     let n = b.lead_events();
     let o = b.lead_first;
     let h = u128::from(b.lead_price) << 64;
+    let h_nz = NonZeroU128::new(h).unwrap_or(NonZeroU128::MIN);
     let upto = |limit: u128, inclusive: bool| -> u32 {
         let reach = if inclusive {
             limit
@@ -875,7 +879,8 @@ pub(crate) fn profile(b: &Block, e2: u128, x2: u128, start: u128) -> TimedBlock 
         if reach < o || (!inclusive && limit == 0) {
             0
         } else {
-            ((reach - o) / h.max(1))
+            divrem_u128(reach - o, h_nz)
+                .0
                 .saturating_add(1)
                 .min(u128::from(n)) as u32
         }

@@ -30,6 +30,8 @@
 //! On a 100 m radius (10¹² Å) a sine error of 2⁻⁵⁸ is 3.5·10⁻⁶ Å: a chord end
 //! lands within 10⁻¹² mm of its exact place.
 
+use crate::wide::divrem_u128;
+use core::num::NonZeroU128;
 use fixed::types::I2F62;
 
 /// 2⁶² as a `Q62`: one.
@@ -69,7 +71,11 @@ impl Turn {
         let r = uas.rem_euclid(FULL_TURN_UAS) as u128;
         let full = FULL_TURN_UAS as u128;
         // r < 2⁴¹: r·2⁶⁴ fits; a result of 2⁶⁴ wraps to 0 (= 360°).
-        Turn((((r << 64) + full / 2) / full) as u64)
+        let full_nz = match NonZeroU128::new(full) {
+            Some(f) => f,
+            None => NonZeroU128::MIN,
+        };
+        Turn(divrem_u128((r << 64) + full / 2, full_nz).0 as u64)
     }
 
     /// An angle from whole arc-seconds.

@@ -9,6 +9,7 @@
 
 use crate::trig::isqrt;
 use core::cmp::Ordering;
+use core::num::NonZeroU128;
 
 /// An unsigned 256-bit integer: `hi · 2¹²⁸ + lo`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -260,6 +261,59 @@ impl U256 {
     }
 }
 
+/// `(n / d, n % d)`, by the long division of [`U256::div`]. Every 128-bit
+/// quotient goes through here: a Cortex-M4 has no 128-bit divide, and each
+/// `/` or `%` of a `u128` or `i128` would be expanded in place into a
+/// bit-by-bit loop of some 700 bytes of flash.
+#[inline(never)]
+pub(crate) const fn divrem_u128(n: u128, d: NonZeroU128) -> (u128, u128) {
+    let d = d.get();
+    let q = if d as u64 == 0 {
+        // d = e · 2⁶⁴ (a price in Å·2⁶⁴): ⌊n / d⌋ = ⌊⌊n / 2⁶⁴⌋ / e⌋, one
+        // 64-bit division (e ≠ 0).
+        match ((n >> 64) as u64).checked_div((d >> 64) as u64) {
+            Some(q) => q as u128,
+            None => 0,
+        }
+    } else {
+        // The high half is 0 < d: the quotient fits and never saturates.
+        U256 { hi: 0, lo: n }.div(d)
+    };
+    // q · d ≤ n.
+    (q, n - q * d)
+}
+
+/// `(n / d, n % d)` truncated toward zero (the remainder takes the sign of
+/// `n`), for a positive `d`: always defined.
+#[inline(never)]
+pub(crate) const fn divrem_i128(n: i128, d: NonZeroU128) -> (i128, i128) {
+    let (q, r) = divrem_u128(n.unsigned_abs(), d);
+    // r < |n| ≤ 2¹²⁷ fits. q = 2¹²⁷ only for n = i128::MIN, d = 1, whose
+    // quotient is i128::MIN: the wrapping negation is exact there too.
+    if n < 0 {
+        ((q as i128).wrapping_neg(), (r as i128).wrapping_neg())
+    } else {
+        (q as i128, r as i128)
+    }
+}
+
+/// `n.checked_div(d)` and `n.checked_rem(d)` together: `None` for `d = 0`
+/// and for `i128::MIN / -1`.
+pub(crate) const fn checked_divrem_i128(n: i128, d: i128) -> Option<(i128, i128)> {
+    let Some(m) = NonZeroU128::new(d.unsigned_abs()) else {
+        return None;
+    };
+    let (q, r) = divrem_i128(n, m);
+    if d > 0 {
+        return Some((q, r));
+    }
+    // n / d = −(n / |d|); n % d = n % |d|.
+    match q.checked_neg() {
+        Some(q) => Some((q, r)),
+        None => None,
+    }
+}
+
 /// `⌊a · b / d⌋`, saturating at `u128::MAX`.
 pub(crate) const fn mul_div(a: u128, b: u128, d: u128) -> u128 {
     U256::mul(a, b).div(d)
@@ -415,6 +469,25 @@ mod tests {
             prop_assert!(U256::mul(r, r) <= n);
             if let Some(r1) = r.checked_add(1) {
                 prop_assert!(U256::mul(r1, r1) > n);
+            }
+        }
+
+        #[test]
+        fn quotient_and_remainder_agree_with_the_operators(
+            n in any::<i128>(), d in any::<i128>(), nsh in 0u32..127, dsh in 0u32..127,
+        ) {
+            for n in [n, n >> nsh, i128::MIN, i128::MAX, -1, 0, 1] {
+                for d in [d, d >> dsh, d << 64, (d >> dsh) << 64, i128::MIN, i128::MAX, -1, 1, 2, -2] {
+                    prop_assert_eq!(
+                        checked_divrem_i128(n, d),
+                        n.checked_div(d).zip(n.checked_rem(d)),
+                        "{} / {}", n, d
+                    );
+                    let (un, ud) = (n as u128, d as u128);
+                    if let Some(nz) = NonZeroU128::new(ud) {
+                        prop_assert_eq!(divrem_u128(un, nz), (un / ud, un % ud));
+                    }
+                }
             }
         }
 
