@@ -129,6 +129,22 @@ impl LocalDevice {
         bytes: &[u8],
         operator: Option<&'o mut (dyn Operator + 'o)>,
     ) -> Vec<u8> {
+        self.with_io(operator, |dev, io| {
+            dev.receive_bytes(bytes, io);
+            while !io.later.is_empty() {
+                let later = std::mem::take(&mut io.later);
+                dev.receive_bytes(&later, io);
+            }
+        })
+    }
+
+    /// Runs `f` on the device with an [`Io`] that collects; returns the
+    /// reply bytes and counts (or keeps) the events issued.
+    fn with_io<'o>(
+        &mut self,
+        operator: Option<&'o mut (dyn Operator + 'o)>,
+        f: impl FnOnce(&mut Device, &mut Collect<'_, 'o>),
+    ) -> Vec<u8> {
         let before = self.events.len();
         let mut io = Collect {
             out: Vec::new(),
@@ -139,11 +155,7 @@ impl LocalDevice {
             stop_line: Vec::new(),
             later: Vec::new(),
         };
-        self.dev.receive_bytes(bytes, &mut io);
-        while !io.later.is_empty() {
-            let later = std::mem::take(&mut io.later);
-            self.dev.receive_bytes(&later, &mut io);
-        }
+        f(&mut self.dev, &mut io);
         let out = io.out;
         self.issued += (self.events.len() - before) as u64;
         if !self.record {
@@ -193,41 +205,13 @@ impl LocalDevice {
         if !self.dev.waiting() {
             return Vec::new();
         }
-        let before = self.events.len();
-        let mut io = Collect {
-            out: Vec::new(),
-            events: &mut self.events,
-            starts: &mut self.starts,
-            runs: &mut self.runs,
-            operator: None,
-            stop_line: Vec::new(),
-            later: Vec::new(),
-        };
-        self.dev.quiet(&mut io);
-        let out = io.out;
-        self.issued += (self.events.len() - before) as u64;
-        if !self.record {
-            self.events.clear();
-            self.starts.clear();
-        }
-        out
+        self.with_io(None, |dev, io| dev.quiet(io))
     }
 
     /// Switches the link to the grbl 1.1 protocol (or back); returns the
     /// banner it sends.
     pub fn set_grbl(&mut self, on: bool) -> Vec<u8> {
-        let (mut events, mut starts, mut runs) = (Vec::new(), Vec::new(), 0);
-        let mut io = Collect {
-            out: Vec::new(),
-            events: &mut events,
-            starts: &mut starts,
-            runs: &mut runs,
-            operator: None,
-            stop_line: Vec::new(),
-            later: Vec::new(),
-        };
-        self.dev.set_grbl(on, &mut io);
-        io.out
+        self.with_io(None, |dev, io| dev.set_grbl(on, io))
     }
 
     /// The underlying device (state inspection).

@@ -504,13 +504,7 @@ fn tape_encode(
         .ok()
         .filter(|l| l.as_angstrom() > 0)
         .ok_or_else(|| format!("--chord {chord}: not a positive number of mm"))?;
-    let program = std::fs::read_to_string(file)
-        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-    let (dialect, note) = host_sim::dialect::choose(dialect, &program)
-        .map_err(|e| format!("{}: {e}", file.display()))?;
-    if let Some(note) = note {
-        eprintln!("{}: {note}", file.display());
-    }
+    let (program, dialect) = read_program(file, dialect)?;
     let job = host_sim::tape::Job {
         format,
         dialect,
@@ -535,6 +529,23 @@ fn tape_encode(
     }
 }
 
+/// Reads a G-code program and settles its dialect (`auto` from its words,
+/// the reason on stderr).
+fn read_program(
+    file: &std::path::Path,
+    dialect: &str,
+) -> Result<(String, core_nostd::gcode::Dialect), Box<dyn std::error::Error>> {
+    let f = file.display();
+    let bytes = std::fs::read(file).map_err(|e| format!("cannot read {f}: {e}"))?;
+    let text = String::from_utf8_lossy(&bytes).into_owned();
+    let (dialect, note) =
+        host_sim::dialect::choose(dialect, &text).map_err(|e| format!("{f}: {e}"))?;
+    if let Some(note) = note {
+        eprintln!("{f}: {note}");
+    }
+    Ok((text, dialect))
+}
+
 /// `host-sim compensate`: the program on stdout, remarks and refusals on
 /// stderr; exit 1 when the program is refused (nothing is printed then).
 fn compensate(
@@ -544,13 +555,7 @@ fn compensate(
     diam: bool,
     dialect: &str,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
-    let program = std::fs::read_to_string(file)
-        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-    let (dialect, note) = host_sim::dialect::choose(dialect, &program)
-        .map_err(|e| format!("{}: {e}", file.display()))?;
-    if let Some(note) = note {
-        eprintln!("{}: {note}", file.display());
-    }
+    let (program, dialect) = read_program(file, dialect)?;
     let settings = host_sim::compensate::Settings {
         rn,
         tip,
@@ -584,12 +589,7 @@ fn plot(
     zoom: Option<host_sim::plot::Window>,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let f = file.display();
-    let text = std::fs::read_to_string(file).map_err(|e| format!("cannot read {f}: {e}"))?;
-    let (dialect, note) =
-        host_sim::dialect::choose(dialect, &text).map_err(|e| format!("{f}: {e}"))?;
-    if let Some(note) = note {
-        eprintln!("{f}: {note}");
-    }
+    let (text, dialect) = read_program(file, dialect)?;
     let setup_text = match tools {
         Some(path) => std::fs::read_to_string(path)
             .map_err(|e| format!("cannot read {}: {e}", path.display()))?,
@@ -918,12 +918,7 @@ fn send_program(args: &SendArgs) -> Result<ExitCode, Box<dyn std::error::Error>>
     use host_sim::send::{board_settings, Console, Halt, Plan, Sender};
     let file = &args.file;
     let f = file.display();
-    let text = std::fs::read_to_string(file).map_err(|e| format!("cannot read {f}: {e}"))?;
-    let (dialect, note) =
-        host_sim::dialect::choose(&args.dialect, &text).map_err(|e| format!("{f}: {e}"))?;
-    if let Some(note) = note {
-        eprintln!("{f}: {note}");
-    }
+    let (text, dialect) = read_program(file, &args.dialect)?;
     let options = host_sim::program::Options {
         dialect,
         radius: args.radius,
@@ -1044,14 +1039,8 @@ fn run_program(
     args: &RunArgs,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
     use host_sim::program::minutes;
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-    let (dialect, note) = host_sim::dialect::choose(&args.dialect, &text)
-        .map_err(|e| format!("{}: {e}", file.display()))?;
+    let (text, dialect) = read_program(file, &args.dialect)?;
     let f = file.display();
-    if let Some(note) = note {
-        eprintln!("{f}: {note}");
-    }
     let options = host_sim::program::Options {
         dialect,
         radius: args.radius,

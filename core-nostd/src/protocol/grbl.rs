@@ -19,11 +19,7 @@
 //! and change nothing.
 
 use super::reply::ReplyLine;
-use super::{Io, Realtime, Session, StatusView, Timing, VERSION};
-use crate::interleave::{LinearBlock, StepEvent};
-use crate::machine::Background;
-use crate::outputs::Outputs;
-use crate::stepdir::DriveTiming;
+use super::{Io, Realtime, Session, Timing, VERSION};
 use core::fmt::Write;
 
 /// The RX buffer a sender may fill by character counting (`$I`'s `OPT`).
@@ -331,33 +327,6 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         }
         // `DATA` lines and the rest: not grbl's.
     }
-    fn run_start(&mut self) {
-        self.inner.run_start();
-    }
-    fn block_start(&mut self, block: &LinearBlock) {
-        self.inner.block_start(block);
-    }
-    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
-        self.inner.step(event, tick, drive);
-    }
-    fn run_end(&mut self, ticks: u64) {
-        self.inner.run_end(ticks);
-    }
-    fn background(&mut self) -> Option<&mut dyn Background> {
-        self.inner.background()
-    }
-    fn view(&mut self, view: &StatusView) {
-        self.inner.view(view);
-    }
-    fn pause(&mut self) {
-        self.inner.pause();
-    }
-    fn dwell(&mut self, us: u64) {
-        self.inner.dwell(us);
-    }
-    fn program_stop(&mut self, code: u8) {
-        self.inner.program_stop(code);
-    }
     fn stop_status(&mut self, line: &[u8]) {
         if !self.grbl {
             return self.inner.stop_status(line);
@@ -370,12 +339,10 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         let mut l = status_report(body, &self.extras);
         self.inner.stop_status(finish(&mut l));
     }
-    fn outputs(&mut self, outputs: &Outputs) {
-        self.inner.outputs(outputs);
-    }
     fn timing(&mut self) -> Option<Timing> {
         self.inner.timing()
     }
+    crate::protocol::forward_io!();
 }
 
 /// Runs a pendant request that moves nothing and returns its final line.

@@ -203,6 +203,51 @@ pub trait Io {
     }
 }
 
+/// The [`Io`] methods a wrapper hands to its `inner` unchanged: motion,
+/// the background, waits and outputs (a wrapper writes its own `send`,
+/// `stop_status` and `timing`).
+macro_rules! forward_io {
+    () => {
+        fn run_start(&mut self) {
+            self.inner.run_start();
+        }
+        fn block_start(&mut self, block: &crate::interleave::LinearBlock) {
+            self.inner.block_start(block);
+        }
+        #[inline(always)]
+        fn step(
+            &mut self,
+            event: crate::interleave::StepEvent,
+            tick: u64,
+            drive: &crate::stepdir::DriveTiming,
+        ) {
+            self.inner.step(event, tick, drive);
+        }
+        fn run_end(&mut self, ticks: u64) {
+            self.inner.run_end(ticks);
+        }
+        fn background(&mut self) -> Option<&mut dyn crate::machine::Background> {
+            self.inner.background()
+        }
+        fn view(&mut self, view: &crate::protocol::StatusView) {
+            self.inner.view(view);
+        }
+        fn pause(&mut self) {
+            self.inner.pause();
+        }
+        fn dwell(&mut self, us: u64) {
+            self.inner.dwell(us);
+        }
+        fn program_stop(&mut self, code: u8) {
+            self.inner.program_stop(code);
+        }
+        fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
+            self.inner.outputs(outputs);
+        }
+    };
+}
+pub(crate) use forward_io;
+
 /// A board's own timing, at the end of its `!STATUS` lines.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Timing {

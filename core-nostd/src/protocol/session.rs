@@ -2364,47 +2364,6 @@ impl<I: Io> Io for Suffixed<'_, I> {
         }
     }
 
-    fn run_start(&mut self) {
-        self.inner.run_start();
-    }
-
-    fn block_start(&mut self, block: &LinearBlock) {
-        self.inner.block_start(block);
-    }
-
-    #[inline(always)]
-    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
-        self.inner.step(event, tick, drive);
-    }
-
-    fn run_end(&mut self, ticks: u64) {
-        self.inner.run_end(ticks);
-    }
-
-    fn background(&mut self) -> Option<&mut dyn Background> {
-        self.inner.background()
-    }
-
-    fn view(&mut self, view: &StatusView) {
-        self.inner.view(view);
-    }
-
-    fn pause(&mut self) {
-        self.inner.pause();
-    }
-
-    fn dwell(&mut self, us: u64) {
-        self.inner.dwell(us);
-    }
-
-    fn program_stop(&mut self, code: u8) {
-        self.inner.program_stop(code);
-    }
-
-    fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
-        self.inner.outputs(outputs);
-    }
-
     fn stop_status(&mut self, line: &[u8]) {
         self.inner.stop_status(line);
     }
@@ -2412,6 +2371,7 @@ impl<I: Io> Io for Suffixed<'_, I> {
     fn timing(&mut self) -> Option<super::Timing> {
         self.inner.timing()
     }
+    crate::protocol::forward_io!();
 }
 
 /// Splits off and checks a trailing `*HH`; returns the bytes before it.
