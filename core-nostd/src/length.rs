@@ -70,6 +70,7 @@ impl Length {
     /// assert_eq!(Length::from_angstrom(25_000).unwrap().to_string(), "0.0025");
     /// assert!(Length::from_angstrom(i64::MAX).is_none());
     /// ```
+    #[inline(never)]
     pub const fn from_angstrom(angstrom: i64) -> Option<Length> {
         if angstrom.unsigned_abs() <= LENGTH_LIMIT.angstrom as u64 {
             Some(Length { angstrom })
@@ -194,6 +195,7 @@ impl Length {
     }
 
     /// Sum, or `None` beyond [`LENGTH_LIMIT`].
+    #[inline(never)]
     pub const fn checked_add(self, other: Length) -> Option<Length> {
         match self.angstrom.checked_add(other.angstrom) {
             Some(a) => Length::from_angstrom(a),
@@ -202,6 +204,7 @@ impl Length {
     }
 
     /// Difference, or `None` beyond [`LENGTH_LIMIT`].
+    #[inline(never)]
     pub const fn checked_sub(self, other: Length) -> Option<Length> {
         match self.angstrom.checked_sub(other.angstrom) {
             Some(a) => Length::from_angstrom(a),

@@ -45,6 +45,18 @@ pub(crate) fn parse_args<'a, const N: usize>(
     keys: [&'static str; N],
 ) -> Result<[Option<&'a str>; N], ArgError<'a>> {
     let mut out = [None; N];
+    match_args(words, &keys, &mut out)?;
+    Ok(out)
+}
+
+/// [`parse_args`] for any number of keys (`out` as long as `keys`): one
+/// copy of the matching, whatever the command.
+#[inline(never)]
+fn match_args<'a>(
+    words: Words<'a>,
+    keys: &[&'static str],
+    out: &mut [Option<&'a str>],
+) -> Result<(), ArgError<'a>> {
     for word in words {
         let (key, value) = match crate::text::split_once(word, b'=') {
             Some((k, v)) if !k.is_empty() && !v.is_empty() => (k, v),
@@ -59,7 +71,7 @@ pub(crate) fn parse_args<'a, const N: usize>(
             _ => return Err(ArgError::Duplicate(keys.get(slot).copied().unwrap_or(""))),
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]
