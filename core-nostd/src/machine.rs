@@ -190,7 +190,12 @@ impl Machine {
 
     /// New limits; the caller has flushed (they apply at rest).
     pub fn set_limits(&mut self, limits: Limits) {
-        self.rates = Rates::new(limits, self.rates.tick());
+        self.rates = Rates::new(limits, self.rates.tick()).with_rapid(self.rates.rapid());
+    }
+
+    /// The rapid override, percent: rapids queued from now on run at it.
+    pub fn set_rapid_override(&mut self, percent: u8) {
+        self.rates = self.rates.with_rapid(percent);
     }
 
     /// Where the axes are now and will be, at rest (after `ZERO` or a price

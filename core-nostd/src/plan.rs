@@ -213,6 +213,8 @@ pub struct Rates {
     vmax: [u128; 2],
     /// `AMAX/TICK²` per axis, Q96 Å/tick².
     accel: [u128; 2],
+    /// The rapid override, percent of the rapid rates (grbl's 100, 50, 25).
+    rapid: u8,
 }
 
 impl Rates {
@@ -234,7 +236,23 @@ impl Rates {
                 shl_div(limits.amax[0] as u128, 96, t2),
                 shl_div(limits.amax[1] as u128, 96, t2),
             ],
+            rapid: 100,
         }
+    }
+
+    /// The same rates, rapids at `percent` (1 … 100) of the rapid rates.
+    pub const fn with_rapid(mut self, percent: u8) -> Rates {
+        self.rapid = if percent == 0 || percent > 100 {
+            100
+        } else {
+            percent
+        };
+        self
+    }
+
+    /// The rapid override, percent.
+    pub const fn rapid(&self) -> u8 {
+        self.rapid
     }
 
     /// The limits.
@@ -406,6 +424,11 @@ impl Block {
             if f2 <= vmax2 {
                 (vmax2, source) = (f2, Source::Feed(f.angstrom_per_min));
             }
+        } else if rates.rapid < 100 {
+            // A rapid under the override: the speed scaled, so its square
+            // by the percentage squared.
+            let p = u128::from(rates.rapid);
+            vmax2 = mul_div(vmax2, p * p, 10_000);
         }
         // 2aL = 2·a·|dn|·2^scale, Q96 · Q32·Q32 → Q64.
         let two_al = mul_shr(accel, lnq, (95 - scale) as u32);
@@ -458,7 +481,11 @@ impl Block {
             spindle: 0,
             per_min: rates.ticks_per_min() as u64,
             axis_vmax: match source {
-                Source::Axis(axis) => rates.limits.vmax[axis & 1],
+                // Under the rapid override, the axis's rate scaled as v² is.
+                Source::Axis(axis) => {
+                    rates.limits.vmax[axis & 1] / 100 * u64::from(rates.rapid)
+                        + rates.limits.vmax[axis & 1] % 100 * u64::from(rates.rapid) / 100
+                }
                 Source::Feed(_) => 0,
             },
         })

@@ -94,8 +94,9 @@ fn real_time_characters_act_inside_a_line_and_reset_gives_the_banner() {
     // Feed override: 0x91 is +10 %, shown in the report.
     let _ = text(&mut dev, &[0x91, 0x91]);
     assert!(text(&mut dev, b"?").contains("|Ov:120,100,100|"));
-    // Rapid and spindle overrides are not implemented: said, not ignored.
-    assert!(text(&mut dev, &[0x96]).starts_with("[MSG:"));
+    // The spindle stop and coolant toggles are not implemented: said, not
+    // ignored.
+    assert!(text(&mut dev, &[0x9E]).starts_with("[MSG:"));
 }
 
 #[test]
@@ -122,9 +123,14 @@ fn a_jog_moves_in_work_coordinates_and_pendant_requests_still_work() {
 /// The run time `SYNC` reports of a long feed move, with `override_bytes`
 /// sent first.
 fn feed_time(override_bytes: &[u8]) -> f64 {
+    run_time(override_bytes, b"G21 G90 G94 G01 Z-100 F100\n")
+}
+
+/// The run time of `line` after `override_bytes`.
+fn run_time(override_bytes: &[u8], line: &[u8]) -> f64 {
     let mut dev = grbl_device();
     let _ = text(&mut dev, override_bytes);
-    assert_eq!(text(&mut dev, b"G21 G90 G94 G01 Z-100 F100\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, line), "ok\r\n");
     assert_eq!(text(&mut dev, b"$PENDANT\n"), "ok\r\n");
     let sync = text(&mut dev, b"SYNC\r\n");
     let ticks: f64 = sync
@@ -149,6 +155,38 @@ fn the_feed_override_scales_the_feed_of_what_is_read_after_it() {
     // 0x90 puts it back to 100 %.
     let back = feed_time(&[0x91, 0x91, 0x90]);
     assert!((back - plain).abs() < 1e-9);
+}
+
+#[test]
+fn the_rapid_override_slows_the_rapids_queued_after_it() {
+    // 100 mm along Z at the rapid rate 3000 mm/min (50 mm/s), 150 mm/s²:
+    // L/v + v/a = 2.333 s; at 50 % 4.167 s, at 25 % 8.083 s.
+    let rapid = |bytes: &[u8]| run_time(bytes, b"G21 G90 G00 Z-100\n");
+    for (bytes, want) in [
+        (&[][..], 2.0 + 50.0 / 150.0),
+        (&[0x96][..], 4.0 + 25.0 / 150.0),
+        (&[0x97][..], 8.0 + 12.5 / 150.0),
+        (&[0x97, 0x95][..], 2.0 + 50.0 / 150.0),
+    ] {
+        let t = rapid(bytes);
+        assert!((t - want).abs() < 0.005, "{bytes:x?}: {t} s, want {want}");
+    }
+    // Feeds are not rapids.
+    assert!((feed_time(&[0x97]) - 60.0).abs() < 0.05);
+}
+
+#[test]
+fn the_spindle_override_scales_the_speed_and_feeds_per_revolution() {
+    let mut dev = grbl_device();
+    assert_eq!(text(&mut dev, b"G21 G95 M03 S1000\n"), "ok\r\n");
+    let _ = text(&mut dev, &[0x9A, 0x9A]);
+    let status = text(&mut dev, b"?");
+    assert!(status.contains("|Ov:100,100,120|"), "{status}");
+    // The output turns at 1200 rpm at once (at rest).
+    assert!(status.contains(",1200.000|"), "{status}");
+    // F0.1 mm/rev at 1200 rpm: 120 mm/min, 100 mm in 50 s.
+    let t = run_time(&[0x9A, 0x9A], b"G21 G95 M03 S1000 G01 Z-100 F0.1\n");
+    assert!((t - 50.0).abs() < 0.05, "{t}");
 }
 
 fn root() -> PathBuf {

@@ -40,8 +40,12 @@ pub enum GrblRealtime {
     JogCancel,
     /// 0x90–0x94: feed override to 100 %, +10, −10, +1, −1.
     Feed(u8),
-    /// Rapid (0x95–0x97), spindle (0x99–0x9E) and coolant (0xA0, 0xA1)
-    /// overrides: not implemented.
+    /// 0x95–0x97: rapid override to 100, 50, 25 %.
+    Rapid(u8),
+    /// 0x99–0x9D: spindle override to 100 %, +10, −10, +1, −1.
+    Spindle(u8),
+    /// The spindle stop (0x9E) and coolant toggles (0xA0, 0xA1): not
+    /// implemented.
     Unsupported(u8),
 }
 
@@ -54,7 +58,9 @@ impl GrblRealtime {
             b'~' => Some(GrblRealtime::Common(Realtime::Resume)),
             0x85 => Some(GrblRealtime::JogCancel),
             0x90..=0x94 => Some(GrblRealtime::Feed(byte)),
-            0x95..=0x97 | 0x99..=0x9E | 0xA0 | 0xA1 => Some(GrblRealtime::Unsupported(byte)),
+            0x95..=0x97 => Some(GrblRealtime::Rapid(byte)),
+            0x99..=0x9D => Some(GrblRealtime::Spindle(byte)),
+            0x9E | 0xA0 | 0xA1 => Some(GrblRealtime::Unsupported(byte)),
             _ => match Realtime::from_byte(byte) {
                 Some(rt) => Some(GrblRealtime::Common(rt)),
                 None => None,
@@ -72,6 +78,10 @@ pub struct Front {
     pub alarm: Option<u8>,
     /// Feed override, percent (10 … 200).
     pub feed: u8,
+    /// Rapid override, percent (100, 50, 25).
+    pub rapid: u8,
+    /// Spindle override, percent (10 … 200).
+    pub spindle: u8,
     /// A jog runs; a jog cancel waits for the axes to come to rest.
     pub jogging: bool,
     /// A jog cancel came: drop the rest once at rest.
@@ -85,6 +95,8 @@ impl Front {
             on: false,
             alarm: None,
             feed: 100,
+            rapid: 100,
+            spindle: 100,
             jogging: false,
             cancel: false,
         }
@@ -123,8 +135,8 @@ pub struct Extras {
     pub wco: [i64; 2],
     /// X as a diameter.
     pub diameter: bool,
-    /// Feed override, percent.
-    pub feed: u8,
+    /// Feed, rapid and spindle overrides, percent.
+    pub overrides: [u8; 3],
     /// A jog runs.
     pub jogging: bool,
     /// The alarm in force.
@@ -136,7 +148,7 @@ impl Extras {
     pub const NONE: Extras = Extras {
         wco: [0, 0],
         diameter: false,
-        feed: 100,
+        overrides: [100; 3],
         jogging: false,
         alarm: None,
     };
@@ -150,7 +162,7 @@ impl Extras {
         Extras {
             wco: [v[0].as_angstrom(), v[1].as_angstrom()],
             diameter: session.config().diam,
-            feed: front.feed,
+            overrides: [front.feed, front.rapid, front.spindle],
             jogging: front.jogging,
             alarm: front.alarm,
         }
@@ -187,12 +199,8 @@ pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
     write_mm(&mut line, extras.wco[0], extras.diameter);
     line.push_bytes(b",0.0000,");
     write_mm(&mut line, extras.wco[1], false);
-    let _ = write!(
-        line,
-        "|Ov:{},100,100|D:{}>",
-        extras.feed,
-        u8::from(extras.diameter)
-    );
+    let [f, r, s] = extras.overrides;
+    let _ = write!(line, "|Ov:{f},{r},{s}|D:{}>", u8::from(extras.diameter));
     line
 }
 
@@ -701,6 +709,20 @@ fn trim(text: &[u8]) -> &[u8] {
     text.get(start..end).unwrap_or(&[])
 }
 
+/// An override stepped by its byte, as 0x90–0x94 step the feed's: 100 %,
+/// +10, −10, +1, −1, within 10 … 200 %.
+fn stepped(percent: u8, byte: u8) -> u8 {
+    let p = i16::from(percent);
+    let next = match byte {
+        0x90 => 100,
+        0x91 => p + 10,
+        0x92 => p - 10,
+        0x93 => p + 1,
+        _ => p - 1,
+    };
+    next.clamp(10, 200) as u8
+}
+
 /// Acts on a grbl real-time character.
 pub fn realtime<I: Io + ?Sized>(
     front: &mut Front,
@@ -717,8 +739,10 @@ pub fn realtime<I: Io + ?Sized>(
             session.realtime(Realtime::Reset, &mut t);
             front.jogging = false;
             front.cancel = false;
-            front.feed = 100;
+            (front.feed, front.rapid, front.spindle) = (100, 100, 100);
             session.set_feed_override(100);
+            session.set_rapid_override(100);
+            session.set_spindle_override(100, &mut t);
             if t.reset == Some(true) {
                 // Stopped at once in motion: a drive may have lost steps.
                 front.alarm = Some(3);
@@ -741,19 +765,23 @@ pub fn realtime<I: Io + ?Sized>(
             }
         }
         GrblRealtime::Feed(byte) => {
-            let f = i16::from(front.feed);
-            let next = match byte {
-                0x90 => 100,
-                0x91 => f + 10,
-                0x92 => f - 10,
-                0x93 => f + 1,
-                _ => f - 1,
-            };
-            front.feed = next.clamp(10, 200) as u8;
+            front.feed = stepped(front.feed, byte);
             session.set_feed_override(front.feed);
         }
+        GrblRealtime::Rapid(byte) => {
+            front.rapid = match byte {
+                0x95 => 100,
+                0x96 => 50,
+                _ => 25,
+            };
+            session.set_rapid_override(front.rapid);
+        }
+        GrblRealtime::Spindle(byte) => {
+            front.spindle = stepped(front.spindle, byte - 0x09);
+            session.set_spindle_override(front.spindle, &mut t);
+        }
         GrblRealtime::Unsupported(_) => {
-            t.line(b"[MSG:rapid, spindle and coolant overrides are not implemented]")
+            t.line(b"[MSG:spindle stop and coolant toggles are not implemented]")
         }
     }
 }
@@ -767,7 +795,7 @@ mod tests {
         let extras = Extras {
             wco: [5_000_000, -1_200_000_000],
             diameter: true,
-            feed: 100,
+            overrides: [100; 3],
             jogging: false,
             alarm: None,
         };

@@ -136,6 +136,9 @@ pub struct Session {
     /// Feed override, percent (grbl's real-time 0x90–0x94): scales every
     /// G-code feed read from now on.
     feed_override: u8,
+    /// Spindle override, percent (grbl's 0x99–0x9D): scales the spindle
+    /// speed commanded, and with it feeds per revolution.
+    spindle_override: u8,
     /// The blocks the last G-code request sent.
     last_moves: Moves,
     /// The host's session token (`SESSION`); 0 after power-on.
@@ -233,6 +236,7 @@ impl Session {
             prog: [Length::ZERO; 2],
             contour: Contour::new(),
             feed_override: 100,
+            spindle_override: 100,
             last_moves: Moves::new(),
             token: 0,
             block_delete: false,
@@ -1011,7 +1015,7 @@ impl Session {
         let now = if feeds {
             path_feed(&modal, &spindle, self.prog[0])
                 .map_err(|e| Refusal::Value("F", e.as_str()))?
-                .map(|f| self.overridden(f))
+                .map(|f| self.overridden(f, modal.feed_mode))
         } else {
             None
         };
@@ -1778,18 +1782,40 @@ impl Session {
         self.feed_override = percent.clamp(10, 200);
     }
 
-    /// `feed` under the override.
-    fn overridden(&self, feed: Feed) -> Feed {
-        if self.feed_override == 100 {
+    /// `feed` under the overrides: the feed's, and per revolution the
+    /// spindle's too (the spindle turns at the overridden speed).
+    fn overridden(&self, feed: Feed, mode: FeedMode) -> Feed {
+        let spindle = if mode == FeedMode::PerRev {
+            self.spindle_override
+        } else {
+            100
+        };
+        let percent = i64::from(self.feed_override) * i64::from(spindle);
+        if percent == 10_000 {
             return feed;
         }
-        let scaled = div_round_half_away(
-            feed.mm_per_min().as_angstrom() * i64::from(self.feed_override),
-            100,
-        );
+        let scaled = div_round_half_away(feed.mm_per_min().as_angstrom() * percent, 10_000);
         Length::from_angstrom(scaled)
             .and_then(Feed::new)
             .unwrap_or(feed)
+    }
+
+    /// Sets the rapid override, percent (grbl's 100, 50, 25): rapids
+    /// queued from now on.
+    pub fn set_rapid_override(&mut self, percent: u8) {
+        self.machine.set_rapid_override(percent);
+    }
+
+    /// Sets the spindle override, percent (10 … 200): at once at rest,
+    /// else with the blocks queued from now on.
+    pub fn set_spindle_override<I: Io>(&mut self, percent: u8, io: &mut I) {
+        self.spindle_override = percent.clamp(10, 200);
+        let outputs = self.outputs_for(&self.aux, self.modal.units);
+        if self.machine.waiting() || !self.held_or_idle(io) {
+            self.machine.set_spindle(outputs.rpm);
+        } else {
+            self.switch_outputs(outputs, io);
+        }
     }
 
     /// The tool table, the work offsets and the stored positions.
@@ -1920,6 +1946,17 @@ impl Session {
             .spindle
             .within(self.top)
             .running_rpm(self.prog[0], units);
+        let rpm = if self.spindle_override == 100 {
+            rpm
+        } else {
+            let scaled = Length::from_angstrom(div_round_half_away(
+                rpm.as_angstrom() * i64::from(self.spindle_override),
+                100,
+            ))
+            .unwrap_or(rpm);
+            // Never above the spindle's top speed.
+            self.top.map_or(scaled, |top| scaled.min(top))
+        };
         Outputs {
             spindle: aux.spindle.turning,
             rpm: milli_rpm(rpm),
