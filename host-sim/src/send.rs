@@ -820,6 +820,10 @@ impl<L: ByteLink> Sender<L> {
         };
         let r = self.stream(plan, op, &mut report);
         report.halt = r.err();
+        if matches!(report.halt, Some(Halt::Aborted(_))) {
+            // The reset ended the session: a new one, to ask where it stands.
+            let _ = self.session();
+        }
         if !matches!(report.halt, Some(Halt::Link(_) | Halt::PowerLost)) {
             if let Ok(pos) = self.exchange("POS", op, None) {
                 let v = |k| pos.value(k).and_then(|v| v.parse().ok());

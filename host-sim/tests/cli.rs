@@ -300,3 +300,50 @@ fn run_expands_subprograms_and_names_what_it_cannot_expand() {
     assert!(out.stdout.is_empty());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `send` against the in-process device on a pty, as a person runs it.
+fn send(args: &[&str], program: &str) -> (Option<i32>, String, String) {
+    let device = host_sim::link::PtyDevice::start().unwrap();
+    let dir = std::env::temp_dir().join(format!("send-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let file = dir.join(format!("p{n}.nc"));
+    std::fs::write(&file, program).unwrap();
+    let out = Command::new(BIN)
+        .args(["send", file.to_str().unwrap(), "--port", device.path()])
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn send_streams_a_program_and_says_where_it_ended() {
+    let program = "G21 G90 G94\nG00 X20 Z2\nG01 Z-30 F300\nG00 X25\nM30\n";
+    let (code, out, err) = send(&[], program);
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(out.contains("5 lines answered"), "{out}");
+    // X25 on the diameter at 0.005 mm (radius), Z-30 at 0.01 mm.
+    assert!(
+        out.contains("board PX=2500 PZ=-3000, program PX=2500 PZ=-3000"),
+        "{out}"
+    );
+    let (code, out, _) = send(&["--dry-run"], program);
+    assert_eq!(code, Some(0));
+    assert!(out.contains("dry run: the board accepts every line; nothing sent"));
+}
+
+#[test]
+fn send_names_a_line_the_board_would_refuse_and_sends_nothing() {
+    let program = "G21 G90 G94\nG01 X20 Z-5 F100\nG01 X20 Q7\nM30\n";
+    let (code, out, err) = send(&[], program);
+    assert_eq!(code, Some(1), "{out}{err}");
+    assert!(err.contains(".nc:3: ERR "), "{err}");
+    assert!(out.contains("nothing sent"), "{out}");
+}

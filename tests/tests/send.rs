@@ -107,8 +107,14 @@ fn a_reset_in_the_middle_restarts_the_program_and_it_ends_where_it_should() {
         .expect("G42");
     assert!(!plan.lines[g42].comp_before && plan.lines[g42 + 1].comp_before);
 
+    // A hold and a cycle start (the in-process device has no motion in
+    // progress to stop: they change nothing there), then a reset.
     let mut op = Script {
-        keys: vec![(120, Duration::ZERO, Key::Reset)],
+        keys: vec![
+            (40, Duration::ZERO, Key::Hold),
+            (45, Duration::ZERO, Key::Resume),
+            (120, Duration::ZERO, Key::Reset),
+        ],
         ..Script::default()
     };
     let report = sender.send(&plan, &mut op);
@@ -191,6 +197,26 @@ fn a_reset_inside_the_compensated_contour_goes_back_to_its_start() {
         .find(|l| l.source == restart)
         .expect("a program line");
     assert!(!line.comp_before, "restarted at line {restart}: {said}");
+}
+
+#[test]
+fn an_abort_stops_at_rest_and_says_where() {
+    let device = PtyDevice::start().expect("pty");
+    let client = Client::open(device.path(), Duration::from_secs(5)).expect("open");
+    let mut sender = Sender::new(client, Duration::from_millis(300), 85).expect("session");
+    let plan = plan_for(&mut sender, &program(), ISO);
+    let mut op = Script {
+        keys: vec![(60, Duration::ZERO, Key::Abort)],
+        ..Script::default()
+    };
+    let report = sender.send(&plan, &mut op);
+    let Some(host_sim::send::Halt::Aborted(at)) = report.halt else {
+        panic!("{:?}", report.halt);
+    };
+    // The board stands where the abort left it, short of the program's end.
+    assert_eq!(report.registers, Some(at));
+    assert_ne!(Some(plan.end()), report.registers);
+    assert!(plan.positions.contains(&at));
 }
 
 #[test]
