@@ -527,6 +527,8 @@ pub struct Progress {
     pub remaining_us: u64,
     /// Resets the sender has recovered from.
     pub resets: u32,
+    /// The program stop waiting for cycle start (`M00`, `M01`), if any.
+    pub stop: Option<String>,
 }
 
 /// The person at the machine: keys, and what they are shown.
@@ -762,7 +764,9 @@ impl<L: ByteLink> Sender<L> {
         }
         let state = words_value(body, "STATE").unwrap_or("").to_owned();
         let speed = words_value(body, "V").unwrap_or("").to_owned();
-        if state != "IDLE" {
+        // Moving, held, or waiting at a program stop: the request is
+        // waiting its turn, not lost.
+        if state != "IDLE" || words_value(body, "STOP").is_some() {
             self.busy_at = Some(Instant::now());
         }
         // At rest (held, or nothing running) the reset loses no step. A
@@ -774,6 +778,7 @@ impl<L: ByteLink> Sender<L> {
             let _ = self.link.send(&[0x18]);
         }
         let p = &mut self.progress;
+        p.stop = words_value(body, "STOP").map(str::to_owned);
         p.state = state;
         p.speed = speed;
         p.x = words_value(body, "X").unwrap_or("").to_owned();
@@ -1092,6 +1097,10 @@ impl Operator for Console {
                 String::new()
             }
         ));
+        if let Some(code) = &p.stop {
+            self.bar
+                .set_message(format!("{code} program stop: c for cycle start"));
+        }
     }
 
     fn say(&mut self, text: &str) {

@@ -321,3 +321,51 @@ fn a_real_grbl_sender_streams_to_the_firmware_with_a_hold_in_the_middle() {
     c.write_raw(b"?").expect("status");
     assert!(c.read_line().expect("report").starts_with("<Idle|"));
 }
+
+/// The firmware in QEMU, motion in time: a jog cancelled halfway stops
+/// short, at rest, and the next jog goes on from there.
+#[test]
+fn a_jog_cancel_stops_the_firmware_short_at_rest() {
+    if !host_sim::qemu::qemu_or_skip() {
+        return;
+    }
+    let elf = host_sim::qemu::build_firmware("qemu-paced").expect("firmware");
+    let mut qemu = host_sim::qemu::Qemu::boot_paced(&elf).expect("boot");
+    let mut c = qemu.connect(Duration::from_secs(30)).expect("connect");
+    c.write_raw(b"GRBL\r\n").expect("switch");
+    assert!(c.read_line().expect("reply").starts_with("OK GRBL=1"));
+    let z = |c: &mut host_sim::link::Client| -> f64 {
+        c.write_raw(b"?").expect("status");
+        let report = loop {
+            let l = c.read_line().expect("report");
+            if l.starts_with('<') {
+                break l;
+            }
+        };
+        assert!(report.starts_with("<Idle|"), "{report}");
+        report
+            .split("MPos:")
+            .nth(1)
+            .and_then(|s| s.split('|').next())
+            .and_then(|s| s.split(',').nth(2))
+            .and_then(|s| s.parse().ok())
+            .expect(&report)
+    };
+    // 50 mm at 600 mm/min: 5 s; cancelled after about one.
+    c.write_raw(b"$J=G91 G21 Z-50 F600\n").expect("jog");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(1000));
+    c.write_raw(&[0x85]).expect("cancel");
+    std::thread::sleep(Duration::from_millis(600));
+    let stopped = z(&mut c);
+    assert!(stopped < -2.0 && stopped > -20.0, "{stopped}");
+    // The rest was dropped: the next jog starts from where it stopped.
+    c.write_raw(b"$J=G91 G21 Z-1 F600\n").expect("jog");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(600));
+    let after = z(&mut c);
+    assert!(
+        (after - (stopped - 1.0)).abs() < 1e-9,
+        "{stopped} then {after}"
+    );
+}

@@ -43,11 +43,23 @@ struct Script {
     said: Vec<String>,
     resume_after_hold: Option<Duration>,
     held_since: Option<Instant>,
+    /// Cycle start this long after a program stop was first seen.
+    resume_stop_after: Option<Duration>,
+    stopped_since: Option<Instant>,
+    stops: usize,
 }
 
 impl Operator for Script {
     fn key(&mut self, p: &Progress) -> Option<Key> {
         let t = self.started.get_or_insert_with(Instant::now).elapsed();
+        if let (Some(wait), Some(_)) = (self.resume_stop_after, &p.stop) {
+            let since = *self.stopped_since.get_or_insert_with(Instant::now);
+            if since.elapsed() >= wait {
+                self.stopped_since = None;
+                self.stops += 1;
+                return Some(Key::Resume);
+            }
+        }
         if let (Some(wait), Some(h)) = (self.resume_after_hold, self.held_since) {
             if p.state == "HOLD" && h.elapsed() >= wait {
                 self.held_since = None;
@@ -217,6 +229,25 @@ fn an_abort_stops_at_rest_and_says_where() {
     assert_eq!(report.registers, Some(at));
     assert_ne!(Some(plan.end()), report.registers);
     assert!(plan.positions.contains(&at));
+}
+
+#[test]
+fn a_program_stop_waits_for_cycle_start_without_asking_again() {
+    let device = PtyDevice::start().expect("pty");
+    let client = Client::open(device.path(), Duration::from_secs(5)).expect("open");
+    let mut sender = Sender::new(client, Duration::from_millis(200), 86).expect("session");
+    let text = program().replace("G42 G01", "M00\nG42 G01");
+    let plan = plan_for(&mut sender, &text, ISO);
+    let mut op = Script {
+        // Longer than the request timeout: the stop is not a lost reply.
+        resume_stop_after: Some(Duration::from_millis(1500)),
+        ..Script::default()
+    };
+    let report = sender.send(&plan, &mut op);
+    assert!(report.halt.is_none(), "{:?}", report.halt);
+    assert_eq!(op.stops, 1);
+    assert_eq!(report.retries, 0);
+    assert_eq!(report.registers, Some(plan.end()));
 }
 
 #[test]
