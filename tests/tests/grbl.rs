@@ -334,6 +334,9 @@ fn a_jog_cancel_stops_the_firmware_short_at_rest() {
     let mut c = qemu.connect(Duration::from_secs(30)).expect("connect");
     c.write_raw(b"GRBL\r\n").expect("switch");
     assert!(c.read_line().expect("reply").starts_with("OK GRBL=1"));
+    // The banner: an empty line, then its text.
+    assert_eq!(c.read_line().expect("banner"), "");
+    assert!(c.read_line().expect("banner").starts_with("Grbl 1.1h"));
     let z = |c: &mut host_sim::link::Client| -> f64 {
         c.write_raw(b"?").expect("status");
         let report = loop {
