@@ -44,12 +44,33 @@ def callback(event, *data):
 
 grbl = GrblStreamer(callback)
 grbl.setup_logging()
+# grbl-streamer fills the RX buffer from the thread that starts the job and
+# from its reader thread (on each `ok`) without a lock: with a controller
+# that answers within microseconds the two interleave and a line is skipped
+# or sent twice. One lock around its fill keeps its own counting sound.
+fill_lock = threading.RLock()
+unlocked_stream = grbl._stream
+
+
+def locked_stream():
+    with fill_lock:
+        unlocked_stream()
+
+
+grbl._stream = locked_stream
 grbl.cnect(port, 115200)
 if not booted.wait(10):
     print(json.dumps({"error": "no banner after the reset"}))
     sys.exit(1)
 grbl.poll_interval = 0.05
 grbl.poll_start()
+# The sender asks `$#` and `$G` from its polling thread after the boot; their
+# `ok`s must be in before the job starts (grbl-streamer's own streaming
+# would otherwise run from two threads at once and skip a line).
+deadline = time.time() + 10
+while (grbl.hash_state_requested or grbl.gcode_parser_state_requested) and time.time() < deadline:
+    time.sleep(0.05)
+time.sleep(0.5)
 grbl.load_file(program)
 lines = grbl.buffer_size
 grbl.job_run()
