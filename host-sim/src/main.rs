@@ -931,6 +931,16 @@ fn send_program(args: &SendArgs) -> Result<ExitCode, Box<dyn std::error::Error>>
     };
     let setup = host_sim::program::setup_lines(&setup_text);
     let timeout = Duration::from_millis(args.timeout_ms);
+    // Checked now, not at the first restart.
+    if !core_nostd::length::Length::from_mm_str(&args.return_feed)
+        .is_ok_and(|f| f.as_angstrom() >= 10_000 && f.as_angstrom() <= 999_999_990_000)
+    {
+        return Err(format!(
+            "--return-feed {}: not a feed of 0.001 to 99999.999 mm/min",
+            args.return_feed
+        )
+        .into());
+    }
     let mut qemu = None;
     let client = if args.qemu {
         let elf = host_sim::qemu::build_firmware("qemu-paced")?;
