@@ -290,6 +290,37 @@ impl fmt::Display for Length {
     }
 }
 
+/// Writes `angstrom` as an exact decimal of mm, without trailing zeros
+/// (up to 7 decimals): what a request or a G-code word takes back
+/// unchanged.
+///
+/// ```
+/// use core_nostd::length::write_exact_mm;
+/// let mut s = String::new();
+/// write_exact_mm(&mut s, -1_250_000).unwrap();
+/// assert_eq!(s, "-0.125");
+/// ```
+pub fn write_exact_mm<W: fmt::Write + ?Sized>(w: &mut W, angstrom: i64) -> fmt::Result {
+    if angstrom < 0 {
+        w.write_str("-")?;
+    }
+    let u = angstrom.unsigned_abs();
+    write!(w, "{}", u / 10_000_000)?;
+    let frac = u % 10_000_000;
+    if frac != 0 {
+        let mut digits = [b'0'; 7];
+        let mut f = frac;
+        for d in digits.iter_mut().rev() {
+            *d = b'0' + (f % 10) as u8;
+            f /= 10;
+        }
+        let len = 7 - digits.iter().rev().take_while(|&&d| d == b'0').count();
+        w.write_str(".")?;
+        w.write_str(core::str::from_utf8(digits.get(..len).unwrap_or(&[])).unwrap_or(""))?;
+    }
+    Ok(())
+}
+
 /// A G-code number without a unit (the grammar of [`Length::from_gcode_mm`])
 /// times 10ᵉ, `e` ≤ 7, rounded once half away from zero: seconds or
 /// milliseconds as microseconds (`e` 6 or 3).

@@ -230,6 +230,16 @@ pub fn program_lines(
     }
 }
 
+/// The run's own settings, before any setup file: the dialect, diameters
+/// or radii, the optional stop switch.
+pub fn run_settings(options: Options) -> [String; 3] {
+    [
+        format!("OPT DIALECT={}", options.dialect.as_str()),
+        format!("CFG DIAM={}", u8::from(!options.radius)),
+        format!("OPT OPTSTOP={}", u8::from(options.optional_stop)),
+    ]
+}
+
 /// Runs a program's text after setup requests, each with the line of the
 /// file it comes from ([`Report::setup_refused`]).
 pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Report {
@@ -266,11 +276,7 @@ fn run_inner(
     };
     let mut report = Report::default();
     let mut timeline = Timeline::default();
-    let settings = [
-        format!("OPT DIALECT={}", options.dialect.as_str()),
-        format!("CFG DIAM={}", u8::from(!options.radius)),
-        format!("OPT OPTSTOP={}", u8::from(options.optional_stop)),
-    ];
+    let settings = run_settings(options);
     for (line, setting) in settings
         .iter()
         .map(|s| (0, s.as_str()))

@@ -134,13 +134,9 @@ pub fn board_settings<L: ByteLink>(s: &mut Sender<L>) -> Result<Vec<String>, Hal
 
 /// A length in ångström as an exact decimal of mm (no trailing zeros).
 fn exact_mm(a: i64) -> String {
-    let sign = if a < 0 { "-" } else { "" };
-    let (int, frac) = (a.unsigned_abs() / 10_000_000, a.unsigned_abs() % 10_000_000);
-    if frac == 0 {
-        return format!("{sign}{int}");
-    }
-    let f = format!("{frac:07}");
-    format!("{sign}{int}.{}", f.trim_end_matches('0'))
+    let mut s = String::new();
+    let _ = core_nostd::length::write_exact_mm(&mut s, a);
+    s
 }
 
 /// The requests that give a board after a reset (power-on modal state, no
@@ -286,12 +282,9 @@ impl Plan {
                 return Err(format!("the board's settings cannot be mirrored: {s}: {r}"));
             }
         }
-        let own = [
-            "RESET".to_string(),
-            format!("OPT DIALECT={}", options.dialect.as_str()),
-            format!("CFG DIAM={}", u8::from(!options.radius)),
-            format!("OPT OPTSTOP={}", u8::from(options.optional_stop)),
-        ];
+        let own: Vec<String> = std::iter::once("RESET".to_string())
+            .chain(crate::program::run_settings(options))
+            .collect();
         for (line, req) in own
             .iter()
             .map(|s| (0, s.as_str()))

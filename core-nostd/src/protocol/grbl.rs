@@ -579,38 +579,17 @@ fn jog<I: Io + ?Sized>(session: &mut Session, words: &[u8], io: &mut Translate<'
     for ((a, name), shift) in axes.iter().zip([b" X=", b" Z="]).zip(shifts) {
         if let Some(v) = a {
             req.push_bytes(name);
-            write_exact(&mut req, v.as_angstrom() + shift);
+            let _ = crate::length::write_exact_mm(&mut req, v.as_angstrom() + shift);
         }
     }
     if inc {
         req.push_bytes(b" INC=1");
     }
     req.push_bytes(b" F=");
-    write_exact(&mut req, f.as_angstrom());
+    let _ = crate::length::write_exact_mm(&mut req, f.as_angstrom());
     let request = ReplyLine::clone(&req);
     session.handle_line(request.as_bytes(), io);
     io.outcome == Some(Ok(()))
-}
-
-/// Å as an exact decimal of mm.
-fn write_exact(line: &mut ReplyLine, a: i64) {
-    if a < 0 {
-        line.push_bytes(b"-");
-    }
-    let u = a.unsigned_abs();
-    let _ = write!(line, "{}", u / 10_000_000);
-    let frac = u % 10_000_000;
-    if frac != 0 {
-        let mut digits = [b'0'; 7];
-        let mut f = frac;
-        for d in digits.iter_mut().rev() {
-            *d = b'0' + (f % 10) as u8;
-            f /= 10;
-        }
-        let len = 7 - digits.iter().rev().take_while(|&&d| d == b'0').count();
-        line.push_bytes(b".");
-        line.push_bytes(digits.get(..len).unwrap_or(&[]));
-    }
 }
 
 /// Runs one line received in grbl mode. Returns whether the link goes
