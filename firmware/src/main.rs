@@ -44,9 +44,13 @@ fn main() -> ! {
                 heard = board::ticks();
                 io.storage.heard();
                 device.receive(byte, &mut io);
-                // The link may have switched protocol.
-                io.grbl = device.grbl_extras();
-                firmware::board::set_grbl(io.grbl.is_some());
+                // A line's end (it may have switched protocol, moved the
+                // offsets or started a jog) or a grbl override: what a grbl
+                // status report adds, looked at again; not at every byte.
+                if matches!(byte, b'\n' | b'\r') || byte >= 0x80 {
+                    io.grbl = device.grbl_extras();
+                    firmware::board::set_grbl(io.grbl.is_some());
+                }
             }
             None if feed => {}
             // A grbl link quiet for 50 ms: what it queued starts (no sleep
