@@ -1209,7 +1209,35 @@ fn run_qemu(args: &QemuArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let code = compare_all(client, &args.scenario)?;
     drop(qemu);
     let paced = paced_qemu(args.scenario.seed)?;
-    Ok(if paced { code } else { ExitCode::FAILURE })
+    let calculators = calculators_qemu()?;
+    Ok(if paced && calculators {
+        code
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+/// The calculators' image (`--features calc`) in QEMU answers every
+/// calculator request as the in-process device does.
+fn calculators_qemu() -> Result<bool, Box<dyn std::error::Error>> {
+    let elf = host_sim::qemu::build_firmware("qemu,calc")?;
+    let mut qemu = host_sim::qemu::Qemu::boot(&elf, true)?;
+    let mut client = qemu.connect(Duration::from_secs(60))?;
+    let session = host_sim::scenario::calculator_session();
+    let expected = host_sim::device::LocalDevice::new().feed(&session);
+    let got = host_sim::qemu::one_by_one(&mut client, &session)?;
+    let requests = session.iter().filter(|&&b| b == b'\n').count();
+    let lines = got.iter().filter(|&&b| b == b'\n').count();
+    let equal = got == expected;
+    println!(
+        "calculators' image (THREAD, WEAR, DEFLECT, TRI, TAPE): {requests} requests, {lines} reply lines, {}",
+        if equal {
+            "identical to the in-process device"
+        } else {
+            "DIFFERENT from the in-process device"
+        }
+    );
+    Ok(equal)
 }
 
 /// The step interrupt in time: a program streamed to the paced firmware
@@ -1333,6 +1361,11 @@ fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {
     let bench = elf.with_file_name("bench");
     println!("Cortex-M4 instruction counts (QEMU netduinoplus2, -icount shift=0):");
     for line in host_sim::qemu::icount_bench(&bench)? {
+        println!("  {line}");
+    }
+    // The calculators' image (`--features calc`): each request in full.
+    let calc = host_sim::qemu::build_firmware("qemu,calc")?.with_file_name("bench");
+    for line in host_sim::qemu::icount_bench(&calc)? {
         println!("  {line}");
     }
     status_latency()

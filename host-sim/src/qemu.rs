@@ -67,6 +67,18 @@ pub fn build_firmware(features: &str) -> Result<PathBuf, LinkError> {
     Ok(target_dir.join("thumbv7em-none-eabihf/release/firmware"))
 }
 
+/// Sends `requests` (raw lines, each ended by LF) one at a time, each after
+/// the final line of the one before, and returns every reply line: for
+/// requests whose replies outrun the link's receive queue (long tables).
+pub fn one_by_one(client: &mut Client, requests: &[u8]) -> Result<Vec<u8>, LinkError> {
+    let mut got = Vec::new();
+    for line in requests.split_inclusive(|&b| b == b'\n') {
+        client.write_raw(line)?;
+        got.extend(client.read_finals(1)?);
+    }
+    Ok(got)
+}
+
 /// A running QEMU with the firmware.
 pub struct Qemu {
     child: Child,

@@ -516,6 +516,93 @@ pub fn random(seed: u64, n: usize) -> Scenario {
     }
 }
 
+/// The seed's BCK-5 tape (Kosenko Table 21, as printed) as `TAPE FRAME=`
+/// requests: Latin look-alikes, whitespace dropped; then `TAPE END`.
+pub fn tape_requests(listing: &str) -> Vec<String> {
+    let latin = |c: char| match c {
+        'Н' => 'H',
+        'Е' => 'E',
+        'Д' => 'D',
+        'Т' => 'T',
+        'К' => 'K',
+        'П' => 'P',
+        'Ш' => 'W',
+        'С' => 'C',
+        'В' => 'B',
+        'Я' => 'R',
+        c => c,
+    };
+    listing
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let frame: String = l
+                .chars()
+                .filter(|c| !c.is_whitespace())
+                .map(latin)
+                .collect();
+            format!("TAPE FRAME={frame}")
+        })
+        .chain(std::iter::once("TAPE END".to_string()))
+        .collect()
+}
+
+/// Every calculator request (`THREAD`, `WEAR`, `DEFLECT`, `TRI`, `TAPE`):
+/// the seeds' examples, each input outside its domain, and the seed's
+/// BCK-5 tape frame by frame. Two devices with the calculators answer it
+/// with identical bytes.
+pub fn calculator_session() -> Vec<u8> {
+    let mut lines: Vec<String> = [
+        "THREAD P=1.5",
+        "THREAD P=2 MODE=G07 CROSS=1",
+        "LIMITS VZ=1200",
+        "THREAD P=1.5 MODE=G06",
+        "LIMITS VZ=3000",
+        "THREAD P=0",
+        "THREAD P=1 MODE=G05",
+        "THREAD",
+        "WEAR D=40 L=120 S=0.2 U0=5 UR=8 Q=50 ALLOW=20 TOL=50 FULL=300 H=0.8 ALPHA=8",
+        "WEAR D=40,30 L=120,50 S=0.15 UR=6 Q=200",
+        "WEAR KM=1.5 UR=8 Q=3",
+        "WEAR D=40 L=120 S=0.2 U0=5 UR=8 ALLOW=30 TOL=50",
+        "WEAR D=40 L=120 S=0 UR=8",
+        "WEAR D=40 L=120 S=0.2 UR=8 H=0.5",
+        "DEFLECT D=29.8,21.8 L=100,150 T=0.5 HB=220 J=4000,3000,10000 DX=10",
+        "DEFLECT D=29.8,21.8 L=100,150 T=0.5 HB=220 J=4000,3000,10000 DX=25 G=1",
+        "DEFLECT D=60 L=500 T=1 C=120 X=0.9 J=5000,4000,8000 RED=VOL DX=50",
+        "DEFLECT D=29.8 L=100 T=0.5 J=-1,3000,10000",
+        "DEFLECT D=29.8,21.8 L=100 T=0.5 J=4000,3000,10000",
+        "DEFLECT D=29.8 L=100 T=0 J=4000,3000,10000",
+        "DEFLECT D=29.8 L=100 T=0.5 J=4000,3000",
+        "DEFLECT D=29.8 L=100 T=0.5 J=4000,3000,10000 PHI=50",
+        "TRI AOB=90 BOC=90 COA=90 ROWS=4 LEN=10,10,12",
+        "TRI AOB=75 BOC=80 COA=95 H=0.25 ROWS=3 RF=0.5 TABLE=120,40 EA=30 KV=2 V=10,-5,2",
+        "TRI AOB=75 BOC=80 OB=97.9824 ROWS=2 G=1",
+        "TRI AOB=75 BOC=80 OC=73.785 ROWS=2",
+        "TRI AOB=90 BOC=90 COA=90 PROP=1 ROWS=1",
+        "TRI AOB=100 BOC=20 COA=30",
+        "TRI AOB=90 BOC=90",
+        "TRI AOB=190 BOC=90 COA=90",
+        "TRI AOB=90 BOC=90 COA=90 KV=5",
+        "TRI AOB=90 BOC=90 COA=90 ROWS=1001",
+        "DEFLECT D=29.8 L=100 T=0.5 J=4000,3000,10000 DX=0.05",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    lines.extend(tape_requests(include_str!(
+        "../../examples/kosenko-table21.bck5"
+    )));
+    lines.push("TAPE FRAME=5K001E000000D000000P00W00C01Q00H".into());
+    lines.push("TAPE END".into());
+    let mut s = Vec::new();
+    for l in lines {
+        s.extend_from_slice(l.as_bytes());
+        s.extend_from_slice(b"\r\n");
+    }
+    s
+}
+
 /// A mixed session of raw request bytes: calculator (`CONE`), motion and
 /// G-code requests (a compensated program),
 /// bad input, binary garbage, an over-long line, wrong and right checksums,

@@ -188,3 +188,171 @@ fn the_seeds_bck5_tape_fails_exactly_where_it_was_misprinted() {
         r.rows
     );
 }
+
+/// The reply lines of `requests` on the in-process device.
+fn device_replies(requests: &str) -> Vec<String> {
+    let bytes: Vec<u8> = requests
+        .lines()
+        .flat_map(|l| format!("{l}\r\n").into_bytes())
+        .collect();
+    let out = host_sim::device::LocalDevice::new().feed(&bytes);
+    String::from_utf8(out)
+        .unwrap()
+        .lines()
+        .map(|l| l.rsplit_once('*').map_or(l, |(body, _)| body).to_string())
+        .collect()
+}
+
+/// The value of `key` in a reply line.
+fn word<'a>(line: &'a str, key: &str) -> &'a str {
+    line.split(' ')
+        .find_map(|w| w.strip_prefix(key).and_then(|v| v.strip_prefix('=')))
+        .unwrap_or_else(|| panic!("no {key} in {line}"))
+}
+
+#[test]
+fn the_pendant_answers_each_calculator_with_the_command_lines_figures() {
+    let r = device_replies(
+        "THREAD P=1.5\nLIMITS VZ=1200\nTHREAD P=1.5\nTHREAD P=2 MODE=G07 CROSS=1\n\
+         WEAR D=40 L=120 S=0.2 U0=5 UR=8 Q=50 ALLOW=20 TOL=50 FULL=300 H=0.8 ALPHA=8\n\
+         DEFLECT D=29.8,21.8 L=100,150 T=0.5 HB=220 J=4000,3000,10000 DX=10\n\
+         TRI AOB=90 BOC=90 COA=90 ROWS=4 LEN=10,10,12",
+    );
+    // ЭМ-907: min(960, 1200/1.5) = 800 rpm; this controller: VZ/t.
+    assert_eq!(
+        r[0],
+        "OK MODE=G08 WORD=600 CAP=960 NEM=800.0 V=3000.0 NMAX=2000.0"
+    );
+    assert_eq!(word(&r[2], "NMAX"), "800.0", "{}", r[2]);
+    // Across: min(480, 600/2) = 300 rpm; VX 1500 / 2 = 750.
+    assert_eq!(word(&r[3], "NEM"), "300.0");
+    assert_eq!(word(&r[3], "NMAX"), "750.0");
+
+    let l = std::f64::consts::PI * 40.0 * 120.0 / 0.2e6;
+    assert_eq!(word(&r[4], "KM"), format!("{l:.5}"));
+    assert_eq!(word(&r[4], "U"), format!("{:.2}", 5.0 + 8.0 * l * 50.0));
+    assert_eq!(word(&r[4], "QR"), "24");
+    // u = h·tan α.
+    assert_eq!(
+        word(&r[4], "HR"),
+        format!("{:.4}", 0.8 * 8f64.to_radians().tan())
+    );
+    let cli = calculators::wear(&WearJob {
+        sections: vec![(40.0, 120.0)],
+        feed_mm_rev: 0.2,
+        initial_um: 5.0,
+        rate_um_per_km: 8.0,
+        parts: 50,
+        resetting: Some((20.0, 50.0)),
+        full_um: Some(300.0),
+        flank: Some((0.8, 8.0)),
+    })
+    .unwrap();
+    assert_eq!(
+        value(&cli, "parts_until_tool_change"),
+        Cell::Int(word(&r[4], "QT").parse().unwrap())
+    );
+
+    // 27 stations, then the reduced diameter of eq. 30: 25 mm.
+    let rows: Vec<&String> = r[5..]
+        .iter()
+        .take_while(|l| l.starts_with("DATA"))
+        .collect();
+    assert_eq!(rows.len(), 27);
+    let ok = &r[5 + 27];
+    assert_eq!(word(ok, "DRED"), "25.0000");
+    assert_eq!(word(ok, "N"), "27");
+    let (table, _) = calculators::deflection(&DeflectionJob {
+        sections: vec![(29.8, 100.0), (21.8, 150.0)],
+        equal_volume: false,
+        modulus: 21_000.0,
+        stiffness: [4000.0, 3000.0, 10_000.0],
+        depth_mm: 0.5,
+        feed_mm_rev: 0.2,
+        hardness_hb: 220.0,
+        approach_deg: 90.0,
+        nose_mm: 1.0,
+        force: None,
+        step_mm: 10.0,
+        rpm: 400.0,
+    })
+    .unwrap();
+    for (line, row) in rows.iter().zip(&table.rows) {
+        let num = |c: &Cell| match c {
+            Cell::Num(v, _) => *v,
+            other => panic!("{other:?}"),
+        };
+        let device: f64 = word(line, "DS").parse().unwrap();
+        assert!((device - num(&row[6])).abs() <= 0.5e-4, "{line} {row:?}");
+        let error: f64 = word(line, "ERR").parse().unwrap();
+        assert!((error - num(&row[3])).abs() <= 0.5e-4, "{line} {row:?}");
+    }
+
+    // The cube's corner: φ = arctan(1/√2), tilt −(90° − φ).
+    let tri = &r[5 + 28..];
+    let phi = 0.5f64.sqrt().atan().to_degrees();
+    assert_eq!(word(&tri[0], "PHI"), format!("{phi:.5}"));
+    assert_eq!(word(&tri[1], "TILT"), format!("{:.5}", phi - 90.0));
+    assert_eq!(tri.iter().filter(|l| l.starts_with("DATA ROW=")).count(), 4);
+    assert!(tri.last().unwrap().starts_with("OK AOB=90.00000"));
+}
+
+#[test]
+fn the_pendant_refuses_what_no_calculator_takes_and_keeps_its_tape() {
+    let r = device_replies(
+        "THREAD P=0\nWEAR D=40 L=120 S=0.2 UR=8 ALLOW=30 TOL=50\n\
+         DEFLECT D=29.8 L=100 T=0.5 J=-1,3000,10000\nTRI AOB=100 BOC=20 COA=30\n\
+         TRI AOB=90 BOC=90\nTAPE FRAME=2K002E212400D630000P75W26H\n\
+         TAPE FRAME=5K001E000000D000000P00W00C01Q00H\nTAPE FRAME=2K002E212400D630000P75W26H\n\
+         DEFLECT D=29.8 L=100 T=0.5 J=4000,3000,10000 DX=0.05\nTRI AOB=90 BOC=90 COA=90 ROWS=1001",
+    );
+    assert!(r[0].starts_with("ERR VALUE THREAD pitch"), "{}", r[0]);
+    assert!(r[1].starts_with("ERR VALUE WEAR allowed wear"), "{}", r[1]);
+    assert!(
+        r[2].starts_with("ERR VALUE DEFLECT headstock stiffness"),
+        "{}",
+        r[2]
+    );
+    // Three plane angles that make no corner: impossible geometry.
+    assert!(r[3].starts_with("ERR GEOMETRY plane angle AOB"), "{}", r[3]);
+    assert!(r[4].starts_with("ERR VALUE TRI corner angles"), "{}", r[4]);
+    assert_eq!(r[5], "OK LINES=1 FRAMES=1 FINDINGS=0");
+    // A letter BCK-5 does not have (Q), named with its column, not counted.
+    assert_eq!(
+        r[6],
+        "ERR VALUE FRAME column 29: a character the code does not have"
+    );
+    // The second good frame repeats K002: the numbering finding, line 2.
+    assert_eq!(r[7], "DATA K002 (line 2): out of sequence, K003 expected");
+    assert_eq!(r[8], "OK LINES=2 FRAMES=2 FINDINGS=1");
+    // A reply of more than a thousand lines is not made.
+    assert_eq!(
+        r[9],
+        "ERR RANGE DEFLECT: more than 1000 stations, give a larger DX"
+    );
+    assert_eq!(r[10], "ERR VALUE ROWS must be 1 to 1000");
+}
+
+#[test]
+fn the_seeds_bck5_tape_fails_on_the_pendant_exactly_where_it_was_misprinted() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/kosenko-table21.bck5"
+    ))
+    .unwrap();
+    let requests = host_sim::scenario::tape_requests(&text).join("\n");
+    let r = device_replies(&requests);
+    let findings: Vec<&String> = r.iter().filter(|l| l.starts_with("DATA")).collect();
+    assert_eq!(findings.len(), 6, "{findings:#?}");
+    for (line, frame) in findings.iter().zip(["K000", "K004", "K007"]) {
+        assert!(line.starts_with(&format!("DATA {frame} (")) && line.contains("check digit"));
+    }
+    assert!(findings[3].starts_with("DATA tool C01 (K001-K011): E does not close"));
+    assert!(findings[4].starts_with("DATA tool C01 (K001-K011): D does not close"));
+    assert!(findings[5].starts_with("DATA tool C02 (K020-K024): E does not close"));
+    assert!(
+        r.last().unwrap().ends_with("FINDINGS=6 END=1"),
+        "{:?}",
+        r.last()
+    );
+}

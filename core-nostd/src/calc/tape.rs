@@ -1223,6 +1223,11 @@ impl Bck5Verifier {
         }
     }
 
+    /// What has been read so far.
+    pub const fn summary(&self) -> Bck5Summary {
+        self.summary
+    }
+
     /// Reads one line (without its line end). Blank lines are skipped.
     pub fn line<F: FnMut(Bck5Finding)>(&mut self, text: &str, mut report: F) {
         self.summary.lines = self.summary.lines.saturating_add(1);

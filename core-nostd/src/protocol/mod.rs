@@ -5,6 +5,8 @@
 //! ([`framing`]), checks them and runs them on its [`Session`], and hands every
 //! reply line and every accepted motion block to an [`Io`].
 
+#[cfg(feature = "calc")]
+mod calc;
 pub mod framing;
 pub mod grbl;
 pub mod reply;

@@ -167,6 +167,9 @@ pub struct Session {
     spinup_us: u64,
     /// The spindle and coolant outputs as last switched at rest.
     outputs: Outputs,
+    /// The BCK-5 tape read so far by `TAPE` requests.
+    #[cfg(feature = "calc")]
+    tape: crate::calc::tape::Bck5Verifier,
 }
 
 impl Default for Session {
@@ -176,7 +179,7 @@ impl Default for Session {
 }
 
 /// Why a request was refused, before it is written out.
-enum Refusal<'a> {
+pub(super) enum Refusal<'a> {
     Checksum(u8),
     ChecksumForm,
     Control,
@@ -193,6 +196,9 @@ enum Refusal<'a> {
     Busy(&'static str),
     Crc,
     NoSession,
+    /// A BCK-5 tape frame that cannot be read (`TAPE`).
+    #[cfg(feature = "calc")]
+    Frame(crate::calc::tape::ParseError),
 }
 
 impl From<ArcError> for Refusal<'_> {
@@ -210,7 +216,7 @@ impl<'a> From<ArgError<'a>> for Refusal<'a> {
     }
 }
 
-type Outcome<'a> = Result<(), Refusal<'a>>;
+pub(super) type Outcome<'a> = Result<(), Refusal<'a>>;
 
 impl Session {
     /// Power-on state: defaults, at program zero.
@@ -249,6 +255,8 @@ impl Session {
             top: None,
             spinup_us: 0,
             outputs: Outputs::OFF,
+            #[cfg(feature = "calc")]
+            tape: crate::calc::tape::Bck5Verifier::new(),
         }
     }
 
@@ -367,6 +375,38 @@ impl Session {
         }
     }
 
+    /// The calculators' requests (`THREAD`, `WEAR`, `DEFLECT`, `TRI`,
+    /// `TAPE`); `None` for any other command.
+    #[cfg(feature = "calc")]
+    fn calc<'a, I: Io>(
+        &mut self,
+        command: &str,
+        words: Words<'a>,
+        io: &mut I,
+    ) -> Option<Outcome<'a>> {
+        use super::calc;
+        let is = |name: &str| command.eq_ignore_ascii_case(name);
+        Some(if is("THREAD") {
+            calc::thread_command(words, self.machine.limits(), io)
+        } else if is("WEAR") {
+            calc::wear_command(words, io)
+        } else if is("DEFLECT") {
+            calc::deflect_command(words, io)
+        } else if is("TRI") {
+            calc::tri_command(words, io)
+        } else if is("TAPE") {
+            calc::tape_command(words, &mut self.tape, io)
+        } else {
+            return None;
+        })
+    }
+
+    /// Without the calculators, no command is one of theirs.
+    #[cfg(not(feature = "calc"))]
+    fn calc<'a, I: Io>(&mut self, _: &str, _: Words<'a>, _: &mut I) -> Option<Outcome<'a>> {
+        None
+    }
+
     fn run<'a, I: Io>(&mut self, body: &'a [u8], io: &mut I) -> Outcome<'a> {
         if !body
             .iter()
@@ -407,6 +447,8 @@ impl Session {
             self.cone_command(words, io)
         } else if command.eq_ignore_ascii_case("ARC") {
             self.arc_command(words, io)
+        } else if let Some(outcome) = self.calc(command, words.clone(), io) {
+            outcome
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
         } else if command.eq_ignore_ascii_case("OPT") {
@@ -2448,7 +2490,7 @@ fn no_args<'a>(mut words: Words<'a>, command: &'static str) -> Outcome<'a> {
     }
 }
 
-fn parse_length(key: &'static str, v: &str) -> Result<Length, Refusal<'static>> {
+pub(super) fn parse_length(key: &'static str, v: &str) -> Result<Length, Refusal<'static>> {
     Length::from_mm_str(v).map_err(|e| Refusal::Value(key, e.as_str()))
 }
 
@@ -2664,6 +2706,8 @@ fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
             format_args!("{what} not allowed while G41/G42 is on; cancel with G40 first"),
         ),
         Refusal::Contour(e) => send_contour_refusal(io, e),
+        #[cfg(feature = "calc")]
+        Refusal::Frame(e) => send_error(io, E::Value, format_args!("FRAME {e}")),
         Refusal::Block(e) => {
             let code = if e.is_value() { E::Value } else { E::Syntax };
             send_error(io, code, format_args!("{e}"))

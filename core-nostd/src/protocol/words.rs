@@ -1,6 +1,7 @@
 //! Splitting a request into its command word and `KEY=VALUE` arguments.
 
 /// A request split into words, without allocation.
+#[derive(Clone)]
 pub(crate) struct Words<'a> {
     rest: &'a str,
 }

@@ -447,6 +447,31 @@ fn reader(tim: &StepTimer) {
     ));
 }
 
+/// The calculators' requests, each in full: parsing, the f64 arithmetic
+/// (soft double precision: the M4's FPU is single precision) and every
+/// reply line.
+fn calculators(tim: &StepTimer) {
+    let mut dev = Device::new();
+    for request in [
+        &b"THREAD P=1.5\r\n"[..],
+        b"WEAR D=40 L=120 S=0.2 U0=5 UR=8 Q=50 ALLOW=20 TOL=50 FULL=300 H=0.5 ALPHA=8\r\n",
+        b"DEFLECT D=29.8,21.8 L=100,150 T=0.5 HB=220 J=4000,3000,10000 DX=10\r\n",
+        b"DEFLECT D=29.8,21.8 L=100,150 T=0.5 HB=220 J=4000,3000,10000 DX=10 G=1\r\n",
+        b"TRI AOB=90 BOC=90 COA=90 ROWS=10\r\n",
+        b"TRI AOB=75 BOC=80 OB=97.9824 ROWS=10 G=1\r\n",
+        b"TAPE FRAME=2K002E212400D630000P75W26H\r\n",
+        b"TAPE END\r\n",
+    ] {
+        let mut quiet = Quiet(0);
+        let t = measure(tim, || dev.receive_bytes(request, &mut quiet));
+        let text = core::str::from_utf8(request).unwrap_or("?").trim_end();
+        Line::print(format_args!(
+            "calculator {text}: {t} instructions, {} reply bytes",
+            quiet.0
+        ));
+    }
+}
+
 #[entry]
 fn main() -> ! {
     let mut b = firmware::boot();
@@ -459,6 +484,12 @@ fn main() -> ! {
     Line::print(format_args!(
         "calibration: delay(100000) = {delay} ticks, empty = {empty}"
     ));
+
+    // The calculators' image measures its requests alone.
+    if cfg!(feature = "calc") {
+        calculators(tim);
+        finish()
+    }
 
     let p = |x, z| ImpulsePoint {
         x: Impulses(x),
@@ -534,7 +565,11 @@ fn main() -> ! {
     arcs(tim);
     timed(tim);
     compensation(tim);
+    finish()
+}
 
+/// Ends the run: QEMU exits.
+fn finish() -> ! {
     #[cfg(feature = "qemu")]
     cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
     halt()
