@@ -707,6 +707,8 @@ impl FixedRate {
 pub struct Record {
     events: u64,
     crc: Crc32,
+    /// `crc` before the last event, for [`Record::forget_last`].
+    before: Crc32,
     /// The tick of the previous event of the current run.
     last: u64,
     /// Ticks of the last run that ended.
@@ -725,6 +727,7 @@ impl Record {
         Record {
             events: 0,
             crc: Crc32::new(),
+            before: Crc32::new(),
             last: 0,
             run_ticks: 0,
         }
@@ -737,7 +740,33 @@ impl Record {
         let delta = tick.wrapping_sub(self.last) as u32;
         self.last = tick;
         self.events += 1;
+        self.before = self.crc;
         self.crc.push_u8_u32_le(event.bits(), delta);
+    }
+
+    /// Takes back the last event added: it was handed out but never
+    /// issued (a reset came while it waited for its tick). Called at most
+    /// once after an event; with nothing recorded it does nothing.
+    ///
+    /// ```
+    /// use core_nostd::impulse::Impulses;
+    /// use core_nostd::interleave::{ImpulsePoint, LinearBlock};
+    /// use core_nostd::step::Record;
+    /// let p = |x, z| ImpulsePoint { x: Impulses(x), z: Impulses(z) };
+    /// let e: Vec<_> = LinearBlock::new(p(0, 0), p(2, -1)).unwrap().events().collect();
+    /// let (mut one, mut two) = (Record::new(), Record::new());
+    /// one.event(e[0], 10);
+    /// two.event(e[0], 10);
+    /// two.event(e[1], 25);
+    /// assert_ne!(two.tseq(), one.tseq());
+    /// two.forget_last();
+    /// assert_eq!((two.events(), two.tseq()), (one.events(), one.tseq()));
+    /// ```
+    pub fn forget_last(&mut self) {
+        if self.events > 0 {
+            self.events -= 1;
+            self.crc = self.before;
+        }
     }
 
     /// A run ended after `ticks`; the next event starts a new run.

@@ -493,6 +493,16 @@ impl<const R: usize> Stepper<R> {
         self.issued
     }
 
+    /// Takes back `e`, the event last pulled: it was never issued (a reset
+    /// came while it waited for its tick). The registers and the record
+    /// no longer count it. At most once after a pull.
+    pub fn take_back(&mut self, e: StepEvent) {
+        let (dx, dz) = e.moves();
+        self.issued.x.0 -= i32::from(dx);
+        self.issued.z.0 -= i32::from(dz);
+        self.record.forget_last();
+    }
+
     /// Sets the registers, at rest (`ZERO`, a price change).
     pub fn set_issued(&mut self, registers: ImpulsePoint) {
         self.issued = registers;

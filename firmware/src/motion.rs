@@ -186,14 +186,14 @@ impl Motion {
     }
 
     /// Reset: outputs low, the motion dropped, the event waiting for its
-    /// tick never issued (nor counted); what was running.
+    /// tick never issued (nor counted in the registers, nor in what `SYNC`
+    /// reports); what was running.
     fn abort(&mut self) -> Aborted {
-        let registers = self.issued();
         let mut found = self.stepper.abort();
-        if self.next.take().is_some() {
+        if let Some((e, _)) = self.next.take() {
             found.done = found.done.saturating_sub(1);
+            self.stepper.take_back(e);
         }
-        self.stepper.set_issued(registers);
         self.alarm.stop();
         self.pulse_end = None;
         self.axes.stop_outputs();

@@ -937,13 +937,9 @@ impl<L: ByteLink> Sender<L> {
         self.must(&format!("SESSION TOKEN={}", self.token), op, plan)?;
         let r = self.must("SYNC", op, plan)?;
         let ev: u64 = r.value("EV").and_then(|v| v.parse().ok()).unwrap_or(0);
-        // The board's count may include the event that was waiting for its
-        // tick when the reset came (never issued): the registers decide.
-        let counted = self.base + ev;
-        let e = (counted.saturating_sub(2)..=counted + 1)
-            .rev()
-            .find(|&k| plan.positions.get(k as usize) == Some(&stood))
-            .unwrap_or(counted);
+        // The events issued before the reset (the one waiting for its tick
+        // is not counted): the registers must be where they lead.
+        let e = self.base + ev;
         if plan.positions.get(e as usize) != Some(&stood) {
             return Err(Halt::Mismatch(
                 plan.lines.get(plan.line_at(e)).map_or(0, |l| l.source),

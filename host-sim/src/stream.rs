@@ -189,7 +189,8 @@ pub struct PacedReport {
     pub after_hold: (String, String),
     pub after_hold_expected: (String, String),
     /// The reset: its line, and whether `PX`, `PZ` are the position after
-    /// `DONE` events of a block of `OF` events.
+    /// `DONE` events of a block of `OF` events and after the `EV` events
+    /// the next `SYNC` reports.
     pub reset_line: String,
     pub reset_consistent: bool,
 }
@@ -307,6 +308,15 @@ pub fn paced_proof(
         }),
         _ => false,
     };
+    // What SYNC then reports counts the events issued, the one that was
+    // waiting for its tick not among them: the registers are where those
+    // events lead.
+    let after = Transport::request(&mut client, "SYNC")?;
+    let reset_consistent = reset_consistent
+        && after
+            .value("EV")
+            .and_then(|v| v.parse::<usize>().ok())
+            .is_some_and(|k| registers(&reset_line).as_ref() == local.positions.get(k));
 
     Ok(PacedReport {
         requests: lines.len(),
