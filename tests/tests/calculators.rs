@@ -71,9 +71,10 @@ fn trihedral_prints_the_set_up_and_refuses_what_is_no_corner() {
     assert!(e.contains("quadrant"), "{e}");
 }
 
-#[test]
-fn the_deflection_compensated_pass_runs_on_the_device() {
-    let job = DeflectionJob {
+/// The stepped shaft of the deflection examples: Ø29.8 × 100 and
+/// Ø21.8 × 150 mm, 0.5 mm deep at 0.2 mm/rev into HB 220.
+fn stepped_shaft() -> DeflectionJob {
+    DeflectionJob {
         sections: vec![(29.8, 100.0), (21.8, 150.0)],
         equal_volume: false,
         modulus: 21_000.0,
@@ -86,7 +87,12 @@ fn the_deflection_compensated_pass_runs_on_the_device() {
         force: None,
         step_mm: 10.0,
         rpm: 400.0,
-    };
+    }
+}
+
+#[test]
+fn the_deflection_compensated_pass_runs_on_the_device() {
+    let job = stepped_shaft();
     let (r, program) = calculators::deflection(&job).unwrap();
     // Eq. 30: (29.8·100 + 21.8·150)/250 = 25 mm.
     assert_eq!(value(&r, "reduced_diameter_mm"), Cell::Num(25.0, 3));
@@ -118,9 +124,10 @@ fn the_deflection_compensated_pass_runs_on_the_device() {
     }
 }
 
-#[test]
-fn wear_counts_parts_and_refuses_an_allowance_beyond_half_the_tolerance() {
-    let job = WearJob {
+/// Fifty parts with a Ø40 × 120 mm surface at 0.2 mm/rev, 5 µm initial
+/// and 8 µm/km relative wear.
+fn batch_of_fifty() -> WearJob {
+    WearJob {
         sections: vec![(40.0, 120.0)],
         feed_mm_rev: 0.2,
         initial_um: 5.0,
@@ -129,7 +136,12 @@ fn wear_counts_parts_and_refuses_an_allowance_beyond_half_the_tolerance() {
         resetting: Some((20.0, 50.0)),
         full_um: Some(300.0),
         flank: Some((0.8, 8.0)),
-    };
+    }
+}
+
+#[test]
+fn wear_counts_parts_and_refuses_an_allowance_beyond_half_the_tolerance() {
+    let job = batch_of_fifty();
     let r = calculators::wear(&job).unwrap();
     // L = π·40·120/(10⁶·0.2) = 0.0753982 km per part; 50 parts: 5 + 8·L·50.
     let l = std::f64::consts::PI * 40.0 * 120.0 / 0.2e6;
@@ -237,17 +249,7 @@ fn the_pendant_answers_each_calculator_with_the_command_lines_figures() {
         word(&r[4], "HR"),
         format!("{:.4}", 0.8 * 8f64.to_radians().tan())
     );
-    let cli = calculators::wear(&WearJob {
-        sections: vec![(40.0, 120.0)],
-        feed_mm_rev: 0.2,
-        initial_um: 5.0,
-        rate_um_per_km: 8.0,
-        parts: 50,
-        resetting: Some((20.0, 50.0)),
-        full_um: Some(300.0),
-        flank: Some((0.8, 8.0)),
-    })
-    .unwrap();
+    let cli = calculators::wear(&batch_of_fifty()).unwrap();
     assert_eq!(
         value(&cli, "parts_until_tool_change"),
         Cell::Int(word(&r[4], "QT").parse().unwrap())
@@ -262,21 +264,7 @@ fn the_pendant_answers_each_calculator_with_the_command_lines_figures() {
     let ok = &r[5 + 27];
     assert_eq!(word(ok, "DRED"), "25.0000");
     assert_eq!(word(ok, "N"), "27");
-    let (table, _) = calculators::deflection(&DeflectionJob {
-        sections: vec![(29.8, 100.0), (21.8, 150.0)],
-        equal_volume: false,
-        modulus: 21_000.0,
-        stiffness: [4000.0, 3000.0, 10_000.0],
-        depth_mm: 0.5,
-        feed_mm_rev: 0.2,
-        hardness_hb: 220.0,
-        approach_deg: 90.0,
-        nose_mm: 1.0,
-        force: None,
-        step_mm: 10.0,
-        rpm: 400.0,
-    })
-    .unwrap();
+    let (table, _) = calculators::deflection(&stepped_shaft()).unwrap();
     for (line, row) in rows.iter().zip(&table.rows) {
         let num = |c: &Cell| match c {
             Cell::Num(v, _) => *v,
