@@ -1209,6 +1209,39 @@ pub(crate) const GRID: RGBColor = RGBColor(236, 236, 236);
 pub(crate) const DASH: &[u32] = &[9, 5];
 const DASH_DOT: &[u32] = &[14, 4, 3, 4];
 
+/// How an axis writes the value at a tick.
+pub(crate) type Label<'f> = &'f dyn Fn(&f64) -> String;
+
+/// A chart of the house style on `area`: the margins (`top` above the
+/// plotting area), the label areas, the grid, the axes and their labels;
+/// `x` along with its description, `y` up.
+pub(crate) fn styled_chart<'a>(
+    area: &'a DrawingArea<Canvas, Shift>,
+    top: u32,
+    (x, x_desc, x_fmt): (Axis, &str, Label<'_>),
+    (y, y_fmt): (Axis, Label<'_>),
+) -> Result<ChartContext<'a, Canvas, Cartesian2d<Axis, Axis>>, PlotError> {
+    let mut chart = ChartBuilder::on(area)
+        .margin(k(MARGIN))
+        .margin_top(k(top))
+        .x_label_area_size(k(X_LABELS))
+        .y_label_area_size(k(Y_LABELS))
+        .build_cartesian_2d(x, y)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .x_label_formatter(x_fmt)
+        .y_label_formatter(y_fmt)
+        .label_style(font(13))
+        .axis_desc_style(font(14))
+        .bold_line_style(GRID.stroke_width(k(1)))
+        .light_line_style(GRID.stroke_width(k(1)))
+        .axis_style(BLACK.stroke_width(k(1)))
+        .set_all_tick_mark_size(ki(5))
+        .draw()?;
+    Ok(chart)
+}
+
 pub(crate) const fn k(px: u32) -> u32 {
     px * UNITS_PER_PX as u32
 }
@@ -1395,33 +1428,25 @@ pub fn render(paths: &Paths, title: &str, zoom: Option<Window>) -> Result<Plot, 
         (0, ki(TITLE as i32)),
         (k(WIDTH - PANEL), k(chart_h - TITLE)),
     );
-    let mut chart = ChartBuilder::on(&chart_area)
-        .margin(k(MARGIN))
-        .margin_top(k(MARGIN + X_TITLE))
-        .x_label_area_size(k(X_LABELS))
-        .y_label_area_size(k(Y_LABELS))
-        .build_cartesian_2d(
+    let mut chart = styled_chart(
+        &chart_area,
+        MARGIN + X_TITLE,
+        (
             Axis {
                 range: view.z,
                 ticks: z_ticks,
             },
+            "Z (mm)",
+            &z_fmt,
+        ),
+        (
             Axis {
                 range: view.r,
                 ticks: r_ticks,
             },
-        )?;
-    chart
-        .configure_mesh()
-        .x_desc("Z (mm)")
-        .x_label_formatter(&z_fmt)
-        .y_label_formatter(&d_fmt)
-        .label_style(font(13))
-        .axis_desc_style(font(14))
-        .bold_line_style(GRID.stroke_width(k(1)))
-        .light_line_style(GRID.stroke_width(k(1)))
-        .axis_style(BLACK.stroke_width(k(1)))
-        .set_all_tick_mark_size(ki(5))
-        .draw()?;
+            &d_fmt,
+        ),
+    )?;
 
     // The transform of the plotting area, from the corners plotters maps.
     let (px0, py0) = chart.backend_coord(&(view.z[0], view.r[0]));

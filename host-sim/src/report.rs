@@ -28,7 +28,7 @@
 
 use crate::plot::{
     self, bold, clipped, decimals, font, k, ki, label, multiples, nice_step, Axis, Canvas,
-    PlotError, Rect, CENTRE, DASH, GRID, MARGIN, PANEL, STEPS, TIP, WIDTH, X_LABELS, Y_LABELS,
+    PlotError, Rect, CENTRE, DASH, MARGIN, PANEL, STEPS, TIP, WIDTH, X_LABELS, Y_LABELS,
 };
 use crate::program::{self, minutes, Happening, Report, Timeline, Traced};
 use plotters::prelude::*;
@@ -419,33 +419,25 @@ fn speed_chart(speeds: &Speeds, title: &str, what: &str, v_top: f64) -> Result<S
         (0, ki(TOP as i32 - 24)),
         (k(WIDTH - PANEL), k(height - TOP + 24)),
     );
-    let mut chart = ChartBuilder::on(&chart_area)
-        .margin(k(MARGIN))
-        .margin_top(k(MARGIN + 24))
-        .x_label_area_size(k(X_LABELS))
-        .y_label_area_size(k(Y_LABELS))
-        .build_cartesian_2d(
+    let mut chart = plot::styled_chart(
+        &chart_area,
+        MARGIN + 24,
+        (
             Axis {
                 range: t_range,
                 ticks: multiples(0.0, t_end, t_step),
             },
+            "time (s)",
+            &t_fmt,
+        ),
+        (
             Axis {
                 range: v_range,
                 ticks: multiples(0.0, v_top, v_step),
             },
-        )?;
-    chart
-        .configure_mesh()
-        .x_desc("time (s)")
-        .x_label_formatter(&t_fmt)
-        .y_label_formatter(&v_fmt)
-        .label_style(font(13))
-        .axis_desc_style(font(14))
-        .bold_line_style(GRID.stroke_width(k(1)))
-        .light_line_style(GRID.stroke_width(k(1)))
-        .axis_style(BLACK.stroke_width(k(1)))
-        .set_all_tick_mark_size(ki(5))
-        .draw()?;
+            &v_fmt,
+        ),
+    )?;
     chart_area.draw(&Text::new(
         "speed along the path (mm/min)",
         (ki(MARGIN as i32), ki((MARGIN + 24) as i32 - 8)),
