@@ -519,19 +519,8 @@ pub fn random(seed: u64, n: usize) -> Scenario {
 /// The seed's BCK-5 tape (Kosenko Table 21, as printed) as `TAPE FRAME=`
 /// requests: Latin look-alikes, whitespace dropped; then `TAPE END`.
 pub fn tape_requests(listing: &str) -> Vec<String> {
-    let latin = |c: char| match c {
-        'Н' => 'H',
-        'Е' => 'E',
-        'Д' => 'D',
-        'Т' => 'T',
-        'К' => 'K',
-        'П' => 'P',
-        'Ш' => 'W',
-        'С' => 'C',
-        'В' => 'B',
-        'Я' => 'R',
-        c => c,
-    };
+    use core_nostd::calc::tape::{Alphabet, Bck5Letter};
+    let latin = |c: char| Bck5Letter::from_char(c).map_or(c, |l| l.to_char(Alphabet::Latin));
     listing
         .lines()
         .filter(|l| !l.trim().is_empty())
