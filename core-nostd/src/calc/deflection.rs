@@ -1875,7 +1875,8 @@ pub fn write_fixed<W: fmt::Write + ?Sized>(w: &mut W, value: f64, decimals: u32)
     if decimals > 9 || !value.is_finite() {
         return Err(fmt::Error);
     }
-    let scale = 10u64.pow(decimals);
+    // At least 1 (decimals ≤ 9): a divisor the compiler sees is not zero.
+    let scale = 10u64.pow(decimals).max(1);
     let scaled = libm::round(value * scale as f64);
     // 2⁵³: every integer below it is an f64; the cast is then exact.
     if scaled.is_nan() || scaled.abs() >= 9_007_199_254_740_992.0 {

@@ -1244,6 +1244,19 @@ impl Bck5Verifier {
                 return;
             }
         };
+        self.accept(&frame, line, report);
+    }
+
+    /// Reads one frame already parsed (a line of its own: a serial link's
+    /// request), as [`Bck5Verifier::line`] reads a line that parses.
+    pub fn frame<F: FnMut(Bck5Finding)>(&mut self, frame: &Bck5Frame, report: F) {
+        self.summary.lines = self.summary.lines.saturating_add(1);
+        let line = self.summary.lines;
+        self.accept(frame, line, report);
+    }
+
+    /// Checks a frame read on `line` and adds it to its tool.
+    fn accept<F: FnMut(Bck5Finding)>(&mut self, frame: &Bck5Frame, line: u32, mut report: F) {
         self.summary.frames = self.summary.frames.saturating_add(1);
         if !frame.check_ok() {
             self.emit(

@@ -4,10 +4,10 @@
 //! with a fixed number of decimals, rounded half away from zero; nothing
 //! here moves an axis.
 
-use super::session::{parse_length, send_data, send_ok, Outcome, Refusal};
+use super::session::{parse_flag, parse_length, send_data, send_ok, Outcome, Refusal};
 use super::words::{parse_args, Words};
 use super::Io;
-use crate::calc::deflection::{self, DeflectionError, MAX_SECTIONS};
+use crate::calc::deflection::{self, write_fixed, DeflectionError, MAX_SECTIONS};
 use crate::calc::tape::{Bck5Finding, Bck5Frame, Bck5Verifier};
 use crate::calc::thread::{self, ThreadAxis, ThreadError, ThreadMode};
 use crate::calc::trihedral::{self, TrihedralError};
@@ -28,24 +28,14 @@ fn data<I: Io>(io: &mut I, words: fmt::Arguments<'_>) {
 }
 
 /// A number with `decimals` digits after the point, rounded half away
-/// from zero; a value too large for that prints as `OVER`.
+/// from zero (the calculators' own [`write_fixed`]); a value too large
+/// for that prints as `OVER`.
 struct Fix(f64, u8);
 
 impl fmt::Display for Fix {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let scale = 10u64.pow(u32::from(self.1.min(9))).max(1);
-        let scaled = if self.0 < 0.0 { -self.0 } else { self.0 } * scale as f64;
-        if scaled.is_nan() || scaled >= 9.0e18 {
-            return f.write_str("OVER");
-        }
-        // `as` truncates: + 0.5 rounds half away from zero.
-        let n = (scaled + 0.5) as u64;
-        let sign = if self.0 < 0.0 && n != 0 { "-" } else { "" };
-        let (whole, frac) = (n / scale, n % scale);
-        if self.1 == 0 {
-            return write!(f, "{sign}{whole}");
-        }
-        write!(f, "{sign}{whole}.{frac:0w$}", w = usize::from(self.1))
+        // `write_fixed` checks before it writes: on a refusal nothing is out.
+        write_fixed(f, self.0, u32::from(self.1)).or_else(|_| f.write_str("OVER"))
     }
 }
 
@@ -95,13 +85,9 @@ fn tuple<const N: usize>(key: &'static str, v: &str) -> Result<[f64; N], Refusal
     Ok(out)
 }
 
-/// A flag word: `0` or `1`.
+/// An optional flag word: `0` or `1`, `0` when absent.
 fn flag(key: &'static str, v: Option<&str>) -> Result<bool, Refusal<'static>> {
-    match v {
-        None | Some("0") => Ok(false),
-        Some("1") => Ok(true),
-        Some(_) => Err(Refusal::Value(key, "must be 0 or 1")),
-    }
+    v.map_or(Ok(false), |v| parse_flag(key, v))
 }
 
 /// The part's sections from `D=` and `L=` lists, from the headstock.
@@ -582,8 +568,8 @@ pub(super) fn tape_command<'a, I: Io>(
     let frame = frame.ok_or(Refusal::Missing("TAPE needs FRAME=<frame> or END"))?;
     // A frame that cannot be read is refused and not counted: the tape so
     // far is unchanged.
-    Bck5Frame::parse(frame).map_err(Refusal::Frame)?;
-    tape.line(frame, |f: Bck5Finding| send_data(io, format_args!("{f}")));
+    let frame = Bck5Frame::parse(frame).map_err(Refusal::Frame)?;
+    tape.frame(&frame, |f: Bck5Finding| send_data(io, format_args!("{f}")));
     let summary = tape.summary();
     send_ok(
         io,

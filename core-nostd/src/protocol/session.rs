@@ -2631,7 +2631,7 @@ fn parse_pass(v: &str) -> Result<Pass, Refusal<'static>> {
     }
 }
 
-fn parse_flag(key: &'static str, v: &str) -> Result<bool, Refusal<'static>> {
+pub(super) fn parse_flag(key: &'static str, v: &str) -> Result<bool, Refusal<'static>> {
     match v {
         "0" => Ok(false),
         "1" => Ok(true),
