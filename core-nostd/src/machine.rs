@@ -374,13 +374,23 @@ impl Machine {
     /// registers keep the steps issued. Returns the block that was running
     /// and the registers.
     pub fn abort<S: StepSink>(&mut self, sink: &mut S) -> (Aborted, ImpulsePoint) {
+        let queued = self.planner.queued() > 0;
         self.planner.clear();
-        let (found, issued) = match sink.background() {
+        let (mut found, issued) = match sink.background() {
             Some(b) => (b.abort(), b.issued()),
             None => (self.stepper.abort(), self.stepper.issued()),
         };
+        found.dropped |= queued;
         self.stepper.set_issued(issued);
         (found, issued)
+    }
+
+    /// Forgets what was queued and started without issuing it anywhere
+    /// (check mode's motion, which went nowhere), the registers as given.
+    pub fn forget(&mut self, registers: ImpulsePoint) {
+        self.planner.clear();
+        self.stepper.abort();
+        self.stepper.set_issued(registers);
     }
 
     /// Where the next queued block starts from now on (after a reset: the

@@ -84,6 +84,10 @@ pub struct Aborted {
     pub done: u32,
     /// All its events.
     pub of: u32,
+    /// Motion taken had not all been issued (a block running, items
+    /// waiting, a hold braking or holding the rest of a block): the reset
+    /// dropped some.
+    pub dropped: bool,
 }
 
 /// What is being issued.
@@ -192,6 +196,17 @@ impl<const R: usize> Stepper<R> {
     /// Whether nothing waits and nothing is being issued.
     pub fn is_idle(&self) -> bool {
         self.ring.is_empty() && matches!(self.now, Now::Idle)
+    }
+
+    /// Whether anything taken has not all been issued: items waiting, a
+    /// block being issued, a hold braking, or held with the rest of a
+    /// block or run to resume.
+    pub fn pending(&self) -> bool {
+        !self.is_idle()
+            || match &self.hold {
+                Hold::Off | Hold::Held(Rest::Nothing) => false,
+                Hold::Braking(..) | Hold::Held(_) => true,
+            }
     }
 
     /// What the axes are doing.
@@ -456,6 +471,7 @@ impl<const R: usize> Stepper<R> {
     /// Reset: drops everything started at once, the hold with it; the
     /// registers keep the steps issued. Reports the block that was running.
     pub fn abort(&mut self) -> Aborted {
+        let dropped = self.pending();
         let aborted = match &self.now {
             Now::Timed(events, block) => {
                 let (skip, _) = block.span();
@@ -463,13 +479,19 @@ impl<const R: usize> Stepper<R> {
                 Aborted {
                     done: skip + events.done(),
                     of: nx.unsigned_abs().max(nz.unsigned_abs()),
+                    dropped,
                 }
             }
             Now::Fixed(run) => Aborted {
                 done: run.n,
                 of: run.n + run.events.clone().count() as u32,
+                dropped,
             },
-            Now::Idle => Aborted { done: 0, of: 0 },
+            Now::Idle => Aborted {
+                done: 0,
+                of: 0,
+                dropped,
+            },
         };
         self.ring.clear();
         self.now = Now::Idle;
@@ -739,7 +761,8 @@ mod tests {
             s.abort(),
             Aborted {
                 done: 700,
-                of: 2000
+                of: 2000,
+                dropped: true
             }
         );
         assert!(s.is_idle());

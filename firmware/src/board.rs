@@ -307,13 +307,17 @@ fn USART1() {
             if GRBL.load(Ordering::Relaxed) {
                 use core_nostd::protocol::grbl::GrblRealtime;
                 match GrblRealtime::from_byte(byte) {
-                    Some(GrblRealtime::Common(rt)) => return crate::motion::realtime(rt, true),
+                    Some(GrblRealtime::Common(rt)) => {
+                        drop_received_on_reset(rt);
+                        return crate::motion::realtime(rt, true);
+                    }
                     Some(GrblRealtime::JogCancel) => {
                         crate::motion::realtime(core_nostd::protocol::Realtime::Hold, true)
                     }
                     _ => {}
                 }
             } else if let Some(rt) = core_nostd::protocol::Realtime::from_byte(byte) {
+                drop_received_on_reset(rt);
                 return crate::motion::realtime(rt, false);
             }
             critical_section::with(|cs| {
@@ -322,6 +326,18 @@ fn USART1() {
                 }
             });
         }
+    }
+}
+
+/// A reset drops the bytes received before it and not yet read, with the
+/// line they began (as grbl empties its receive buffer).
+fn drop_received_on_reset(rt: core_nostd::protocol::Realtime) {
+    if rt == core_nostd::protocol::Realtime::Reset {
+        critical_section::with(|cs| {
+            if let Ok(mut q) = RX.borrow(cs).try_borrow_mut() {
+                q.clear();
+            }
+        });
     }
 }
 

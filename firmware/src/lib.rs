@@ -226,7 +226,11 @@ impl Background for Controller {
     }
 
     fn abort(&mut self) -> Aborted {
-        motion::abort().unwrap_or(Aborted { done: 0, of: 0 })
+        motion::abort().unwrap_or(Aborted {
+            done: 0,
+            of: 0,
+            dropped: false,
+        })
     }
 
     fn motion(&mut self) -> Motion {

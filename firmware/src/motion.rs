@@ -192,6 +192,7 @@ impl Motion {
         let mut found = self.stepper.abort();
         if let Some((e, _)) = self.next.take() {
             found.done = found.done.saturating_sub(1);
+            found.dropped = true;
             self.stepper.take_back(e);
         }
         self.alarm.stop();

@@ -184,6 +184,14 @@ pub trait Io {
         let _ = code;
     }
 
+    /// Whether a program stop is a feed hold at rest rather than a wait
+    /// (grbl's `M0`: answered at once, the state `Hold:0`, the lines after
+    /// it received and queued, cycle start going on). Only with a
+    /// background stepper, which holds.
+    fn stop_holds(&mut self) -> bool {
+        false
+    }
+
     /// Before a program stop on a transport without a background stepper:
     /// the `!STATUS … STOP=M00` line (complete) that answers a status byte
     /// while it waits, nothing moving meanwhile.
@@ -207,7 +215,7 @@ pub trait Io {
 
 /// The [`Io`] methods a wrapper hands to its `inner` unchanged: motion,
 /// the background, waits and outputs (a wrapper writes its own `send`,
-/// `stop_status` and `timing`).
+/// `stop_status`, `timing` and `stop_holds`).
 macro_rules! forward_io {
     () => {
         fn run_start(&mut self) {
@@ -277,6 +285,9 @@ pub struct Device {
     rx: LineAssembler,
     session: Session,
     grbl: grbl::Front,
+    /// The request `GRBL` switched the link at the byte before: an LF now
+    /// ends that request's CRLF, not a grbl line.
+    switched: bool,
 }
 
 impl Device {
@@ -286,6 +297,7 @@ impl Device {
             rx: LineAssembler::new(),
             session: Session::new(),
             grbl: grbl::Front::new(),
+            switched: false,
         }
     }
 
@@ -297,6 +309,7 @@ impl Device {
             rx: LineAssembler::new(),
             session: Session::with_window(window),
             grbl: grbl::Front::new(),
+            switched: false,
         }
     }
 
@@ -308,10 +321,18 @@ impl Device {
             if let Some(rt) = grbl::GrblRealtime::from_byte(byte) {
                 return self.realtime_grbl(rt, io);
             }
+            // As grbl: every other byte above 0x7F (the UTF-8 prefix a
+            // sender puts before an override byte, noise) and every control
+            // byte but the line's ends and tab is dropped, never part of a
+            // line.
+            if grbl::dropped(byte) {
+                return;
+            }
         } else if let Some(rt) = Realtime::from_byte(byte) {
             return self.realtime(rt, io);
         }
-        match self.rx.push(byte) {
+        let pairs = !self.grbl.on || core::mem::take(&mut self.switched);
+        match self.rx.push_with(byte, pairs) {
             Some(Framed::Line) => self.line(io),
             Some(Framed::TooLong) => {
                 let mut t = self.link(io);
@@ -350,6 +371,7 @@ impl Device {
             session::send_ok(&mut t, Some(format_args!("GRBL=1")));
             t.send(grbl::BANNER);
             self.grbl.on = true;
+            self.switched = true;
         } else {
             self.session
                 .handle_line(line, &mut grbl::Translate::pendant(io));
@@ -381,6 +403,9 @@ impl Device {
     /// A grbl real-time character, picked out by a transport or by
     /// [`Device::receive`].
     pub fn realtime_grbl<I: Io>(&mut self, rt: grbl::GrblRealtime, io: &mut I) {
+        if rt == grbl::GrblRealtime::Common(Realtime::Reset) {
+            self.rx.clear();
+        }
         grbl::realtime(&mut self.grbl, &mut self.session, rt, io);
     }
 
@@ -428,6 +453,10 @@ impl Device {
     /// real-time bytes out as they arrive hands them over here); on a grbl
     /// link, as grbl answers it.
     pub fn realtime<I: Io>(&mut self, rt: Realtime, io: &mut I) {
+        if rt == Realtime::Reset {
+            // A reset drops the line being received with everything else.
+            self.rx.clear();
+        }
         if self.grbl.on {
             return self.realtime_grbl(grbl::GrblRealtime::Common(rt), io);
         }

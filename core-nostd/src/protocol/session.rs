@@ -150,6 +150,11 @@ pub struct Session {
     optional_stop: bool,
     /// Changes of the table, the work offsets and the stored positions.
     generation: u32,
+    /// Check mode (grbl's `$C`): the registers where it began, put back
+    /// when it ends.
+    checking: Option<ImpulsePoint>,
+    /// The last reset dropped motion answered and not all run.
+    reset_dropped: bool,
     /// The id of the last request that carried one, and its final reply.
     last_id: Option<u32>,
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
@@ -248,6 +253,8 @@ impl Session {
             block_delete: false,
             optional_stop: false,
             generation: 0,
+            checking: None,
+            reset_dropped: false,
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
@@ -875,14 +882,20 @@ impl Session {
         let shift = offsets.shift;
         match special {
             Some(Special::Shift) => {
+                // The point here in the block's work system as it stands
+                // (never under nose compensation: refused above).
+                let off = offsets.vector(&sel).ok_or(Refusal::Range(RANGE_OFFSET))?;
+                let mut here = self.cmd;
+                for (h, o) in here.iter_mut().zip(off) {
+                    *h = h.checked_sub(o).ok_or(Refusal::Range(RANGE_OFFSET))?;
+                }
                 let words = [b.x.map(|x| x_radius(x, diam)).transpose()?, b.z];
-                for ((s, p), w) in offsets.shift.iter_mut().zip(prog.iter_mut()).zip(words) {
+                for ((s, p), w) in offsets.shift.iter_mut().zip(here).zip(words) {
                     if let Some(w) = w {
                         *s = s
-                            .checked_add(*p)
+                            .checked_add(p)
                             .and_then(|v| v.checked_sub(w))
                             .ok_or(Refusal::Range(RANGE_OFFSET))?;
-                        *p = w;
                     }
                 }
             }
@@ -898,26 +911,34 @@ impl Session {
             }
             _ => {}
         }
-        if matches!(
-            special,
-            Some(Special::ClearShift(_) | Special::RestoreShift)
-        ) {
-            // The machine stays: the programmed point moves by the shift.
-            for ((p, old), new) in prog.iter_mut().zip(shift).zip(offsets.shift) {
-                *p = p
-                    .checked_add(old)
-                    .and_then(|v| v.checked_sub(new))
-                    .ok_or(Refusal::Range(RANGE_OFFSET))?;
-            }
-        }
         let off = offsets.vector(&sel).ok_or(Refusal::Range(
             "the offsets in effect add beyond 99999.999999 mm",
         ))?;
         if (sel != self.sel || b.set_work.is_some()) && self.contour.active() {
             return Err(Refusal::Busy("a work or tool offset change"));
         }
+        // The machine stays where it is when offsets change (a work system
+        // selected or set, G92 and its kin, a tool's offset): the point
+        // here is the same machine point in the new work coordinates, so an
+        // axis the block does not name never moves, as in LinuxCNC and
+        // grbl; a named axis takes the new offset up on its way. Under
+        // nose compensation no offset changes (refused above) and the
+        // programmed point is the contour's, not the tool's.
+        let mut here = prog;
+        if !self.contour.active() {
+            for ((p, at), o) in here.iter_mut().zip(self.cmd).zip(off) {
+                *p = at.checked_sub(o).ok_or(Refusal::Range(RANGE_OFFSET))?;
+            }
+        }
+        if matches!(
+            special,
+            Some(Special::Shift | Special::ClearShift(_) | Special::RestoreShift)
+        ) {
+            // G92 and its kin name the point here anew.
+            prog = here;
+        }
         // Words are work coordinates; increments add to the programmed point.
-        let mut target = prog;
+        let mut target = here;
         let words = if b.set_work.is_some()
             || matches!(special, Some(s) if !matches!(s, Special::Reference(_)))
         {
@@ -930,11 +951,11 @@ impl Session {
         if let Some(x) = words.0 {
             let radius = x_radius(x, diam)?;
             let inc = modal.incremental || b.incremental_x;
-            target[0] = step(self.prog[0], radius, inc, "X beyond 99999.999999 mm")?;
+            target[0] = step(here[0], radius, inc, "X beyond 99999.999999 mm")?;
         }
         if let Some(z) = words.1 {
             let inc = modal.incremental || b.incremental_z;
-            target[1] = step(self.prog[1], z, inc, "Z beyond 99999.999999 mm")?;
+            target[1] = step(here[1], z, inc, "Z beyond 99999.999999 mm")?;
         }
         if let Some(po) = b.position_offset {
             target = self.position_offset(po, &modal, &offsets, words, target, &b)?;
@@ -956,7 +977,7 @@ impl Session {
             Motion::ArcCw | Motion::ArcCcw if has_end || arc_words => {
                 // An arc starts where the tool is: it cannot take up a new
                 // offset on the way.
-                if !self.contour.active() && to_machine(self.prog, off)? != self.cmd {
+                if !self.contour.active() && here != prog {
                     return Err(Refusal::Geometry(
                         "an arc cannot take up an offset change: move in a line first",
                     ));
@@ -970,7 +991,7 @@ impl Session {
                 let centre = match (ik, b.r) {
                     (true, Some(_)) => return Err(Refusal::Missing("give I and K or R, not both")),
                     (false, None) => return Err(Refusal::Missing("an arc needs I and K, or R")),
-                    (false, Some(r)) => centre_from_radius(self.prog, target, r, dir)?,
+                    (false, Some(r)) => centre_from_radius(here, target, r, dir)?,
                     (true, None) if modal.arc_absolute => match (b.i, b.k) {
                         (Some(i), Some(k)) => [i, k],
                         _ => return Err(Refusal::Missing("G90.1: an arc centre needs I and K")),
@@ -978,17 +999,17 @@ impl Session {
                     (true, None) => {
                         let beyond = "arc centre beyond 99999.999999 mm";
                         [
-                            self.prog[0]
+                            here[0]
                                 .checked_add(b.i.unwrap_or(Length::ZERO))
                                 .ok_or(Refusal::Range(beyond))?,
-                            self.prog[1]
+                            here[1]
                                 .checked_add(b.k.unwrap_or(Length::ZERO))
                                 .ok_or(Refusal::Range(beyond))?,
                         ]
                     }
                 };
                 ArcPoints {
-                    start: self.prog,
+                    start: here,
                     end: target,
                     centre,
                 }
@@ -1001,7 +1022,7 @@ impl Session {
             Motion::ArcCw | Motion::ArcCcw => None,
         };
         let element = shape.map(|shape| Element {
-            from: a(self.prog),
+            from: a(here),
             to: a(target),
             shape,
             n: b.n,
@@ -1055,7 +1076,7 @@ impl Session {
         // Output blocks of the element held back by compensation run at its
         // feed; this block's own and the corners between, at this one's.
         let now = if feeds {
-            path_feed(&modal, &spindle, self.prog[0])
+            path_feed(&modal, &spindle, here[0])
                 .map_err(|e| Refusal::Value("F", e.as_str()))?
                 .map(|f| self.overridden(f, modal.feed_mode))
         } else {
@@ -1169,20 +1190,26 @@ impl Session {
             // At rest where the block ends, until cycle start.
             self.machine.flush(&mut Sink::new(io, self.drive));
             let code = if b.stop == Some(Stop::Pause) { 0 } else { 1 };
-            if io.background().is_some() {
-                let mut view = self.view(self.machine.speed());
-                view.stop = Some(code);
-                io.view(&view);
+            if io.stop_holds() {
+                // grbl: a hold at rest, answered now; what follows queues
+                // and waits for cycle start.
+                self.machine.hold(&mut Sink::new(io, self.drive));
             } else {
-                // Nothing moves while it waits: one line answers every
-                // status byte.
-                let st = self.machine.status(&mut Sink::new(io, self.drive));
-                let mut view = self.view(0);
-                (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
-                let mut line = status_line("!STATUS", st.motion, st.issued, st.queued, &view);
-                io.stop_status(line.finish());
+                if io.background().is_some() {
+                    let mut view = self.view(self.machine.speed());
+                    view.stop = Some(code);
+                    io.view(&view);
+                } else {
+                    // Nothing moves while it waits: one line answers every
+                    // status byte.
+                    let st = self.machine.status(&mut Sink::new(io, self.drive));
+                    let mut view = self.view(0);
+                    (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
+                    let mut line = status_line("!STATUS", st.motion, st.issued, st.queued, &view);
+                    io.stop_status(line.finish());
+                }
+                io.program_stop(code);
             }
-            io.program_stop(code);
             self.share_view(io);
         }
         if end {
@@ -1680,7 +1707,11 @@ impl Session {
     /// `STATUS`: where the axes are now (the steps issued), their speed and
     /// the blocks waiting.
     fn status_reply<I: Io>(&self, io: &mut I, prefix: &str) {
-        let st = self.machine.status(&mut Sink::new(io, self.drive));
+        let mut st = self.machine.status(&mut Sink::new(io, self.drive));
+        if let (Some(registers), None) = (self.checking, io.background()) {
+            // Check mode on the virtual clock: its motion went nowhere.
+            (st.issued, st.motion, st.queued) = (registers, Axes::Idle, 0);
+        }
         let mut view = self.view(st.speed(self.machine.tick()));
         view.outputs.rpm = st.spindle;
         let mut line = status_line(prefix, st.motion, st.issued, st.queued, &view);
@@ -1731,6 +1762,33 @@ impl Session {
         matches!(st.motion, Axes::Idle | Axes::Held)
     }
 
+    /// Whether the last reset dropped motion that had been answered and
+    /// had not all run (blocks queued, the axes moving, braking, or held
+    /// with more to do).
+    pub const fn reset_dropped_motion(&self) -> bool {
+        self.reset_dropped
+    }
+
+    /// Check mode begins (grbl's `$C`): lines go on through a transport
+    /// that moves nothing, and the registers where it began are kept.
+    /// Only at rest with nothing queued (false otherwise).
+    pub fn check_begin<I: Io>(&mut self, io: &mut I) -> bool {
+        let st = self.machine.status(&mut Sink::new(io, self.drive));
+        if st.motion != Axes::Idle || st.queued > 0 {
+            return false;
+        }
+        self.checking = Some(st.issued);
+        true
+    }
+
+    /// Check mode ends: what its lines queued is forgotten and the
+    /// registers are where it began; a reset follows (as grbl's).
+    pub fn check_end(&mut self) {
+        if let Some(registers) = self.checking.take() {
+            self.machine.forget(registers);
+        }
+    }
+
     /// Starts the queued blocks now, the run ending at rest after them
     /// (the link has gone quiet: grbl plans with what it has).
     pub fn release<I: Io>(&mut self, io: &mut I) {
@@ -1767,6 +1825,7 @@ impl Session {
     /// block that was running that were issued, of how many.
     fn reset<I: Io>(&mut self, io: &mut I) {
         let (found, issued) = self.drop_motion(io);
+        self.reset_dropped = found.dropped;
         self.sel = Selection::POWER_ON;
         self.prog = self.work_point(self.cmd);
         self.modal = Modal::POWER_ON;
@@ -2449,6 +2508,10 @@ impl<I: Io> Io for Suffixed<'_, I> {
 
     fn timing(&mut self) -> Option<super::Timing> {
         self.inner.timing()
+    }
+
+    fn stop_holds(&mut self) -> bool {
+        self.inner.stop_holds()
     }
     crate::protocol::forward_io!();
 }
