@@ -493,6 +493,17 @@ async function run() {
     socket.close();
 }
 
+// Killed (a test runner's timeout, Ctrl-C): the server goes with it.
+for (const signal of ['SIGINT', 'SIGTERM', 'SIGHUP']) {
+    process.on(signal, () => {
+        if (server && server.exitCode === null) {
+            server.kill('SIGKILL');
+        }
+        fs.rmSync(home, { recursive: true, force: true });
+        process.exit(1);
+    });
+}
+
 let failure = null;
 run()
     .catch((e) => { failure = e; })
