@@ -289,6 +289,11 @@ impl Machine {
         }
     }
 
+    /// Blocks queued and not started.
+    pub fn queued(&self) -> usize {
+        self.planner.queued()
+    }
+
     /// Whether blocks are queued with no run under way: they start with a
     /// full window, at a flush, or at [`Machine::release`].
     pub fn waiting(&self) -> bool {

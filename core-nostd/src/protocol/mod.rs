@@ -422,8 +422,9 @@ impl Device {
         self.session.poll(&mut t);
     }
 
-    /// Whether a grbl link has blocks waiting to start: when the link has
-    /// been quiet a while, [`Device::quiet`] starts them.
+    /// Whether a grbl link has blocks waiting to start (in a run under way
+    /// too): when the link has been quiet a while, [`Device::quiet`]
+    /// starts them, the run ending at rest after them.
     pub fn waiting(&self) -> bool {
         self.grbl.on && self.session.waiting()
     }

@@ -1795,9 +1795,10 @@ impl Session {
         self.machine.release(&mut Sink::new(io, self.drive));
     }
 
-    /// Whether blocks wait with no run under way.
+    /// Whether blocks are queued and not started (with or without a run
+    /// under way): a quiet link releases them.
     pub fn waiting(&self) -> bool {
-        self.machine.waiting()
+        self.machine.queued() > 0
     }
 
     /// Whether [`Session::poll`] could start a block.
