@@ -636,3 +636,27 @@ fn the_simulated_board_runs_in_real_time() {
         "{drift:?}"
     );
 }
+
+/// A program without `M2`/`M30`: once the link is quiet, every block
+/// queued starts (a run under way included) and the board reports `Idle`
+/// where the program ends, unpaced and on the wall clock.
+#[test]
+fn a_program_without_m2_runs_to_its_end() {
+    for pace in [
+        host_sim::board::Pace::Unpaced,
+        host_sim::board::Pace::Wall(20.0),
+    ] {
+        let (_board, mut c) = board(pace);
+        // More lines than the 64-block window: a run is under way when
+        // the stream ends.
+        for k in 1..=80 {
+            c.write_raw(format!("G21 G90 G01 X{} Z-{}.5 F3000\n", k % 2, k).as_bytes())
+                .expect("line");
+            assert_eq!(c.read_line().expect("ok"), "ok", "{pace:?}");
+        }
+        std::thread::sleep(Duration::from_millis(1500));
+        let end = report(&mut c);
+        assert!(end.starts_with("<Idle|"), "{pace:?}: {end}");
+        assert_eq!(mpos(&end), (0.0, -80.5), "{pace:?}");
+    }
+}
