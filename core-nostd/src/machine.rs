@@ -138,6 +138,21 @@ pub struct Machine {
     starved: u32,
     /// The spindle speed the blocks queued from now on carry, 10⁻³ rpm.
     spindle: u32,
+    /// How the blocks queued from now on join the block before: at the
+    /// junction deviation given (Å; `None` the limits' `JD`), or at rest.
+    join: Join,
+}
+
+/// How a queued block joins the one before it (path control).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Join {
+    /// At the speed the limits' junction deviation allows (`G64`).
+    Blend,
+    /// At the speed a junction deviation of this many ångström allows
+    /// (`G64 P`).
+    Deviation(u64),
+    /// At rest (`G61`, exact stop).
+    Stop,
 }
 
 impl Default for Machine {
@@ -161,7 +176,13 @@ impl Machine {
             point: [0, 0],
             starved: 0,
             spindle: 0,
+            join: Join::Blend,
         }
+    }
+
+    /// How the blocks queued from now on join the block before.
+    pub fn set_join(&mut self, join: Join) {
+        self.join = join;
     }
 
     /// The spindle speed commanded for the blocks queued from now on (10⁻³
@@ -234,7 +255,12 @@ impl Machine {
             self.start_one(sink);
         }
         // The window is not full now: there is room.
-        let _ = self.planner.push(block, &self.rates);
+        let deviation = match self.join {
+            Join::Blend => Some(self.rates.limits().junction().as_angstrom().unsigned_abs()),
+            Join::Deviation(d) => Some(d),
+            Join::Stop => None,
+        };
+        let _ = self.planner.push_joined(block, &self.rates, deviation);
         if self.planner.window_full() {
             self.start_one(sink);
         } else {

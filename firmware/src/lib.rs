@@ -165,7 +165,7 @@ impl Io for Controller {
         }
     }
 
-    fn program_stop(&mut self, _: u8) {
+    fn program_stop(&mut self, _: u16) {
         motion::clear_cycle_start();
         while !motion::stop_ended() {
             self.pause();

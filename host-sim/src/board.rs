@@ -365,7 +365,7 @@ impl<W: Write> Io for Protocol<W> {
         self.wait_for(|_| Instant::now() >= end);
     }
 
-    fn program_stop(&mut self, _: u8) {
+    fn program_stop(&mut self, _: u16) {
         self.shared.cycle_start.store(false, Ordering::Release);
         self.wait_for(|s| s.cycle_start.load(Ordering::Acquire));
     }

@@ -336,6 +336,10 @@ pub struct Translate<'a, I: Io + ?Sized> {
     pub message: ReplyLine,
     /// A reset came, with a block running (`OF` > 0).
     pub reset: Option<bool>,
+    /// Check mode (`$C`): replies go out; nothing moves, waits or
+    /// switches (a flag, not a second transport type, so that the
+    /// session's code exists once on the board).
+    pub dry: bool,
 }
 
 impl<'a, I: Io + ?Sized> Translate<'a, I> {
@@ -360,6 +364,7 @@ impl<'a, I: Io + ?Sized> Translate<'a, I> {
             outcome: None,
             message: ReplyLine::new(),
             reset: None,
+            dry: false,
         }
     }
 
@@ -439,23 +444,70 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         self.inner.timing()
     }
     fn stop_holds(&mut self) -> bool {
-        self.grbl && self.inner.background().is_some()
+        !self.dry && self.grbl && self.inner.background().is_some()
     }
-    crate::protocol::forward_io!();
-}
-
-/// Check mode's transport (`$C`): replies go out; nothing moves, waits
-/// or switches.
-struct Dry<'a, I: Io + ?Sized> {
-    inner: &'a mut I,
-}
-
-impl<I: Io + ?Sized> Io for Dry<'_, I> {
-    fn send(&mut self, line: &[u8]) {
-        self.inner.send(line);
+    fn run_start(&mut self) {
+        if !self.dry {
+            self.inner.run_start();
+        }
+    }
+    fn block_start(&mut self, block: &crate::interleave::LinearBlock) {
+        if !self.dry {
+            self.inner.block_start(block);
+        }
+    }
+    #[inline(always)]
+    fn step(
+        &mut self,
+        event: crate::interleave::StepEvent,
+        tick: u64,
+        drive: &crate::stepdir::DriveTiming,
+    ) {
+        if !self.dry {
+            self.inner.step(event, tick, drive);
+        }
+    }
+    fn run_end(&mut self, ticks: u64) {
+        if !self.dry {
+            self.inner.run_end(ticks);
+        }
+    }
+    fn background(&mut self) -> Option<&mut dyn crate::machine::Background> {
+        if self.dry {
+            return None;
+        }
+        self.inner.background()
+    }
+    fn view(&mut self, view: &crate::protocol::StatusView) {
+        self.inner.view(view);
     }
     fn pause(&mut self) {
         self.inner.pause();
+    }
+    fn dwell(&mut self, us: u64) {
+        if !self.dry {
+            self.inner.dwell(us);
+        }
+    }
+    fn program_stop(&mut self, code: u16) {
+        if !self.dry {
+            self.inner.program_stop(code);
+        }
+    }
+    fn user_output(&mut self, n: u8, on: bool) {
+        if !self.dry {
+            self.inner.user_output(n, on);
+        }
+    }
+    fn wait_input(&mut self, n: u8, level: bool) {
+        if !self.dry {
+            self.inner.wait_input(n, level);
+        }
+    }
+    fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
+        if !self.dry {
+            self.inner.outputs(outputs);
+        }
     }
 }
 
@@ -692,20 +744,22 @@ fn set<I: Io + ?Sized>(
                 return refuse_setting(io, 2, s.n, b"steps per mm above 0");
             };
             // h Å = 10⁷ Å / (steps / 10⁷).
-            let exact = 100_000_000_000_000i64 % steps == 0;
-            if !exact {
+            let steps = steps.unsigned_abs();
+            let price = 100_000_000_000_000u64.checked_div(steps);
+            let exact = 100_000_000_000_000u64.checked_rem(steps) == Some(0);
+            let Some(price) = price.filter(|_| exact) else {
                 return refuse_setting(
                     io,
                     3,
                     s.n,
                     b"one step must be a whole number of 0.0000001 mm",
                 );
-            }
+            };
             let mut req = ReplyLine::new();
             req.push_bytes(b"CFG ");
             req.push_bytes(key);
             req.push_bytes(b"=");
-            let _ = crate::length::write_exact_mm(&mut req, 100_000_000_000_000 / steps);
+            let _ = crate::length::write_exact_mm(&mut req, price as i64);
             let request = ReplyLine::clone(&req);
             session.handle_line(request.as_bytes(), io);
         }
@@ -924,8 +978,8 @@ pub fn line<I: Io + ?Sized>(
     if front.check && (jog || !command) && !trimmed.is_empty() {
         // Check mode: the line is read and checked, its motion goes
         // nowhere.
-        let mut dry = Dry { inner: io };
-        let mut t = Translate::grbl(&mut dry, extras);
+        let mut t = Translate::grbl(io, extras);
+        t.dry = true;
         if jog {
             jog_line(session, trimmed.get(3..).unwrap_or(b""), &mut t);
         } else {

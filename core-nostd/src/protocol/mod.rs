@@ -117,8 +117,9 @@ pub struct StatusView {
     pub speed: i64,
     /// Starved block starts since the last `SYNC` or `ZERO`.
     pub starved: u32,
-    /// Waiting for cycle start after `M00` (0) or `M01` (1): ` STOP=M00`.
-    pub stop: Option<u8>,
+    /// Waiting for cycle start after `M00` (0), `M01` (1), a gear range
+    /// (41 … 44) or a machine's own M code: ` STOP=M00`.
+    pub stop: Option<u16>,
     /// The spindle and coolant outputs (` SPINDLE= S= COOLANT=`); a board
     /// puts in the speed it drives now.
     pub outputs: Outputs,
@@ -180,8 +181,21 @@ pub trait Io {
     /// the axes at rest: a board waits for cycle start (0x81), answering
     /// status bytes meanwhile (`STOP=M00`); a reset ends the wait too. A
     /// transport without an operator presses cycle start at once.
-    fn program_stop(&mut self, code: u8) {
+    fn program_stop(&mut self, code: u16) {
         let _ = code;
+    }
+
+    /// A machine's M code switches user output `n` (1 … 4), the axes at
+    /// rest: a board drives its pin.
+    fn user_output(&mut self, n: u8, on: bool) {
+        let _ = (n, on);
+    }
+
+    /// A machine's M code waits for user input `n` (1 … 4) to read
+    /// `level`, the axes at rest, answering status bytes meanwhile (a
+    /// reset ends the wait). A transport without inputs goes on at once.
+    fn wait_input(&mut self, n: u8, level: bool) {
+        let _ = (n, level);
     }
 
     /// Whether a program stop is a feed hold at rest rather than a wait
@@ -248,8 +262,14 @@ macro_rules! forward_io {
         fn dwell(&mut self, us: u64) {
             self.inner.dwell(us);
         }
-        fn program_stop(&mut self, code: u8) {
+        fn program_stop(&mut self, code: u16) {
             self.inner.program_stop(code);
+        }
+        fn user_output(&mut self, n: u8, on: bool) {
+            self.inner.user_output(n, on);
+        }
+        fn wait_input(&mut self, n: u8, level: bool) {
+            self.inner.wait_input(n, level);
         }
         fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
             self.inner.outputs(outputs);

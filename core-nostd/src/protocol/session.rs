@@ -14,14 +14,14 @@ use crate::comp::{
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{
-    is_block, parse, BlockError, Coolant, Dialect, FeedMode, Motion, Special, Spindle, SpindleMode,
-    Stop, ToolOffset, ToolWord, Units,
+    is_block, parse, BlockError, Compensation, Coolant, Dialect, FeedMode, Motion, PathControl,
+    Plane, Special, Spindle, SpindleMode, Stop, ToolOffset, ToolWord, Units,
 };
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
-use crate::interp::{path_feed, Aux, Modal, Offsets, Selection, TOOL_REGISTERS};
+use crate::interp::{path_feed, Aux, MAction, Modal, Offsets, Selection, TOOL_REGISTERS};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
-use crate::machine::{Background, Machine, StepSink};
+use crate::machine::{Background, Join, Machine, StepSink};
 use crate::outputs::{milli_rpm, write_rpm, Outputs};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
 use crate::stepdir::{DriveTiming, TimingError};
@@ -155,6 +155,10 @@ pub struct Session {
     checking: Option<ImpulsePoint>,
     /// The last reset dropped motion answered and not all run.
     reset_dropped: bool,
+    /// The top speed of each gear range (`AUX G1=` … `G4=`), rpm.
+    gears: [Option<Length>; 4],
+    /// The nose `G41.1`/`G42.1` gave, while its compensation is on.
+    dynamic_tool: Option<Tool>,
     /// The id of the last request that carried one, and its final reply.
     last_id: Option<u32>,
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
@@ -255,6 +259,8 @@ impl Session {
             generation: 0,
             checking: None,
             reset_dropped: false,
+            gears: [None; 4],
+            dynamic_tool: None,
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
@@ -415,11 +421,32 @@ impl Session {
     }
 
     fn run<'a, I: Io>(&mut self, body: &'a [u8], io: &mut I) -> Outcome<'a> {
-        if !body
-            .iter()
-            .all(|&b| b == b'\t' || (0x20..0x7F).contains(&b))
-        {
-            return Err(Refusal::Control);
+        let printable = |b: u8| b == b'\t' || (0x20..0x7F).contains(&b);
+        if !body.iter().all(|&b| printable(b)) {
+            // A G-code comment may hold any byte (a UTF-8 letter, a tape
+            // control character); it is never read, so the line runs with
+            // them replaced. Anywhere else they are refused.
+            let words_start = body
+                .iter()
+                .position(|&b| printable(b) && b != b' ' && b != b'\t');
+            let gcode = words_start
+                .and_then(|i| body.get(i..))
+                .and_then(|rest| core::str::from_utf8(rest.get(..2).unwrap_or(rest)).ok())
+                .is_some_and(is_block);
+            let only_in_comments = body
+                .iter()
+                .zip(in_comment(body))
+                .all(|(&b, comment)| printable(b) || comment);
+            if !gcode || !only_in_comments {
+                return Err(Refusal::Control);
+            }
+            let mut clean = heapless::Vec::<u8, { super::framing::MAX_LINE }>::new();
+            for &b in body {
+                let _ = clean.push(if printable(b) { b } else { b'?' });
+            }
+            // Printable ASCII now: never fails.
+            let text = core::str::from_utf8(&clean).map_err(|_| Refusal::Control)?;
+            return self.gcode(text, io);
         }
         // Printable ASCII only from here on, so this never fails.
         let text = core::str::from_utf8(body).map_err(|_| Refusal::Control)?;
@@ -458,6 +485,10 @@ impl Session {
             outcome
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
+        } else if command.eq_ignore_ascii_case("MCODE") {
+            self.mcode_command(words, io)
+        } else if command.eq_ignore_ascii_case("GEAR") {
+            self.gear_command(words, io)
         } else if command.eq_ignore_ascii_case("OPT") {
             let [bdel, dialect, optstop] = parse_args(words, ["BDEL", "DIALECT", "OPTSTOP"])?;
             let block_delete = match bdel {
@@ -846,7 +877,9 @@ impl Session {
             return Ok(());
         }
         let modal = self.modal.after(&b);
-        if let Some(f) = b.f {
+        // F0 (a header's, before G95) is taken; a feed move then needs a
+        // feed above 0.
+        if let Some(f) = b.f.filter(|f| f.as_angstrom() != 0) {
             let (ok, why) = match modal.feed_mode {
                 FeedMode::PerMinute => (
                     Feed::new(f).is_some(),
@@ -863,7 +896,7 @@ impl Session {
         // diameter the tool cuts at (X0 of every work system is the
         // spindle's axis; offsets move the slide, not the part); within
         // the spindle's top speed.
-        let spindle = aux.spindle.within(self.top);
+        let spindle = aux.spindle.within(self.top_speed(&aux));
         if aux.spindle.turning != Spindle::Off {
             spindle
                 .rpm(self.prog[0], modal.units)
@@ -962,6 +995,22 @@ impl Session {
         }
         let has_end = words.0.is_some() || words.1.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
+        if modal.plane != Plane::Zx {
+            let arc = matches!(modal.motion, Motion::ArcCw | Motion::ArcCcw)
+                && special.is_none()
+                && (has_end || arc_words);
+            let compensating = self.contour.active()
+                || matches!(
+                    b.compensation,
+                    Some(Compensation::Left | Compensation::Right)
+                );
+            if arc || compensating {
+                return Err(Refusal::Geometry(match modal.plane {
+                    Plane::Xy => "in G17 (XY): a lathe turns arcs and compensates in G18 (ZX)",
+                    _ => "in G19 (YZ): a lathe turns arcs and compensates in G18 (ZX)",
+                }));
+            }
+        }
         let a = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
         let shape = match modal.motion {
             // G28 and G30 move through their way point themselves.
@@ -1075,6 +1124,9 @@ impl Session {
             || (!machine_path.is_empty() && !rapid);
         // Output blocks of the element held back by compensation run at its
         // feed; this block's own and the corners between, at this one's.
+        if feeds && modal.feed.is_some_and(|f| f.as_angstrom() == 0) {
+            return Err(Refusal::Value("F", "0: a feed move needs a feed above 0"));
+        }
         let now = if feeds {
             path_feed(&modal, &spindle, here[0])
                 .map_err(|e| Refusal::Value("F", e.as_str()))?
@@ -1082,7 +1134,15 @@ impl Session {
         } else {
             None
         };
-        let tool = self.nose(&offsets, &sel);
+        let dynamic_tool = match (b.dynamic_nose, b.compensation) {
+            (Some(nose), _) => Some(Tool::new(
+                nose.radius,
+                TipCode::new(linuxcnc_orientation(nose.orientation)).unwrap_or(self.cfg.tip),
+            )),
+            (None, Some(Compensation::Off)) => None,
+            (None, _) => self.dynamic_tool,
+        };
+        let tool = dynamic_tool.unwrap_or_else(|| self.nose(&offsets, &sel));
         let (contour, moves) = self
             .contour
             .block(&tool, b.compensation, b.corner, element)
@@ -1139,6 +1199,67 @@ impl Session {
             // As many plans as moves: never full.
             let _ = planned.push(p);
         }
+        let join = match modal.path {
+            PathControl::ExactStop => Join::Stop,
+            PathControl::ExactPath | PathControl::Blend => Join::Blend,
+            PathControl::Tolerance(t) if t.as_angstrom() <= 100_000_000 => {
+                Join::Deviation(t.as_angstrom().unsigned_abs())
+            }
+            PathControl::Tolerance(_) => {
+                return Err(Refusal::Value("P", "a G64 tolerance of 0 to 10 mm"))
+            }
+        };
+        let machine_m = b
+            .machine_m
+            .map(|code| (code, self.offsets.mcodes.get(code)));
+        if (b.gear.is_some() || machine_m.is_some()) && contour.active() {
+            return Err(Refusal::Busy("a gear range or a machine's M code"));
+        }
+        // Nothing refuses the block from here on.
+        self.machine.set_join(join);
+        // A gear range, then the machine's own M code, at rest before the
+        // spindle switches and the block moves.
+        if let Some(range) = b.gear {
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            let r = self
+                .gears
+                .get(usize::from(range).saturating_sub(1))
+                .copied()
+                .flatten();
+            match r {
+                Some(top) => send_data(
+                    io,
+                    format_args!("MSG M4{range}: shift the gearbox to range {range} (up to {top} rpm), then cycle start"),
+                ),
+                None => send_data(
+                    io,
+                    format_args!("MSG M4{range}: shift the gearbox to range {range}, then cycle start"),
+                ),
+            }
+            self.program_stop(40 + u16::from(range), io);
+        }
+        if let Some((code, action)) = machine_m {
+            let m = code / 10;
+            match action {
+                MAction::Stop => {
+                    self.machine.flush(&mut Sink::new(io, self.drive));
+                    send_data(
+                        io,
+                        format_args!("MSG M{m:02}: the machine's own M code; do it by hand, then cycle start"),
+                    );
+                    self.program_stop(m, io);
+                }
+                MAction::Nothing => {}
+                MAction::Output(n, on) => {
+                    self.machine.flush(&mut Sink::new(io, self.drive));
+                    io.user_output(n, on);
+                }
+                MAction::Wait(n, level) => {
+                    self.machine.flush(&mut Sink::new(io, self.drive));
+                    io.wait_input(n, level);
+                }
+            }
+        }
         // The spindle and the coolant switch with the axes at rest, before
         // the block's motion (as LinuxCNC orders a block); a dwell waits
         // there too.
@@ -1181,6 +1302,7 @@ impl Session {
         self.aux = aux;
         self.sel = sel;
         self.take_offsets(offsets);
+        self.dynamic_tool = if contour.active() { dynamic_tool } else { None };
         self.contour = contour;
         self.last_moves = moves;
         if element.is_some() {
@@ -1190,27 +1312,7 @@ impl Session {
             // At rest where the block ends, until cycle start.
             self.machine.flush(&mut Sink::new(io, self.drive));
             let code = if b.stop == Some(Stop::Pause) { 0 } else { 1 };
-            if io.stop_holds() {
-                // grbl: a hold at rest, answered now; what follows queues
-                // and waits for cycle start.
-                self.machine.hold(&mut Sink::new(io, self.drive));
-            } else {
-                if io.background().is_some() {
-                    let mut view = self.view(self.machine.speed());
-                    view.stop = Some(code);
-                    io.view(&view);
-                } else {
-                    // Nothing moves while it waits: one line answers every
-                    // status byte.
-                    let st = self.machine.status(&mut Sink::new(io, self.drive));
-                    let mut view = self.view(0);
-                    (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
-                    let mut line = status_line("!STATUS", st.motion, st.issued, st.queued, &view);
-                    io.stop_status(line.finish());
-                }
-                io.program_stop(code);
-            }
-            self.share_view(io);
+            self.program_stop(code, io);
         }
         if end {
             // The end of the program: at rest, spindle and coolant off, the
@@ -1233,6 +1335,48 @@ impl Session {
             )),
         );
         Ok(())
+    }
+
+    /// A program stop at rest (`M00`, `M01`, a gear range, a machine's M
+    /// code not in its table; `code` the M code): the board waits for
+    /// cycle start, a grbl link holds at rest and goes on.
+    fn program_stop<I: Io>(&mut self, code: u16, io: &mut I) {
+        if io.stop_holds() {
+            // grbl: a hold at rest, answered now; what follows queues and
+            // waits for cycle start.
+            self.machine.hold(&mut Sink::new(io, self.drive));
+        } else {
+            if io.background().is_some() {
+                let mut view = self.view(self.machine.speed());
+                view.stop = Some(code);
+                io.view(&view);
+            } else {
+                // Nothing moves while it waits: one line answers every
+                // status byte.
+                let st = self.machine.status(&mut Sink::new(io, self.drive));
+                let mut view = self.view(0);
+                (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
+                let mut line = status_line("!STATUS", st.motion, st.issued, st.queued, &view);
+                io.stop_status(line.finish());
+            }
+            io.program_stop(code);
+        }
+        self.share_view(io);
+    }
+
+    /// The spindle's top speed with `aux`'s gear range: `AUX SMAX` and the
+    /// range's own, the lower.
+    fn top_speed(&self, aux: &Aux) -> Option<Length> {
+        let gear = aux.gear.and_then(|g| {
+            self.gears
+                .get(usize::from(g).saturating_sub(1))
+                .copied()
+                .flatten()
+        });
+        match (self.top, gear) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// Lecture 13's `G45`–`G48`: each axis move the block names, from the
@@ -1940,7 +2084,7 @@ impl Session {
 
     /// New offsets; what a board keeps of them changed or not.
     fn take_offsets(&mut self, new: Offsets) {
-        let kept = |o: &Offsets| (o.work, o.tools, o.reference);
+        let kept = |o: &Offsets| (o.work, o.tools, o.reference, o.mcodes);
         if kept(&new) != kept(&self.offsets) {
             self.generation = self.generation.wrapping_add(1);
         }
@@ -1985,7 +2129,7 @@ impl Session {
         };
         let rpm = a
             .spindle
-            .within(self.top)
+            .within(self.top_speed(a))
             .running_rpm(self.prog[0], self.modal.units);
         let limit = a.spindle.clamp.unwrap_or(Length::ZERO);
         let mut line = ReplyLine::new();
@@ -2041,12 +2185,128 @@ impl Session {
         Ok(())
     }
 
+    /// `MCODE [M=n DO=STOP|NONE|ON|OFF|HIGH|LOW [N=1..4]]`: what one of
+    /// the machine's own M codes does — stop with a message (the default,
+    /// and what `STOP` sets back), nothing, switch user output `N` on or
+    /// off, or wait for user input `N` to read high or low. Alone: the
+    /// table, a `DATA` line per code set. Kept with the tool table.
+    #[inline(never)]
+    fn mcode_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [m, action, n] = parse_args(words, ["M", "DO", "N"])?;
+        if let Some(m) = m {
+            let code = match m.parse::<u16>() {
+                Ok(c @ 0..=999) if m.bytes().all(|b| b.is_ascii_digit()) => c,
+                _ => return Err(Refusal::Value("M", "must be a whole M code 0 to 999")),
+            };
+            // The codes the device runs itself are not the machine's.
+            if matches!(code, 0..=9 | 30 | 41..=44 | 98 | 99) {
+                return Err(Refusal::Value(
+                    "M",
+                    "is one the device runs itself (M00-M09, M30, M41-M44, M98, M99)",
+                ));
+            }
+            let n = match n {
+                None => None,
+                Some(v) => match v.parse::<u8>() {
+                    Ok(k @ 1..=4) if v.len() == 1 => Some(k),
+                    _ => {
+                        return Err(Refusal::Value(
+                            "N",
+                            "must be 1 to 4 (a user output or input)",
+                        ))
+                    }
+                },
+            };
+            let need_n =
+                |n: Option<u8>| n.ok_or(Refusal::Missing("ON, OFF, HIGH and LOW need N: 1 to 4"));
+            let action = match action.unwrap_or("STOP") {
+                a if a.eq_ignore_ascii_case("STOP") => MAction::Stop,
+                a if a.eq_ignore_ascii_case("NONE") => MAction::Nothing,
+                a if a.eq_ignore_ascii_case("ON") => MAction::Output(need_n(n)?, true),
+                a if a.eq_ignore_ascii_case("OFF") => MAction::Output(need_n(n)?, false),
+                a if a.eq_ignore_ascii_case("HIGH") => MAction::Wait(need_n(n)?, true),
+                a if a.eq_ignore_ascii_case("LOW") => MAction::Wait(need_n(n)?, false),
+                _ => {
+                    return Err(Refusal::Value(
+                        "DO",
+                        "must be STOP, NONE, ON, OFF, HIGH or LOW",
+                    ))
+                }
+            };
+            if matches!(action, MAction::Stop | MAction::Nothing) && n.is_some() {
+                return Err(Refusal::Missing("N only with ON, OFF, HIGH or LOW"));
+            }
+            let mut offsets = self.offsets;
+            if !offsets.mcodes.set(code * 10, action) {
+                return Err(Refusal::Range("the table holds 16 M codes"));
+            }
+            self.take_offsets(offsets);
+        } else if action.is_some() || n.is_some() {
+            return Err(Refusal::Missing("DO and N need M: the code"));
+        }
+        let mut count = 0;
+        for (code, action) in self.offsets.mcodes.entries() {
+            count += 1;
+            let m = code / 10;
+            match action {
+                MAction::Stop => {}
+                MAction::Nothing => send_data(io, format_args!("M{m:02} DO=NONE")),
+                MAction::Output(n, on) => send_data(
+                    io,
+                    format_args!("M{m:02} DO={} N={n}", if on { "ON" } else { "OFF" }),
+                ),
+                MAction::Wait(n, high) => send_data(
+                    io,
+                    format_args!("M{m:02} DO={} N={n}", if high { "HIGH" } else { "LOW" }),
+                ),
+            }
+        }
+        send_ok(io, Some(format_args!("CODES={count}")));
+        Ok(())
+    }
+
+    /// `GEAR [N=1..4 TOP=rpm]`: the top speed of a gear range (`M41` …
+    /// `M44`; 0: the range adds no limit). Answered with the range in
+    /// effect and every range's top.
+    #[inline(never)]
+    fn gear_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [n, top] = parse_args(words, ["N", "TOP"])?;
+        match (n, top) {
+            (Some(n), Some(top)) => {
+                let slot = match n.parse::<usize>() {
+                    Ok(k @ 1..=4) if n.len() == 1 => k - 1,
+                    _ => return Err(Refusal::Value("N", "must be 1 to 4 (M41 to M44)")),
+                };
+                let l = parse_amount("TOP", top, 99_999_999, "must be 0 to 99999.999 rpm")?;
+                if let Some(g) = self.gears.get_mut(slot) {
+                    *g = (l > Length::ZERO).then_some(l);
+                }
+            }
+            (None, None) => {}
+            _ => {
+                return Err(Refusal::Missing(
+                    "GEAR sets a range with N and TOP together",
+                ))
+            }
+        }
+        let mut line = ReplyLine::new();
+        let _ = match self.aux.gear {
+            Some(g) => write!(line, "OK RANGE={g}"),
+            None => line.write_str("OK RANGE=-"),
+        };
+        for (i, g) in self.gears.iter().enumerate() {
+            let _ = write!(line, " G{}={}", i + 1, g.unwrap_or(Length::ZERO));
+        }
+        io.send(line.finish());
+        Ok(())
+    }
+
     /// The outputs for `aux` with the tool at the programmed X (`units`
     /// those of a surface speed).
     fn outputs_for(&self, aux: &Aux, units: Units) -> Outputs {
         let rpm = aux
             .spindle
-            .within(self.top)
+            .within(self.top_speed(aux))
             .running_rpm(self.prog[0], units);
         let rpm = if self.spindle_override == 100 {
             rpm
@@ -2517,12 +2777,44 @@ impl<I: Io> Io for Suffixed<'_, I> {
     crate::protocol::forward_io!();
 }
 
+/// LinuxCNC's lathe orientation (`G41.1 L`, its tool table's `Q`) as the
+/// device's tip code: the same tips mirrored in X (its 2 is the device's
+/// 3, its 6 the device's 8; 0 and 9 the nose centre).
+const fn linuxcnc_orientation(l: u8) -> u8 {
+    match l {
+        1 => 4,
+        2 => 3,
+        3 => 2,
+        4 => 1,
+        6 => 8,
+        8 => 6,
+        l => l,
+    }
+}
+
 /// Splits off and checks a trailing `*HH`; returns the bytes before it.
 fn strip_checksum(line: &[u8]) -> Result<&[u8], Refusal<'static>> {
-    let Some(star) = line.iter().rposition(|&b| b == b'*') else {
+    // A `*` that is not the checksum's is inside a G-code comment, or the
+    // request is malformed.
+    let trailing =
+        matches!(line, [.., b'*', h, l] if h.is_ascii_hexdigit() && l.is_ascii_hexdigit());
+    let star = if trailing {
+        line.iter().rposition(|&b| b == b'*')
+    } else {
+        let mut found = None;
+        for ((i, &b), comment) in (0..).zip(line).zip(in_comment(line)) {
+            if b == b'*' && !comment {
+                found = Some(i);
+            }
+        }
+        found
+    };
+    let Some(star) = star else {
         return Ok(line);
     };
-    let (body, tail) = line.split_at(star);
+    let Some((body, tail)) = line.split_at_checked(star) else {
+        return Err(Refusal::ChecksumForm);
+    };
     let given = match tail {
         [_, h, l] => match (hex_value(*h), hex_value(*l)) {
             (Some(h), Some(l)) => h << 4 | l,
@@ -2536,6 +2828,28 @@ fn strip_checksum(line: &[u8]) -> Result<&[u8], Refusal<'static>> {
     } else {
         Err(Refusal::Checksum(expected))
     }
+}
+
+/// For each byte of a line, whether it lies inside a G-code comment:
+/// `( … )` (the parentheses included), or from `;` to the end.
+fn in_comment(line: &[u8]) -> impl Iterator<Item = bool> + '_ {
+    let mut paren = false;
+    let mut rest = false;
+    line.iter().map(move |&b| {
+        if rest {
+            return true;
+        }
+        if paren {
+            paren = b != b')';
+            return true;
+        }
+        match b {
+            b'(' => paren = true,
+            b';' => rest = true,
+            _ => return false,
+        }
+        true
+    })
 }
 
 fn hex_value(b: u8) -> Option<u8> {
