@@ -440,6 +440,11 @@ impl<const R: usize> Stepper<R> {
     /// timed again from the speeds the run reaches (never above their
     /// plan). While the hold is still decelerating nothing changes.
     pub fn resume(&mut self) -> Option<Pulled> {
+        // Only at rest: a resume while braking changes nothing (taking the
+        // hold away then would drop the rest of the block it stopped).
+        if !matches!(self.hold, Hold::Held(_)) {
+            return None;
+        }
         let Hold::Held(rest) = core::mem::replace(&mut self.hold, Hold::Off) else {
             return None;
         };
@@ -742,6 +747,36 @@ mod tests {
         let ds = 1133.5 * 0.01 - (999.5 * 0.01 + v * v / (2.0 * a));
         let t1 = libm::sqrt(2.0 * ds / a);
         assert!((after[0].1 as i64 - libm::round(t1 * 1e6) as i64).abs() <= 1);
+    }
+
+    #[test]
+    fn a_resume_while_braking_changes_nothing() {
+        let started = z_block(0, -20_000, Some("1200"));
+        let mut s = Stepper::<AHEAD>::new();
+        for item in [
+            Item::RunStart,
+            Item::Block(started),
+            Item::RunEnd(started.timed().end_tick()),
+        ] {
+            s.push(item).unwrap();
+        }
+        let mut n = 0;
+        while n < 500 {
+            if let Some(Pulled::Step(..)) = s.pull() {
+                n += 1;
+            }
+        }
+        s.hold();
+        assert_eq!(s.motion(), Motion::Braking);
+        assert_eq!(s.resume(), None);
+        assert_eq!(s.motion(), Motion::Braking);
+        let braking = steps(&mut s);
+        assert_eq!(s.motion(), Motion::Held);
+        assert_eq!(s.resume(), Some(Pulled::RunStart));
+        let after = steps(&mut s);
+        // Every event of the block, none lost.
+        assert_eq!(500 + braking.len() + after.len(), 2000);
+        assert_eq!(s.issued().z, Impulses(-2000));
     }
 
     #[test]

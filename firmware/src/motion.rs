@@ -364,7 +364,7 @@ pub fn start(item: Item, drive: &DriveTiming, mut wait: impl FnMut()) -> Result<
 /// Whether everything handed over has been issued (a hold keeps what it
 /// stopped until a resume or a reset).
 pub fn drained() -> bool {
-    with(|m| !m.busy && m.stepper.is_idle() && m.next.is_none()).unwrap_or(true)
+    with(|m| !m.busy && !m.stepper.pending() && m.next.is_none()).unwrap_or(true)
 }
 
 /// Whether the step interrupt runs the last block started in an open run

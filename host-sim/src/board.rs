@@ -69,6 +69,10 @@ struct Axes {
     outputs: Outputs,
     /// Runs ended, with the wall time each took against its ticks.
     drift: Drift,
+    /// The user outputs a machine's M code switches, 1 … 4.
+    user_outputs: [bool; 4],
+    /// The user inputs a machine's M code waits for (nothing wired: low).
+    user_inputs: [bool; 4],
 }
 
 /// How far the wall clock ran from the step clock over the runs.
@@ -166,7 +170,7 @@ impl Shared {
 
     fn drained(&self) -> bool {
         let a = self.axes();
-        !a.busy && a.stepper.is_idle() && a.next.is_none()
+        !a.busy && !a.stepper.pending() && a.next.is_none()
     }
 }
 
@@ -368,6 +372,22 @@ impl<W: Write> Io for Protocol<W> {
     fn program_stop(&mut self, _: u16) {
         self.shared.cycle_start.store(false, Ordering::Release);
         self.wait_for(|s| s.cycle_start.load(Ordering::Acquire));
+    }
+
+    fn user_output(&mut self, n: u8, on: bool) {
+        if let Some(o) = self
+            .shared
+            .axes()
+            .user_outputs
+            .get_mut(usize::from(n).saturating_sub(1))
+        {
+            *o = on;
+        }
+    }
+
+    fn wait_input(&mut self, n: u8, level: bool) {
+        let n = usize::from(n).saturating_sub(1);
+        self.wait_for(|s| s.axes().user_inputs.get(n) == Some(&level));
     }
 
     fn outputs(&mut self, outputs: &Outputs) {
@@ -659,6 +679,8 @@ impl Board {
                 aborted: None,
                 outputs: Outputs::OFF,
                 drift: Drift::default(),
+                user_outputs: [false; 4],
+                user_inputs: [false; 4],
             }),
             work: Condvar::new(),
             changed: Condvar::new(),
