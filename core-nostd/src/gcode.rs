@@ -376,6 +376,9 @@ pub struct Block {
     pub x: Option<Length>,
     /// Z word (or Z from a Fanuc `W`).
     pub z: Option<Length>,
+    /// Half the X (or U) word, rounded once from the number as written:
+    /// the radius when X is a diameter.
+    pub x_half: Option<Length>,
     /// The X word was a Fanuc `U`: an increment.
     pub incremental_x: bool,
     /// The Z word was a Fanuc `W`: an increment.
@@ -410,6 +413,43 @@ pub struct Block {
     pub tool_change: bool,
     /// `G45`–`G48` with its `D`.
     pub position_offset: Option<PositionOffset>,
+    /// A turning cycle (Fanuc dialect: `G70`, `G71`, `G72`) and its words.
+    pub cycle: Option<CycleWords>,
+}
+
+/// The turning cycles the device runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CycleKind {
+    /// `G70`: finishing along a held profile.
+    Finish,
+    /// `G71`: stock removal in turning (cuts along Z).
+    Turn,
+    /// `G72`: stock removal in facing (cuts along X).
+    Face,
+}
+
+/// A cycle block's own words (Fanuc and Haas forms): in a cycle block `U`
+/// and `W` are allowances or a depth, not increments, and `P`, `Q` name the
+/// profile's first and last blocks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CycleWords {
+    /// Which cycle.
+    pub kind: CycleKind,
+    /// `P`: the sequence number of the profile's first block.
+    pub p: Option<u32>,
+    /// `Q`: the sequence number of its last.
+    pub q: Option<u32>,
+    /// `U` as written (the first block of Fanuc's two: the depth of cut,
+    /// a radius; the second: the X allowance, a diameter).
+    pub u: Option<Length>,
+    /// `W` as written (the Z allowance; `G72`'s first block: the depth).
+    pub w: Option<Length>,
+    /// `D`: Haas' depth of cut (a radius).
+    pub d: Option<Length>,
+    /// `R`: the retract (Fanuc's first block).
+    pub r: Option<Length>,
 }
 
 /// Why a block was refused.
@@ -643,6 +683,8 @@ struct Scan {
     blend: bool,
     /// `G41.1`/`G42.1`: `D` is the nose diameter, `L` its orientation.
     dynamic: bool,
+    /// `G70`–`G72` (Fanuc): the cycle's own words.
+    cycle: Option<CycleKind>,
 }
 
 fn scan(line: &str) -> Scan {
@@ -666,6 +708,9 @@ fn scan(line: &str) -> Scan {
                     Some(40) => found.dwell = true,
                     Some(450 | 460 | 470 | 480) => found.position_offset = true,
                     Some(640) => found.blend = true,
+                    Some(700) => found.cycle = Some(CycleKind::Finish),
+                    Some(710) => found.cycle = Some(CycleKind::Turn),
+                    Some(720) => found.cycle = Some(CycleKind::Face),
                     Some(411 | 421) => found.dynamic = true,
                     _ => {}
                 }
@@ -697,6 +742,8 @@ struct Reading {
     position_offset: bool,
     blend: bool,
     dynamic: bool,
+    /// The cycle's words, while reading a cycle block (Fanuc).
+    cycle: Option<CycleWords>,
     /// G64's `P` and `Q`, mm.
     tolerance: Option<Length>,
     /// The group-0 G code (G04, G50) and its column.
@@ -722,6 +769,18 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
         position_offset: scanned.position_offset,
         blend: scanned.blend,
         dynamic: scanned.dynamic,
+        cycle: match (scanned.cycle, dialect) {
+            (Some(kind), Dialect::Fanuc) => Some(CycleWords {
+                kind,
+                p: None,
+                q: None,
+                u: None,
+                w: None,
+                d: None,
+                r: None,
+            }),
+            _ => None,
+        },
         tolerance: None,
         once: None,
         time: None,
@@ -840,6 +899,16 @@ fn unitless_scaled(letter: u8, number: &str, e: u32) -> Result<u64, BlockError> 
     }
 }
 
+/// A sequence number (`P`, `Q` of a cycle): a whole number of at most
+/// nine digits.
+fn whole_number(letter: u8, number: &str) -> Result<u32, BlockError> {
+    let digits = number.trim_start_matches('0');
+    if number.is_empty() || !number.bytes().all(|b| b.is_ascii_digit()) || digits.len() > 9 {
+        return Err(BlockError::Range(letter, "must be a sequence number"));
+    }
+    Ok(digits.bytes().fold(0, |n, b| n * 10 + u32::from(b - b'0')))
+}
+
 /// A whole number of at most four digits (`P`, `L`, `H`).
 fn whole(letter: u8, number: &str) -> Result<u32, BlockError> {
     let digits = number.trim_start_matches('0');
@@ -888,6 +957,37 @@ impl Reading {
             }
             .map_err(|e| BlockError::Value(letter, e))
         };
+        if let Some(c) = &mut self.cycle {
+            // A cycle's own words.
+            let slot = match letter {
+                b'U' => Some(&mut c.u),
+                b'W' => Some(&mut c.w),
+                b'D' => Some(&mut c.d),
+                b'R' => Some(&mut c.r),
+                _ => None,
+            };
+            if let Some(slot) = slot {
+                *slot = Some(length()?);
+                return Ok(());
+            }
+            match letter {
+                b'P' | b'Q' => {
+                    let n = whole_number(letter, number)?;
+                    if letter == b'P' {
+                        c.p = Some(n);
+                    } else {
+                        c.q = Some(n);
+                    }
+                    return Ok(());
+                }
+                b'F' | b'S' | b'T' | b'N' => {}
+                _ => {
+                    return Err(BlockError::Form(
+                        "a cycle block takes P Q U W D R F S T (G71/G72) or P Q F U W (G70)",
+                    ))
+                }
+            }
+        }
         let b = &mut self.block;
         match letter {
             // The Fanuc dwell's X and U are seconds.
@@ -905,6 +1005,13 @@ impl Reading {
                     return Err(BlockError::Form("X and U in one block"));
                 }
                 b.x = Some(length()?);
+                b.x_half = Some(
+                    match units {
+                        Units::Mm => Length::half_gcode_mm(number),
+                        Units::Inch => Length::half_gcode_inch(number),
+                    }
+                    .map_err(|e| BlockError::Value(letter, e))?,
+                );
                 b.incremental_x = letter == b'U';
             }
             b'Z' | b'W' => {
@@ -1073,6 +1180,13 @@ impl Reading {
                 set(&mut self.once, (tenths, pos))
             }
             540..=590 if tenths % 10 == 0 => set(&mut b.wcs, ((tenths - 540) / 10) as u8),
+            700 | 710 | 720 if fanuc => {
+                if self.cycle.is_none() {
+                    // Two cycles in one block.
+                    return repeated;
+                }
+                Ok(())
+            }
             700..=760 if tenths % 10 == 0 => Err(BlockError::Cycle(tenths)),
             // Fanuc system A.
             500 if fanuc => set(&mut self.once, (tenths, pos)),
@@ -1319,6 +1433,7 @@ impl Reading {
         if let Some(t) = self.tolerance {
             b.path = Some(PathControl::Tolerance(t));
         }
+        b.cycle = self.cycle;
         if let Some(nose) = &mut b.dynamic_nose {
             let Some((d, _)) = self.d.take() else {
                 return Err((
@@ -1621,8 +1736,8 @@ mod tests {
             "G50 belongs to the FANUC dialect (OPT DIALECT=FANUC)"
         );
         assert_eq!(
-            fanuc("G71 U2 R.5").unwrap_err().error.to_string(),
-            "G71 canned cycles not supported"
+            fanuc("G74 R1").unwrap_err().error.to_string(),
+            "G74 canned cycles not supported"
         );
         assert_eq!(
             iso("M98 P1000").unwrap_err().error.to_string(),

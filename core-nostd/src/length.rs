@@ -188,6 +188,32 @@ impl Length {
         from_gcode(text, 254, 6)
     }
 
+    /// Half of a G-code number of millimetres (a diameter's radius),
+    /// rounded once from the number as written, not from its rounding.
+    ///
+    /// ```
+    /// use core_nostd::length::Length;
+    /// let half = |t| Length::half_gcode_mm(t).map(Length::as_angstrom);
+    /// assert_eq!(half("20."), Ok(100_000_000));
+    /// assert_eq!(half("1.0000001"), Ok(5_000_001)); // 5 000 000.5 Å: away from 0
+    /// assert_eq!(half("1.00000009"), Ok(5_000_000)); // 5 000 000.45 Å
+    /// assert_eq!(half("-2.8918148932211922"), Ok(-14_459_074));
+    /// ```
+    pub fn half_gcode_mm(text: &str) -> Result<Length, LengthError> {
+        from_gcode(text, 5, 6)
+    }
+
+    /// Half of a G-code number of inches, rounded once (127·10⁶ Å an
+    /// inch's half).
+    ///
+    /// ```
+    /// use core_nostd::length::Length;
+    /// assert_eq!(Length::half_gcode_inch("1.").map(Length::as_angstrom), Ok(127_000_000));
+    /// ```
+    pub fn half_gcode_inch(text: &str) -> Result<Length, LengthError> {
+        from_gcode(text, 127, 6)
+    }
+
     /// The raw count of ångström (10⁻⁷ mm).
     pub const fn as_angstrom(self) -> i64 {
         self.angstrom

@@ -62,6 +62,7 @@ pub mod calc;
 pub mod comp;
 pub mod cone;
 pub mod crc32;
+pub mod cycle;
 pub mod gcode;
 pub mod impulse;
 pub mod interleave;

@@ -16,22 +16,53 @@
 //! one would be.
 
 use crate::crc32::Crc32;
-use crate::interp::{Offsets, ToolEntry, TOOL_REGISTERS, WORK_SYSTEMS};
+use crate::interp::{MAction, Offsets, ToolEntry, MCODES, TOOL_REGISTERS, WORK_SYSTEMS};
 use crate::length::Length;
 
-/// `LTO1`: the record of this layout.
-const MAGIC: u32 = u32::from_le_bytes(*b"LTO1");
+/// `LTO2`: the record of this layout (the table, the offsets, the
+/// stored positions, the machine's M codes).
+const MAGIC: u32 = u32::from_le_bytes(*b"LTO2");
+/// `LTO1`: the layout before the M codes, still read (its M code table
+/// empty).
+const MAGIC_1: u32 = u32::from_le_bytes(*b"LTO1");
 
 /// Lengths in the payload: work offsets (X, Z), per register geometry,
 /// wear, nose radius (-1: none) and tip code, and the two stored
 /// positions.
 const LENGTHS: usize = WORK_SYSTEMS * 2 + TOOL_REGISTERS * 6 + 2 * 2;
 
-/// Payload words: two per length.
-const PAYLOAD_WORDS: usize = LENGTHS * 2;
+/// Values after them in `LTO2`: per M code slot its code (tenths, 0
+/// empty) and its action.
+const MCODE_VALUES: usize = MCODES * 2;
+
+/// Payload words: two per value.
+const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES) * 2;
+/// Those of an `LTO1` record.
+const PAYLOAD_WORDS_1: usize = LENGTHS * 2;
 
 /// Words of a whole record: magic, sequence, length, payload, CRC.
 pub const RECORD_WORDS: usize = 3 + PAYLOAD_WORDS + 1;
+
+/// An M code's action as a value: 1 nothing, 10 + n / 20 + n output `n`
+/// off / on, 30 + n / 40 + n wait for input `n` low / high.
+const fn action_value(a: MAction) -> i64 {
+    match a {
+        MAction::Stop => 0,
+        MAction::Nothing => 1,
+        MAction::Output(n, on) => (if on { 20 } else { 10 }) + n as i64,
+        MAction::Wait(n, high) => (if high { 40 } else { 30 }) + n as i64,
+    }
+}
+
+fn value_action(v: i64) -> Option<MAction> {
+    let n = (v % 10) as u8;
+    match v {
+        1 => Some(MAction::Nothing),
+        11..=14 | 21..=24 => Some(MAction::Output(n, v > 20)),
+        31..=34 | 41..=44 => Some(MAction::Wait(n, v > 40)),
+        _ => None,
+    }
+}
 
 /// Two slots of flash, each erasable on its own and at least
 /// [`RECORD_WORDS`] words long.
@@ -70,7 +101,12 @@ fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
         .reference
         .iter()
         .flat_map(|p| p.iter().map(|l| l.as_angstrom()));
-    work.chain(tools).chain(reference)
+    let mut slots = [(0i64, 0i64); MCODES];
+    for (slot, (code, action)) in slots.iter_mut().zip(o.mcodes.entries()) {
+        *slot = (i64::from(code), action_value(action));
+    }
+    let mcodes = slots.into_iter().flat_map(|(c, a)| [c, a]);
+    work.chain(tools).chain(reference).chain(mcodes)
 }
 
 /// The words of the record of `offsets` with sequence number `seq`,
@@ -92,13 +128,20 @@ fn crc_of(words: impl Iterator<Item = u32>) -> u32 {
     crc.finish()
 }
 
+/// The payload words of the layout a slot's record says it has.
+fn layout<F: Flash>(flash: &mut F, slot: usize) -> Option<usize> {
+    match (flash.read(slot, 0), flash.read(slot, 2)) {
+        (MAGIC, n) if n == (PAYLOAD_WORDS * 4) as u32 => Some(PAYLOAD_WORDS),
+        (MAGIC_1, n) if n == (PAYLOAD_WORDS_1 * 4) as u32 => Some(PAYLOAD_WORDS_1),
+        _ => None,
+    }
+}
+
 /// The sequence number of the whole record in `slot`, if it holds one.
 fn sequence<F: Flash>(flash: &mut F, slot: usize) -> Option<u32> {
-    if flash.read(slot, 0) != MAGIC || flash.read(slot, 2) != (PAYLOAD_WORDS * 4) as u32 {
-        return None;
-    }
-    let crc = crc_of((0..RECORD_WORDS - 1).map(|i| flash.read(slot, i)));
-    (crc == flash.read(slot, RECORD_WORDS - 1)).then(|| flash.read(slot, 1))
+    let words = 3 + layout(flash, slot)? + 1;
+    let crc = crc_of((0..words - 1).map(|i| flash.read(slot, i)));
+    (crc == flash.read(slot, words - 1)).then(|| flash.read(slot, 1))
 }
 
 /// What a load found.
@@ -137,6 +180,7 @@ fn current<F: Flash>(flash: &mut F) -> Option<(usize, u32, Offsets)> {
 
 /// The offsets of the whole record in `slot`, if every value is in range.
 fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
+    let with_mcodes = layout(flash, slot) == Some(PAYLOAD_WORDS);
     let mut i = 3;
     let mut next = || {
         let lo = u64::from(flash.read(slot, i));
@@ -168,6 +212,20 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
     }
     for p in o.reference.iter_mut().flatten() {
         *p = Length::from_angstrom(next())?;
+    }
+    if with_mcodes {
+        for _ in 0..MCODES {
+            let (code, action) = (next(), next());
+            if code == 0 {
+                continue;
+            }
+            let code = u16::try_from(code)
+                .ok()
+                .filter(|c| c % 10 == 0 && *c <= 9990)?;
+            if !o.mcodes.set(code, value_action(action)?) {
+                return None;
+            }
+        }
     }
     Some(o)
 }
@@ -264,7 +322,37 @@ mod tests {
         o.tools[31].nose = Some((l("25"), 9));
         o.reference[1] = [l("99999.999999"), l("-99999.999999")];
         o.shift = [l("7"), l("8")];
+        o.mcodes.set(160, MAction::Output(2, true));
+        o.mcodes.set(310, MAction::Wait(4, false));
+        o.mcodes.set(260 + 10 * (k as u16 % 3), MAction::Nothing);
         o
+    }
+
+    #[test]
+    fn a_record_of_the_layout_before_the_m_codes_still_loads() {
+        // An LTO1 record as the firmware before the M codes wrote it: the
+        // lengths only.
+        let mut f = Nor::new();
+        let mut o = table(1);
+        o.mcodes = crate::interp::MCodes::new();
+        let lengths: Vec<i64> = lengths(&o).take(LENGTHS).collect();
+        let mut words = std::vec![MAGIC_1, 7, (PAYLOAD_WORDS_1 * 4) as u32];
+        for v in lengths {
+            words.extend([v as u64 as u32, ((v as u64) >> 32) as u32]);
+        }
+        words.push(crc_of(words.iter().copied()));
+        f.slots[0][..words.len()].copy_from_slice(&words);
+        assert_eq!(
+            load(&mut f),
+            Loaded {
+                offsets: kept(&o),
+                seq: 7
+            }
+        );
+        // The next save writes the new layout over the other slot.
+        let seq = save(&mut f, &table(2), 7);
+        assert_eq!(load(&mut f).offsets, kept(&table(2)));
+        assert_eq!(load(&mut f).seq, seq);
     }
 
     fn kept(o: &Offsets) -> Offsets {

@@ -1,15 +1,17 @@
-//! `host-sim check`: every line of a G-code file the device would refuse as
-//! written, with its line and column, before the program is sent.
+//! `host-sim check`: every line of a G-code file the device would refuse,
+//! with its line and column, before the program is sent; and the lines
+//! where it will stop for the operator (a gear range, the machine's own M
+//! codes), as warnings.
 //!
-//! Each line is read by the device's own reader (`core_nostd::gcode`), so
-//! what is listed here is exactly what the device refuses at the word
-//! level: unknown addresses, malformed numbers, unsupported G codes, lines
-//! longer than the protocol's limit. A line's first item is listed (the
-//! reader stops there); geometry (an arc whose radii differ, a move beyond
-//! the machine) is the device's to judge when it runs.
+//! The program is run through the in-process device exactly as `run` runs
+//! it (the same lines, [`crate::program::program_lines`]), so what is
+//! listed is exactly what `run` refuses: unknown addresses, malformed
+//! numbers, unsupported codes, and geometry (an arc whose radii differ, a
+//! move beyond the machine). Each refusal is placed at the column of the
+//! word the device's reader names, where it names one.
 
+use crate::program::{program_lines, run, Options};
 use core_nostd::gcode::{is_block, parse, Dialect, Units};
-use core_nostd::protocol::framing::MAX_LINE;
 
 /// One refused item.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -27,74 +29,120 @@ pub fn check(text: &str) -> Vec<Item> {
     check_in(text, Dialect::Iso)
 }
 
-/// The items of a program's text in `dialect`, in order; each line read in
-/// the unit (`G20`/`G21`) the lines before it left.
+/// The items of a program's text in `dialect`, in order: the lines `run`
+/// refuses, each once, with the device's words.
 ///
 /// A program with macros, subprograms or expressions is expanded first, as
 /// the host does before streaming: what cannot be expanded is the one item
-/// then; otherwise the expanded blocks are checked, each at its source
-/// line (a block an expression wrote is named as written, its column that
-/// of the written block), every item once.
+/// then; otherwise a block an expression wrote is named as written.
 pub fn check_in(text: &str, dialect: Dialect) -> Vec<Item> {
     let source: Vec<&str> = text.split('\n').collect();
-    let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
-        match crate::expand::expand(text, dialect) {
-            Ok(lines) => lines.into_iter().map(|l| (l.source - 1, l.text)).collect(),
-            Err(e) => {
-                return vec![Item {
-                    line: e.line,
-                    column: e.column,
-                    what: e.what,
-                }]
-            }
+    let lines = match program_lines(text, dialect) {
+        Ok(lines) => lines,
+        Err(e) => {
+            return vec![Item {
+                line: e.line,
+                column: e.column,
+                what: e.what,
+            }]
         }
-    } else {
-        source.iter().map(|l| l.to_string()).enumerate().collect()
     };
-    let mut items: Vec<Item> = Vec::new();
+    let report = run(
+        text,
+        Options {
+            dialect,
+            radius: false,
+            optional_stop: false,
+        },
+    );
+    // Where the reader places each line's first refusal, for its column.
+    let mut columns: Vec<(usize, usize)> = Vec::new();
     let mut units = Units::Mm;
-    for (i, raw) in &lines {
-        let i = *i;
-        let line = raw.strip_suffix('\r').unwrap_or(raw);
-        let written = source.get(i).map(|l| l.strip_suffix('\r').unwrap_or(l));
-        let expanded = written != Some(line);
-        let mut item = |column, what: String| {
-            let what = if expanded {
-                format!("{what} (in `{line}`)")
-            } else {
-                what
-            };
-            let item = Item {
-                line: i + 1,
-                column,
-                what,
-            };
-            if !items.contains(&item) {
-                items.push(item);
-            }
-        };
-        if line.trim().is_empty() {
-            continue;
-        }
-        if line.len() > MAX_LINE {
-            item(MAX_LINE + 1, format!("line longer than {MAX_LINE} bytes"));
-            continue;
-        }
-        if let Some(at) = line.find(|c: char| !(c == '\t' || (' '..='~').contains(&c))) {
-            item(at + 1, "not printable ASCII".to_string());
-            continue;
-        }
-        if !is_block(line) {
-            let at = line.len() - line.trim_start().len();
-            item(at + 1, "not a G-code line".to_string());
+    for (i, line) in &lines {
+        if line.trim().is_empty() || !is_block(line) {
             continue;
         }
         match parse(line, dialect, units) {
             Ok(b) => units = b.units.unwrap_or(units),
-            Err(e) => item(e.column, e.error.to_string()),
+            Err(e) => columns.push((*i + 1, e.column)),
+        }
+    }
+    let mut items: Vec<Item> = Vec::new();
+    for (refused, &at) in report.refused.iter().zip(&report.refused_at) {
+        let line = refused.line;
+        // The device's words, without the protocol's code.
+        let what = refused
+            .reply
+            .strip_prefix("ERR ")
+            .and_then(|r| r.split_once(' '))
+            .map_or(refused.reply.as_str(), |(_, w)| w)
+            .to_string();
+        let sent = lines.get(at).map(|(_, l)| l.as_str());
+        let written = source
+            .get(line - 1)
+            .map(|l| l.strip_suffix('\r').unwrap_or(l));
+        let what = match (sent, written) {
+            (Some(s), Some(w)) if crate::program::device_text(w) != s => {
+                format!("{what} (in `{s}`)")
+            }
+            _ => what,
+        };
+        let column = columns
+            .iter()
+            .find(|(l, _)| *l == line)
+            .map_or_else(|| leading(written.unwrap_or("")), |(_, c)| *c);
+        let item = Item { line, column, what };
+        if !items.contains(&item) {
+            items.push(item);
         }
     }
     items
+}
+
+/// Where a line's text begins (column from 1).
+fn leading(line: &str) -> usize {
+    line.len() - line.trim_start().len() + 1
+}
+
+/// The lines where the program stops for the operator: a gear range
+/// (`M41`–`M44`) and the machine's own M codes (each does what the
+/// machine's table says, `MCODE`; one not in it stops with a message).
+pub fn warnings_in(text: &str, dialect: Dialect) -> Vec<Item> {
+    let Ok(lines) = program_lines(text, dialect) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let mut units = Units::Mm;
+    for (i, line) in &lines {
+        if line.trim().is_empty() || !is_block(line) {
+            continue;
+        }
+        let Ok(b) = parse(line, dialect, units) else {
+            continue;
+        };
+        units = b.units.unwrap_or(units);
+        let column = line.find(['M', 'm']).map_or(1, |c| c + 1);
+        if let Some(g) = b.gear {
+            out.push(Item {
+                line: i + 1,
+                column,
+                what: format!(
+                    "M4{g}: the program stops for the gearbox to be shifted to range {g}"
+                ),
+            });
+        }
+        if let Some(code) = b.machine_m {
+            out.push(Item {
+                line: i + 1,
+                column,
+                what: format!(
+                    "M{:02}: the machine's own M code; it stops the program with a message unless the machine's table (MCODE) says otherwise",
+                    code / 10
+                ),
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -118,7 +166,18 @@ mod tests {
                 (8, 5, "unknown address Q"),
             ]
         );
-        assert!(check("G01 X1\nG02 X2 Z2 R1\n").is_empty());
+        assert!(check("G00 X1\nG02 X3 Z-1 R1 F100\n").is_empty());
+        // What run refuses, check lists: a feed never set, an arc that
+        // cannot be.
+        let items = check("G01 X1\nG00 X1\nG02 X3 Z-10 R1 F100\n");
+        let got: Vec<(usize, &str)> = items.iter().map(|i| (i.line, i.what.as_str())).collect();
+        assert_eq!(
+            got,
+            [
+                (1, "F not programmed: a feed move needs F (mm/min)"),
+                (3, "radius smaller than half the distance to the end point"),
+            ]
+        );
         // Expanded first: a refused block of a loop is named once, as the
         // expression wrote it; what cannot be expanded is the one item.
         let looped = "#1 = 0\no1 while [#1 LT 3]\nG01 X[#1] Q[#1]\n#1 = [#1 + 1]\no1 endwhile\n";
@@ -132,10 +191,17 @@ mod tests {
         assert_eq!(items.len(), 1);
         assert_eq!((items[0].line, items[0].column), (1, 1));
         assert!(items[0].what.contains("not defined"), "{items:?}");
-        let long = format!("G01 X1 ({})", "A".repeat(MAX_LINE));
+        // A long comment, odd characters in it, a * in it: read as
+        // nothing, by run and check alike; words longer than the device
+        // takes are refused.
+        let max = core_nostd::protocol::framing::MAX_LINE;
+        let long = format!("G00 X1 ({}) (\u{e9}\u{12}*****)", "A".repeat(max));
+        assert!(check(&long).is_empty(), "{:?}", check(&long));
+        let words = format!("G00 X1{}", " N1".repeat(max / 3));
+        assert_eq!(check(&words)[0].what, format!("longer than {max} bytes"));
         assert_eq!(
-            check(&long)[0].what,
-            format!("line longer than {MAX_LINE} bytes")
+            check("G00 X1 \u{e9}")[0].what,
+            "control or non-ASCII byte in request"
         );
     }
 

@@ -663,6 +663,15 @@ fn check(file: &std::path::Path, dialect: &str) -> Result<ExitCode, Box<dyn std:
     for i in &items {
         println!("{}:{}:{}: {}", file.display(), i.line, i.column, i.what);
     }
+    for w in host_sim::check::warnings_in(&text, dialect) {
+        println!(
+            "{}:{}:{}: warning: {}",
+            file.display(),
+            w.line,
+            w.column,
+            w.what
+        );
+    }
     if items.is_empty() {
         println!("{}: every line is one the device reads", file.display());
         Ok(ExitCode::SUCCESS)

@@ -545,7 +545,8 @@ fn run_pass(
                 .push(mark("ERR SYNTAX not a G-code line".into()));
             continue;
         }
-        let reply = final_reply(&dev.request(line));
+        let replies = dev.request(line);
+        let reply = final_reply(&replies);
         if let Some(t) = trace.as_mut() {
             t.take(&mut dev);
         }
@@ -561,7 +562,19 @@ fn run_pass(
             continue;
         }
         let nose = tool.nose(&dev);
-        for m in dev.device().session().last_moves() {
+        let mut moves: Vec<core_nostd::comp::Move> =
+            dev.device().session().last_moves().iter().copied().collect();
+        // A request that ran many blocks (a turning cycle): its moves from
+        // its DATA lines.
+        let data = crate::program::data_moves(
+            replies.join("\r\n").as_bytes(),
+            dev.device().session().config().diam,
+            at,
+        );
+        if data.len() != moves.len() {
+            moves = data;
+        }
+        for m in &moves {
             let s = Segment {
                 from: at,
                 to: m.to,
@@ -590,18 +603,14 @@ fn run_pass(
 /// the tool-tip path, the programmed contour, the nose centre, the
 /// refusals, and with a zoom window the steps near it.
 pub fn trace(text: &str, options: &Options, setup: &[(usize, &str)]) -> Paths {
-    let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
-        match crate::expand::expand(text, options.program.dialect) {
-            Ok(lines) => lines.into_iter().map(|l| (l.source - 1, l.text)).collect(),
-            Err(e) => {
-                return Paths {
-                    expand_error: Some(e),
-                    ..Paths::default()
-                }
+    let lines = match crate::program::program_lines(text, options.program.dialect) {
+        Ok(lines) => lines,
+        Err(e) => {
+            return Paths {
+                expand_error: Some(e),
+                ..Paths::default()
             }
         }
-    } else {
-        text.lines().map(str::to_owned).enumerate().collect()
     };
     // The steps are kept over a square about the window wide enough for
     // any picture the window is fitted into.
@@ -2250,7 +2259,7 @@ mod tests {
 
     #[test]
     fn plot_marks_refused_lines_where_the_tool_stood() {
-        let program = "G21 G18\nG00 X20 Z2\nG01 Z-10 F100\nG71 U1 R.5\nG01 X30\n";
+        let program = "G21 G18\nG00 X20 Z2\nG01 Z-10 F100\nG74 R1\nG01 X30\n";
         let paths = trace(program, &options(Dialect::Fanuc, None), &[]);
         assert_eq!(paths.refused.len(), 1);
         let m = &paths.refused[0];
@@ -2271,7 +2280,7 @@ mod tests {
         assert!(plot.svg.contains(">line 4</text>"));
         assert!(plot
             .svg
-            .contains("4: VALUE G71 canned cycles not supported"));
+            .contains("4: VALUE G74 canned cycles not supported"));
     }
 
     #[test]

@@ -34,6 +34,9 @@ pub struct Refused {
 /// What running a program came to.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Report {
+    /// For each of [`Report::refused`], its place in [`program_lines`]
+    /// (from 0): which expanded block it was.
+    pub refused_at: Vec<usize>,
     /// G-code lines the device ran.
     pub blocks: usize,
     /// The lines it refused.
@@ -171,6 +174,51 @@ impl Io for Tally {
     }
 }
 
+/// The moves of a request's `DATA G0n X Z [I K]` lines (X a diameter
+/// when `diam`), in ångström, from `at`.
+pub fn data_moves(out: &[u8], diam: bool, mut at: [i64; 2]) -> Vec<core_nostd::comp::Move> {
+    let text = String::from_utf8_lossy(out);
+    let mut moves = Vec::new();
+    for line in text.split("\r\n") {
+        let Some(rest) = line.strip_prefix("DATA G0") else {
+            continue;
+        };
+        let body = rest.rsplit_once('*').map_or(rest, |(b, _)| b);
+        let mut words = body.split(' ');
+        let g: u8 = words.next().and_then(|w| w.parse().ok()).unwrap_or(0);
+        let (mut x, mut z, mut i, mut k) = (None, None, None, None);
+        let a = |v: &str| Length::from_mm_str(v).ok().map(Length::as_angstrom);
+        for w in words {
+            match w.split_at_checked(1) {
+                Some(("X", v)) => x = a(v).map(|v| if diam { v / 2 } else { v }),
+                Some(("Z", v)) => z = a(v),
+                Some(("I", v)) => i = a(v),
+                Some(("K", v)) => k = a(v),
+                _ => {}
+            }
+        }
+        let to = [x.unwrap_or(at[0]), z.unwrap_or(at[1])];
+        let kind = match g {
+            0 | 1 => MoveKind::Line { rapid: g == 0 },
+            _ => MoveKind::Arc {
+                centre: [at[0] + i.unwrap_or(0), at[1] + k.unwrap_or(0)],
+                dir: if g == 3 {
+                    core_nostd::arc::ArcDir::Ccw
+                } else {
+                    core_nostd::arc::ArcDir::Cw
+                },
+            },
+        };
+        moves.push(core_nostd::comp::Move {
+            to,
+            kind,
+            origin: Origin::Current,
+        });
+        at = to;
+    }
+    moves
+}
+
 /// Sends one request; the final reply line without its checksum.
 fn request(dev: &mut Device, io: &mut Tally, line: &str) -> String {
     io.out.clear();
@@ -212,7 +260,9 @@ pub fn setup_lines(text: &str) -> Vec<(usize, &str)> {
 
 /// The lines the device is sent, each with its line index in the file
 /// (from 0): the file's own lines, or its macros, subprograms and
-/// parameters expanded when it has any.
+/// parameters expanded when it has any; each as [`device_text`] makes it.
+/// `run`, `check`, `plot`, `send` and `tape` all read a program through
+/// here, so they read every line one way.
 ///
 /// # Errors
 /// Why the program cannot be expanded.
@@ -220,13 +270,60 @@ pub fn program_lines(
     text: &str,
     dialect: Dialect,
 ) -> Result<Vec<(usize, String)>, crate::expand::ExpandError> {
-    if crate::expand::needs_expansion(text) {
-        Ok(crate::expand::expand(text, dialect)?
+    let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
+        crate::expand::expand(text, dialect)?
             .into_iter()
             .map(|l| (l.source - 1, l.text))
-            .collect())
+            .collect()
     } else {
-        Ok(text.lines().map(str::to_owned).enumerate().collect())
+        text.lines().map(str::to_owned).enumerate().collect()
+    };
+    Ok(lines
+        .into_iter()
+        .map(|(i, l)| (i, device_text(&l)))
+        .collect())
+}
+
+/// A program line as it goes over the link: the CR of a CRLF file gone;
+/// inside comments (`( … )`, `;` to the end) every character the link does
+/// not carry as text (outside printable ASCII: a UTF-8 letter, a tape
+/// control character, and the bytes 0x80–0x82 the link reserves for its
+/// real-time commands) replaced by `?`; and when the line would still be
+/// longer than the device's 120 bytes, its comments left out. Comments are
+/// never read, so nothing the device does changes; outside them the text
+/// is sent as written (and refused there if it is not G-code).
+pub fn device_text(raw: &str) -> String {
+    let line = raw.strip_suffix('\r').unwrap_or(raw);
+    let mut out = String::with_capacity(line.len());
+    let mut words = String::with_capacity(line.len());
+    let (mut paren, mut rest) = (false, false);
+    for c in line.chars() {
+        let comment = rest || paren || c == '(' || c == ';';
+        if comment {
+            out.push(if c == '\t' || (' '..='~').contains(&c) {
+                c
+            } else {
+                '?'
+            });
+        } else {
+            out.push(c);
+            words.push(c);
+        }
+        if rest {
+            continue;
+        }
+        if paren {
+            paren = c != ')';
+        } else if c == '(' {
+            paren = true;
+        } else if c == ';' {
+            rest = true;
+        }
+    }
+    if out.len() > core_nostd::protocol::framing::MAX_LINE {
+        words.trim_end().to_string()
+    } else {
+        out
     }
 }
 
@@ -319,10 +416,12 @@ fn run_inner(
             report
                 .refused
                 .push(refuse("ERR SYNTAX not a G-code line".into()));
+            report.refused_at.push(seq);
             continue;
         }
         let reply = request(&mut dev, &mut io, line);
         if !reply.starts_with("OK") {
+            report.refused_at.push(seq);
             report.refused.push(refuse(reply));
             continue;
         }
@@ -361,7 +460,14 @@ fn run_inner(
         }
         // The blocks this request sent (none for a block without motion,
         // or one whose motion waits for the next block).
-        let moves = dev.session().last_moves().clone();
+        let mut moves: Vec<core_nostd::comp::Move> =
+            dev.session().last_moves().iter().copied().collect();
+        // A request that ran many blocks (a turning cycle's roughing, a
+        // G70's profile): its moves from its DATA lines, one per block.
+        let data = data_moves(&io.out, !options.radius, at);
+        if data.len() != moves.len() {
+            moves = data;
+        }
         for m in &moves {
             let (line, seq) = match m.origin {
                 Origin::Previous => motion_block,
@@ -535,7 +641,7 @@ mod tests {
         let program = "%\nO1000\nG21 G18 G98\nG00 X40. Z2.\n#100 = 0\n\
                        WHILE [#100 LT 2] DO1\nG01 X[38. - #100 * 2] Z0 F200.\n\
                        #100 = #100 + 1\nEND1\nM98 P2000 L2\nM30\n\
-                       O2000\nG00 W-5.\nG71 U1.\nM99\n%\n";
+                       O2000\nG00 W-5.\nG74 R1.\nM99\n%\n";
         let r = run(program, FANUC);
         assert_eq!(
             r.trace,
@@ -558,13 +664,13 @@ mod tests {
 
     #[test]
     fn refusals_are_listed_and_the_rest_runs() {
-        let r = run("G00 X10\nG71 U2 R.5\nMOVE X=1\nG00 X20\n", FANUC);
+        let r = run("G00 X10\nG74 R1\nMOVE X=1\nG00 X20\n", FANUC);
         assert_eq!(
             r.refused,
             [
                 Refused {
                     line: 2,
-                    reply: "ERR VALUE G71 canned cycles not supported".into()
+                    reply: "ERR VALUE G74 canned cycles not supported".into()
                 },
                 Refused {
                     line: 3,

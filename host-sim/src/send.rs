@@ -309,19 +309,11 @@ impl Plan {
         let _ = dev.request("SYNC");
         dev.take_events();
 
-        let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
-            crate::expand::expand(text, options.dialect)
-                .map_err(|e| format!("{e}"))?
-                .into_iter()
-                .map(|l| (l.source, l.text))
-                .collect()
-        } else {
-            text.lines()
-                .map(|l| l.trim_end_matches('\r').to_owned())
-                .enumerate()
-                .map(|(i, l)| (i + 1, l))
-                .collect()
-        };
+        let lines: Vec<(usize, String)> = crate::program::program_lines(text, options.dialect)
+            .map_err(|e| format!("{e}"))?
+            .into_iter()
+            .map(|(i, l)| (i + 1, l))
+            .collect();
         let mut events = 0u64;
         for (source, raw) in lines {
             if raw.trim().is_empty() {

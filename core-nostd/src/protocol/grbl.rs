@@ -425,6 +425,14 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         } else if body.starts_with(b"!RESET") {
             let running = value(body, b"OF").is_some_and(|v| v != b"0");
             self.reset = Some(running);
+        } else if let Some(text) = body.strip_prefix(b"DATA MSG ") {
+            // What the operator must do at a stop (a gear range, the
+            // machine's own M code): grbl's feedback message.
+            let mut l = ReplyLine::new();
+            l.push_bytes(b"[MSG:");
+            l.push_bytes(text);
+            l.push_bytes(b"]");
+            self.inner.send(finish(&mut l));
         }
         // `DATA` lines and the rest: not grbl's.
     }

@@ -108,77 +108,79 @@ impl Default for Config {
 /// The protocol state of one device.
 #[derive(Clone, Debug)]
 pub struct Session {
-    cfg: Config,
+    pub(super) cfg: Config,
     /// Exact commanded X (radius) and Z in machine coordinates (since the
     /// machine zero: power-on or `ZERO`).
-    cmd: [Length; 2],
+    pub(super) cmd: [Length; 2],
     /// Position registers; always `Q(cmd / price)` per axis.
-    pos: ImpulsePoint,
+    pub(super) pos: ImpulsePoint,
     /// Step/dir output timing.
-    drive: DriveTiming,
+    pub(super) drive: DriveTiming,
     /// Modal G-code state.
-    modal: Modal,
+    pub(super) modal: Modal,
     /// The spindle, the coolant, the tool named.
-    aux: Aux,
+    pub(super) aux: Aux,
     /// The dialect G-code lines are read in (`OPT DIALECT=`).
-    dialect: Dialect,
+    pub(super) dialect: Dialect,
     /// Work offsets and the tool table.
-    offsets: Offsets,
+    pub(super) offsets: Offsets,
     /// Which of them are in effect.
-    sel: Selection,
+    pub(super) sel: Selection,
     /// The programmed contour point in work coordinates: where the last
     /// G-code block ended, as written. `cmd` less the offsets in effect,
     /// except while nose compensation is on or until the next move after an
     /// offset change.
-    prog: [Length; 2],
+    pub(super) prog: [Length; 2],
     /// Nose radius compensation.
-    contour: Contour,
+    pub(super) contour: Contour,
     /// Feed override, percent (grbl's real-time 0x90–0x94): scales every
     /// G-code feed read from now on.
-    feed_override: u8,
+    pub(super) feed_override: u8,
     /// Spindle override, percent (grbl's 0x99–0x9D): scales the spindle
     /// speed commanded, and with it feeds per revolution.
-    spindle_override: u8,
+    pub(super) spindle_override: u8,
     /// The blocks the last G-code request sent.
-    last_moves: Moves,
+    pub(super) last_moves: Moves,
     /// The host's session token (`SESSION`); 0 after power-on.
-    token: u32,
+    pub(super) token: u32,
     /// The block delete switch (`OPT BDEL=`): blocks that begin with `/`
     /// are skipped while it is on.
-    block_delete: bool,
+    pub(super) block_delete: bool,
     /// The optional stop switch: `M01` stops (`OPT OPTSTOP=`).
-    optional_stop: bool,
+    pub(super) optional_stop: bool,
     /// Changes of the table, the work offsets and the stored positions.
-    generation: u32,
+    pub(super) generation: u32,
     /// Check mode (grbl's `$C`): the registers where it began, put back
     /// when it ends.
-    checking: Option<ImpulsePoint>,
+    pub(super) checking: Option<ImpulsePoint>,
     /// The last reset dropped motion answered and not all run.
-    reset_dropped: bool,
+    pub(super) reset_dropped: bool,
     /// The top speed of each gear range (`AUX G1=` … `G4=`), rpm.
-    gears: [Option<Length>; 4],
+    pub(super) gears: [Option<Length>; 4],
     /// The nose `G41.1`/`G42.1` gave, while its compensation is on.
-    dynamic_tool: Option<Tool>,
+    pub(super) dynamic_tool: Option<Tool>,
+    /// The turning cycles: a profile held, their modal depth and retract.
+    pub(super) cycles: super::cycles::Cycles,
     /// The id of the last request that carried one, and its final reply.
-    last_id: Option<u32>,
-    last_final: heapless::Vec<u8, REPLY_CAPACITY>,
+    pub(super) last_id: Option<u32>,
+    pub(super) last_final: heapless::Vec<u8, REPLY_CAPACITY>,
     /// The planner, the run in progress, what has been issued.
-    machine: Machine,
+    pub(super) machine: Machine,
     /// The feed of the last element given to the contour engine (the one
     /// it holds while compensation is on); `None` for a rapid.
-    element_feed: Option<Feed>,
+    pub(super) element_feed: Option<Feed>,
     /// The spindle's top speed, rpm (`AUX SMAX`): the speed at full PWM
     /// duty and a limit of every commanded speed; none when the speed is
     /// set on the machine by hand.
-    top: Option<Length>,
+    pub(super) top: Option<Length>,
     /// The wait after the spindle starts or changes speed at rest, µs
     /// (`AUX SPINUP`).
-    spinup_us: u64,
+    pub(super) spinup_us: u64,
     /// The spindle and coolant outputs as last switched at rest.
-    outputs: Outputs,
+    pub(super) outputs: Outputs,
     /// The BCK-5 tape read so far by `TAPE` requests.
     #[cfg(feature = "calc")]
-    tape: crate::calc::tape::Bck5Verifier,
+    pub(super) tape: crate::calc::tape::Bck5Verifier,
 }
 
 impl Default for Session {
@@ -261,6 +263,7 @@ impl Session {
             reset_dropped: false,
             gears: [None; 4],
             dynamic_tool: None,
+            cycles: super::cycles::Cycles::new(),
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
@@ -870,11 +873,34 @@ impl Session {
     /// contour engine (compensation off: the block itself).
     #[inline(never)]
     fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
+        if self.cycles.holding() {
+            return self.profile_line(text, io);
+        }
+        let start = self.pos;
+        let mut crc = Crc32::new();
+        let done = self.gcode_block(text, &mut crc, io)?;
+        let summary = MotionSummary::new(start, self.pos, &crc);
+        match done {
+            Block::Run => send_ok(io, Some(format_args!("{summary}"))),
+            Block::Skipped => send_ok(io, Some(format_args!("{summary} SKIP=BDEL"))),
+        }
+        Ok(())
+    }
+
+    /// Runs one G-code block, its step events added to `crc`; answers
+    /// nothing (its caller does: one line per request). What it was.
+    pub(super) fn gcode_block<'a, I: Io>(
+        &mut self,
+        text: &str,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<Block, Refusal<'a>> {
         let b = parse(text, self.dialect, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
         if b.deleted && self.block_delete {
-            let none = MotionSummary::new(self.pos, self.pos, &Crc32::new());
-            send_ok(io, Some(format_args!("{none} SKIP=BDEL")));
-            return Ok(());
+            return Ok(Block::Skipped);
+        }
+        if let Some(cycle) = b.cycle {
+            return self.cycle_block(&b, cycle, crc, io);
         }
         let modal = self.modal.after(&b);
         // F0 (a header's, before G95) is taken; a feed move then needs a
@@ -922,7 +948,7 @@ impl Session {
                 for (h, o) in here.iter_mut().zip(off) {
                     *h = h.checked_sub(o).ok_or(Refusal::Range(RANGE_OFFSET))?;
                 }
-                let words = [b.x.map(|x| x_radius(x, diam)).transpose()?, b.z];
+                let words = [block_x(&b, diam), b.z];
                 for ((s, p), w) in offsets.shift.iter_mut().zip(here).zip(words) {
                     if let Some(w) = w {
                         *s = s
@@ -981,8 +1007,8 @@ impl Session {
         } else {
             (b.x, b.z)
         };
-        if let Some(x) = words.0 {
-            let radius = x_radius(x, diam)?;
+        if words.0.is_some() {
+            let radius = block_x(&b, diam).unwrap_or(Length::ZERO);
             let inc = modal.incremental || b.incremental_x;
             target[0] = step(here[0], radius, inc, "X beyond 99999.999999 mm")?;
         }
@@ -1109,8 +1135,8 @@ impl Session {
                     return Err(Refusal::Missing("G53 moves in G00 or G01"));
                 }
                 let mut end = self.cmd;
-                if let Some(x) = b.x {
-                    end[0] = x_radius(x, diam)?;
+                if let Some(x) = block_x(&b, diam) {
+                    end[0] = x;
                 }
                 if let Some(z) = b.z {
                     end[1] = z;
@@ -1139,7 +1165,7 @@ impl Session {
                 nose.radius,
                 TipCode::new(linuxcnc_orientation(nose.orientation)).unwrap_or(self.cfg.tip),
             )),
-            (None, Some(Compensation::Off)) => None,
+            // G40 too: the lead-out is the nose's that compensated.
             (None, _) => self.dynamic_tool,
         };
         let tool = dynamic_tool.unwrap_or_else(|| self.nose(&offsets, &sel));
@@ -1283,10 +1309,8 @@ impl Session {
         self.machine.set_spindle(outputs.rpm);
         // The DATA lines write X as this block reads it.
         self.cfg.diam = diam;
-        let start = self.pos;
-        let mut crc = Crc32::new();
         for p in &planned {
-            crc = self.run_planned(p, crc, io);
+            *crc = self.run_planned(p, *crc, io);
         }
         if let Some(end) = machine_path.last() {
             self.prog = [
@@ -1327,20 +1351,13 @@ impl Session {
             self.aux = self.aux.stopped();
             self.switch_outputs(self.outputs_for(&self.aux, self.modal.units), io);
         }
-        send_ok(
-            io,
-            Some(format_args!(
-                "{}",
-                MotionSummary::new(start, self.pos, &crc)
-            )),
-        );
-        Ok(())
+        Ok(Block::Run)
     }
 
     /// A program stop at rest (`M00`, `M01`, a gear range, a machine's M
     /// code not in its table; `code` the M code): the board waits for
     /// cycle start, a grbl link holds at rest and goes on.
-    fn program_stop<I: Io>(&mut self, code: u16, io: &mut I) {
+    pub(super) fn program_stop<I: Io>(&mut self, code: u16, io: &mut I) {
         if io.stop_holds() {
             // grbl: a hold at rest, answered now; what follows queues and
             // waits for cycle start.
@@ -1366,7 +1383,7 @@ impl Session {
 
     /// The spindle's top speed with `aux`'s gear range: `AUX SMAX` and the
     /// range's own, the lower.
-    fn top_speed(&self, aux: &Aux) -> Option<Length> {
+    pub(super) fn top_speed(&self, aux: &Aux) -> Option<Length> {
         let gear = aux.gear.and_then(|g| {
             self.gears
                 .get(usize::from(g).saturating_sub(1))
@@ -1479,7 +1496,7 @@ impl Session {
             let tool = offsets
                 .tool_offset(&sel)
                 .ok_or(Refusal::Range(RANGE_OFFSET))?;
-            let values = [b.x.map(|x| x_radius(x, diam)).transpose()?, b.z];
+            let values = [block_x(b, diam), b.z];
             let register = usize::from(set.register).saturating_sub(1);
             let work = offsets
                 .work
@@ -1503,7 +1520,7 @@ impl Session {
     /// The nose compensation uses: the register of the tool in effect
     /// (Fanuc: the offset register; ISO: the loaded tool's) when its nose
     /// is set, else the configured `RN` and `TIP`.
-    fn nose(&self, offsets: &Offsets, sel: &Selection) -> Tool {
+    pub(super) fn nose(&self, offsets: &Offsets, sel: &Selection) -> Tool {
         let register = match self.dialect {
             Dialect::Fanuc => sel.register,
             Dialect::Iso => sel.loaded,
@@ -1516,7 +1533,7 @@ impl Session {
 
     /// Plans one move from the commanded point `cmd` and registers `pos`,
     /// checking every block of it against the machine's limits.
-    fn plan_move<I: Io>(
+    pub(super) fn plan_move<I: Io>(
         &self,
         cmd: [Length; 2],
         pos: ImpulsePoint,
@@ -1561,7 +1578,7 @@ impl Session {
 
     /// Runs one planned move, sends its `DATA` line, and adds its step
     /// events to `crc`.
-    fn run_planned<I: Io>(&mut self, p: &Planned, mut crc: Crc32, io: &mut I) -> Crc32 {
+    pub(super) fn run_planned<I: Io>(&mut self, p: &Planned, mut crc: Crc32, io: &mut I) -> Crc32 {
         match *p {
             Planned::Line {
                 block,
@@ -1971,6 +1988,7 @@ impl Session {
     fn reset<I: Io>(&mut self, io: &mut I) {
         let (found, issued) = self.drop_motion(io);
         self.reset_dropped = found.dropped;
+        self.cycles.abandon();
         self.sel = Selection::POWER_ON;
         self.prog = self.work_point(self.cmd);
         self.modal = Modal::POWER_ON;
@@ -2030,7 +2048,7 @@ impl Session {
 
     /// `feed` under the overrides: the feed's, and per revolution the
     /// spindle's too (the spindle turns at the overridden speed).
-    fn overridden(&self, feed: Feed, mode: FeedMode) -> Feed {
+    pub(super) fn overridden(&self, feed: Feed, mode: FeedMode) -> Feed {
         let spindle = if mode == FeedMode::PerRev {
             self.spindle_override
         } else {
@@ -2244,9 +2262,13 @@ impl Session {
         } else if action.is_some() || n.is_some() {
             return Err(Refusal::Missing("DO and N need M: the code"));
         }
+        let listing = m.is_none();
         let mut count = 0;
         for (code, action) in self.offsets.mcodes.entries() {
             count += 1;
+            if !listing {
+                continue;
+            }
             let m = code / 10;
             match action {
                 MAction::Stop => {}
@@ -2484,7 +2506,7 @@ const _: () = assert!(MAX_POSITION == 999_999_999 && MAX_BLOCK_IMPULSES == 1_000
 
 /// One output block, planned and checked: ready to run without a check that
 /// could fail.
-enum Planned {
+pub(super) enum Planned {
     Line {
         block: LinearBlock,
         end: [Length; 2],
@@ -2503,7 +2525,7 @@ enum Planned {
 
 impl Planned {
     /// The commanded point after it.
-    const fn end(&self) -> [Length; 2] {
+    pub(super) const fn end(&self) -> [Length; 2] {
         match self {
             Planned::Line { end, .. } => *end,
             Planned::Arc { points, .. } => points.end,
@@ -2511,7 +2533,7 @@ impl Planned {
     }
 
     /// The registers after it.
-    fn registers(&self) -> ImpulsePoint {
+    pub(super) fn registers(&self) -> ImpulsePoint {
         match self {
             Planned::Line { block, .. } => block.to(),
             Planned::Arc { to, .. } => *to,
@@ -2519,16 +2541,25 @@ impl Planned {
     }
 }
 
+/// What a G-code block was.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Block {
+    /// Run (moved or not).
+    Run,
+    /// Skipped by block delete.
+    Skipped,
+}
+
 /// `NX= NZ= PX= PZ= SEQ=`: the impulses a request issued, the registers
 /// after it, and the CRC of its step events.
-struct MotionSummary {
+pub(super) struct MotionSummary {
     from: ImpulsePoint,
     to: ImpulsePoint,
     seq: u32,
 }
 
 impl MotionSummary {
-    fn new(from: ImpulsePoint, to: ImpulsePoint, crc: &Crc32) -> Self {
+    pub(super) fn new(from: ImpulsePoint, to: ImpulsePoint, crc: &Crc32) -> Self {
         MotionSummary {
             from,
             to,
@@ -2554,7 +2585,7 @@ impl fmt::Display for MotionSummary {
 
 /// `centre − start` in ångström: the I and K words of an arc.
 /// A point (Å) moved by the offsets.
-fn shifted(p: [i64; 2], off: [Length; 2]) -> Result<[i64; 2], Refusal<'static>> {
+pub(super) fn shifted(p: [i64; 2], off: [Length; 2]) -> Result<[i64; 2], Refusal<'static>> {
     let add = |axis: usize| {
         Length::from_angstrom(p[axis])
             .and_then(|l| l.checked_add(off[axis]))
@@ -2591,6 +2622,16 @@ fn to_machine(work: [Length; 2], off: [Length; 2]) -> Result<[Length; 2], Refusa
 const RANGE_OFFSET: &str = "position with its offsets beyond 99999.999999 mm";
 
 /// An X word as a radius: halved when it is a diameter.
+/// A block's X word as a radius: half of it, rounded once from the number
+/// as written, when it is a diameter.
+pub(super) fn block_x(b: &crate::gcode::Block, diam: bool) -> Option<Length> {
+    if diam {
+        b.x_half
+    } else {
+        b.x
+    }
+}
+
 fn x_radius(word: Length, diam: bool) -> Result<Length, Refusal<'static>> {
     if diam {
         word.exact_half()
@@ -2941,18 +2982,18 @@ fn parse_rate(
 }
 
 /// A commanded point as the planner takes it.
-fn point_q32(p: [Length; 2]) -> Point {
+pub(super) fn point_q32(p: [Length; 2]) -> Point {
     [q32(p[0]), q32(p[1])]
 }
 
 /// The protocol's outputs as the motion pipeline's step sink.
-struct Sink<'a, I: Io> {
+pub(super) struct Sink<'a, I: Io> {
     io: &'a mut I,
     drive: DriveTiming,
 }
 
 impl<'a, I: Io> Sink<'a, I> {
-    fn new(io: &'a mut I, drive: DriveTiming) -> Self {
+    pub(super) fn new(io: &'a mut I, drive: DriveTiming) -> Self {
         Sink { io, drive }
     }
 }

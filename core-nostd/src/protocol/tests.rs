@@ -120,7 +120,7 @@ fn every_error_code_is_reached_and_changes_nothing() {
         ("G04 P-1", "ERR VALUE P"),
         ("G99 F1", "ERR VALUE G99 belongs to the FANUC dialect"),
         ("OPT DIALECT=HAAS", "ERR VALUE DIALECT"),
-        ("G01 X1.1234567", "ERR VALUE X"),
+        ("G01 X100000 F10", "ERR VALUE X"),
         ("G01 X30 I1", "ERR SYNTAX"),
         ("G02 X30 Z-7", "ERR SYNTAX"),
         ("G02 X30 Z-7 I1 R2", "ERR SYNTAX"),
@@ -1593,4 +1593,261 @@ fn g45_to_g48_lengthen_and_shorten_the_move_by_an_offset_register() {
     assert!(last(&mut iso, "G01 Z1 D2").starts_with(
         "ERR SYNTAX D only with G96 (the spindle speed limit) or G45 to G48 (the offset register)"
     ));
+}
+
+/// What a machine's M code and a program stop did, besides the replies.
+#[derive(Default)]
+struct MPanel {
+    lines: Lines,
+    outputs: Vec<(u8, bool)>,
+    waits: Vec<(u8, bool)>,
+    stops: Vec<u16>,
+}
+
+impl Io for MPanel {
+    fn send(&mut self, line: &[u8]) {
+        self.lines.send(line);
+    }
+    fn user_output(&mut self, n: u8, on: bool) {
+        self.outputs.push((n, on));
+    }
+    fn wait_input(&mut self, n: u8, level: bool) {
+        self.waits.push((n, level));
+    }
+    fn program_stop(&mut self, code: u16) {
+        self.stops.push(code);
+    }
+}
+
+fn panel(dev: &mut Device, line: &str) -> MPanel {
+    let mut p = MPanel::default();
+    dev.receive_bytes(std::format!("{line}\n").as_bytes(), &mut p);
+    p
+}
+
+/// The run time `SYNC` reports of `lines`.
+fn run_ticks(lines: &[&str]) -> u64 {
+    let mut dev = Device::new();
+    for l in lines {
+        let r = ask(&mut dev, std::format!("{l}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{l}: {r:?}");
+    }
+    let sync = ask1(&mut dev, "SYNC");
+    sync.split(" T=")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap()
+}
+
+/// Header words of posts for mills and lathes alike: G17 as the plane
+/// until G18, path control, G80, F0 before G95; each bad form refused by
+/// name, nothing changed.
+#[test]
+fn header_words_real_programs_hold() {
+    let mut dev = Device::new();
+    for line in ["G17 G90 G21", "G80 G40 G64 P0.01", "G61.1", "G64", "F0"] {
+        assert!(ask1(&mut dev, line).starts_with("OK"), "{line}");
+    }
+    assert!(ask(&mut dev, b"G00 X20 Z2\n")[1].starts_with("OK NX=2000 "));
+    let before = state(&mut dev);
+    for (line, want) in [
+        (
+            "G02 X24 Z0 R2 F100",
+            "ERR GEOMETRY in G17 (XY): a lathe turns arcs and compensates in G18 (ZX)",
+        ),
+        (
+            "G19 G42 G01 X24 F100",
+            "ERR GEOMETRY in G19 (YZ): a lathe turns arcs and compensates in G18 (ZX)",
+        ),
+        (
+            "G01 X24 Z0",
+            "ERR VALUE F 0: a feed move needs a feed above 0",
+        ),
+        ("G64 P11", "ERR VALUE P a G64 tolerance of 0 to 10 mm"),
+        ("G64 P-1", "ERR VALUE P a tolerance is 0 or more"),
+        ("G61 G64", "ERR SYNTAX address given twice: G"),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        assert_eq!(state(&mut dev), before, "{line}");
+    }
+    // In G18 the arc runs.
+    let r = ask(&mut dev, b"G18 G02 X24 Z0 R2 F100\n");
+    assert!(r.last().unwrap().starts_with("OK NX="), "{r:?}");
+}
+
+/// G61 joins blocks at rest; G64 P at the speed its tolerance allows (a
+/// larger one, faster); G64 alone at the limits' JD.
+#[test]
+fn path_control_decides_how_blocks_join() {
+    let corners = |mode: &str| {
+        run_ticks(&[
+            "G00 X0 Z0",
+            mode,
+            "G01 X10 Z-10 F2000",
+            "X10 Z-20",
+            "X20 Z-30",
+            "X20 Z-40",
+        ])
+    };
+    let exact = corners("G61");
+    let blend = corners("G64");
+    let loose = corners("G64 P1");
+    let tight = corners("G64 P0.0001");
+    assert!(
+        exact > tight && tight > blend && blend > loose,
+        "{exact} {tight} {blend} {loose}"
+    );
+    // Collinear blocks: exact stop brakes between them, blending does not.
+    let straight = |mode: &str| run_ticks(&[mode, "G01 Z-10 F2000", "Z-20", "Z-30"]);
+    assert!(straight("G61") > straight("G64"));
+    assert_eq!(straight("G64"), straight("G61.1"));
+}
+
+/// M41–M44: a stop that names the range (the gearbox shifted by hand), the
+/// range's top speed limiting the spindle.
+#[test]
+fn a_gear_range_stops_to_be_shifted_and_limits_the_speed() {
+    let mut dev = Device::new();
+    assert_eq!(
+        ask1(&mut dev, "GEAR N=1 TOP=500"),
+        "OK RANGE=- G1=500.0000 G2=0.0000 G3=0.0000 G4=0.0000"
+    );
+    let p = panel(&mut dev, "M41 S1000 M03");
+    assert_eq!(p.stops, [41]);
+    assert_eq!(
+        p.lines.out[0],
+        "DATA MSG M41: shift the gearbox to range 1 (up to 500.0000 rpm), then cycle start"
+    );
+    assert!(
+        ask1(&mut dev, "AUX").contains(" S=500.0000 "),
+        "{}",
+        ask1(&mut dev, "AUX")
+    );
+    let p = panel(&mut dev, "M42");
+    assert_eq!(p.stops, [42]);
+    assert!(ask1(&mut dev, "AUX").contains(" S=1000.0000 "));
+    assert!(ask1(&mut dev, "GEAR").starts_with("OK RANGE=2 "));
+    for (line, want) in [
+        (
+            "GEAR N=5 TOP=100",
+            "ERR VALUE N must be 1 to 4 (M41 to M44)",
+        ),
+        (
+            "GEAR N=1",
+            "ERR SYNTAX GEAR sets a range with N and TOP together",
+        ),
+        ("M41 M42", "ERR SYNTAX address given twice: M"),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+    }
+}
+
+/// The machine's own M codes: one not in the table stops with a message
+/// naming it, as M00; the table sets it to do nothing, switch a user output
+/// or wait for a user input; bad forms refused, the table unchanged.
+#[test]
+fn machine_m_codes_do_what_the_table_says() {
+    let mut dev = Device::new();
+    let p = panel(&mut dev, "G00 X10 M16");
+    assert_eq!(p.stops, [16]);
+    assert_eq!(
+        p.lines.out[0],
+        "DATA MSG M16: the machine's own M code; do it by hand, then cycle start"
+    );
+    assert!(p.lines.out.last().unwrap().starts_with("OK NX="));
+    assert_eq!(ask1(&mut dev, "MCODE M=16 DO=NONE"), "OK CODES=1");
+    assert_eq!(ask1(&mut dev, "MCODE M=31 DO=ON N=2"), "OK CODES=2");
+    assert_eq!(ask1(&mut dev, "MCODE M=33 DO=HIGH N=4"), "OK CODES=3");
+    let list = ask(&mut dev, b"MCODE\n");
+    assert_eq!(
+        list,
+        [
+            "DATA M16 DO=NONE",
+            "DATA M31 DO=ON N=2",
+            "DATA M33 DO=HIGH N=4",
+            "OK CODES=3"
+        ]
+    );
+    let p = panel(&mut dev, "M16");
+    assert!(p.stops.is_empty() && p.outputs.is_empty());
+    let p = panel(&mut dev, "M31");
+    assert_eq!(p.outputs, [(2, true)]);
+    let p = panel(&mut dev, "M33");
+    assert_eq!(p.waits, [(4, true)]);
+    // Back to the default: a stop.
+    assert_eq!(ask1(&mut dev, "MCODE M=16 DO=STOP"), "OK CODES=2");
+    assert_eq!(panel(&mut dev, "M16").stops, [16]);
+    let before = ask(&mut dev, b"MCODE\n");
+    for (line, want) in [
+        (
+            "MCODE M=3 DO=NONE",
+            "ERR VALUE M is one the device runs itself (M00-M09, M30, M41-M44, M98, M99)",
+        ),
+        (
+            "MCODE M=16 DO=BLINK",
+            "ERR VALUE DO must be STOP, NONE, ON, OFF, HIGH or LOW",
+        ),
+        (
+            "MCODE M=16 DO=ON",
+            "ERR SYNTAX ON, OFF, HIGH and LOW need N: 1 to 4",
+        ),
+        (
+            "MCODE M=16 DO=ON N=5",
+            "ERR VALUE N must be 1 to 4 (a user output or input)",
+        ),
+        (
+            "MCODE M=16 DO=NONE N=1",
+            "ERR SYNTAX N only with ON, OFF, HIGH or LOW",
+        ),
+        ("MCODE DO=NONE", "ERR SYNTAX DO and N need M: the code"),
+        (
+            "MCODE M=1000",
+            "ERR VALUE M must be a whole M code 0 to 999",
+        ),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+    }
+    assert_eq!(ask(&mut dev, b"MCODE\n"), before);
+    // The table holds 16.
+    for m in 100..114 {
+        assert!(ask1(&mut dev, &std::format!("MCODE M={m} DO=NONE")).starts_with("OK"));
+    }
+    assert_eq!(
+        ask1(&mut dev, "MCODE M=200 DO=NONE"),
+        "ERR RANGE the table holds 16 M codes"
+    );
+}
+
+/// LinuxCNC's G41.1/G42.1: the nose in the block, its orientation mirrored
+/// into the device's tip code; the same path as the table's nose.
+#[test]
+fn dynamic_compensation_takes_the_nose_from_the_block() {
+    let contour = |setup: &str, on: &str| {
+        let mut dev = Device::new();
+        assert!(ask1(&mut dev, setup).starts_with("OK"));
+        let mut out = Vec::new();
+        for l in [
+            "G00 X20 Z5",
+            on,
+            "X28",
+            "X48 Z-10",
+            "Z-30",
+            "G40 G00 X60 Z5",
+        ] {
+            let r = ask(&mut dev, std::format!("{l}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{l}: {r:?}");
+            out.extend(r);
+        }
+        out
+    };
+    let table = contour("CFG RN=0.4 TIP=3", "G42 G01 Z0 F100");
+    let dynamic = contour("CFG RN=0 TIP=0", "G42.1 D0.8 L2 G01 Z0 F100");
+    assert_eq!(table, dynamic);
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "G42.1 L2 G01 Z0 F100")
+        .starts_with("ERR SYNTAX G41.1 and G42.1 need D: the nose diameter"));
 }

@@ -1,0 +1,616 @@
+//! Turning cycles on the session (`docs/cycles.md`): Fanuc's two-block and
+//! Haas' one-block `G71` (turning) and `G72` (facing) roughing from a
+//! profile held as it streams in, and `G70` finishing along it.
+//!
+//! The blocks `P` … `Q` that follow a roughing block are its profile: the
+//! device holds them (each answered `HELD=`, nothing moves), checks them,
+//! and when block `Q` arrives roughs the stock down to the profile plus
+//! its allowances in one go, that block's reply summing the motion. A
+//! profile block the cycle cannot take is refused naming it, and so is
+//! every block after it up to `Q`: none of them runs, nothing has moved.
+//! The profile stays held for `G70 P Q`, which runs its blocks as written
+//! (feeds, nose compensation) and returns to its start point.
+
+use super::session::{block_x, shifted, Block, Planned, Refusal, Session};
+use super::Io;
+use crate::arc::{centre_from_radius, ArcDir};
+use crate::comp::{Move, MoveKind, Origin};
+use crate::crc32::Crc32;
+use crate::cycle::{Along, CycleError, Roughing, Segment, Step, PROFILE_BLOCKS};
+use crate::gcode::{parse, CycleKind, CycleWords, Motion};
+use crate::interp::path_feed;
+use crate::length::Length;
+use core::fmt::Write;
+
+/// The retract until a first block sets one: 0.5 mm.
+const HALF_MM: Length = match Length::from_um(500) {
+    Some(l) => l,
+    None => Length::ZERO,
+};
+
+/// Bytes of profile text held (comments left out).
+pub const ARENA: usize = 4096;
+
+/// What the cycles keep between blocks.
+#[derive(Clone, Debug)]
+pub struct Cycles {
+    /// Fanuc's first block: the depth of cut (`G71 U`, `G72 W`) and the
+    /// retract (`R`), modal.
+    depth: Option<Length>,
+    retract: Length,
+    mode: Mode,
+    /// The profile's blocks as text, end to end, and where each ends.
+    text: heapless::Vec<u8, ARENA>,
+    ends: heapless::Vec<u16, PROFILE_BLOCKS>,
+    /// Its elements from its first point, in work coordinates (X on the
+    /// radius), and that point.
+    segments: heapless::Vec<Segment, PROFILE_BLOCKS>,
+    first: [i64; 2],
+    /// The point the profile was read from (its first block moves from it).
+    from: [i64; 2],
+    /// The motion mode in force while it was read.
+    motion: Motion,
+    /// `P` and `Q` of the profile held whole.
+    held: Option<(u32, u32)>,
+}
+
+/// Whether blocks are being held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    Idle,
+    /// A roughing's profile streams in.
+    Holding(Pending),
+    /// A refused profile: its blocks up to `Q` are refused too.
+    Refusing(u32, u32),
+}
+
+/// A roughing waiting for its profile.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Pending {
+    kind: CycleKind,
+    p: u32,
+    q: u32,
+    /// Allowances: X (on the radius) and Z, Å.
+    allow: [i64; 2],
+    depth: i64,
+    retract: i64,
+    feed: Option<Length>,
+}
+
+impl Default for Cycles {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Cycles {
+    /// Nothing held; a retract of 0.5 mm until a first block sets one.
+    pub const fn new() -> Cycles {
+        Cycles {
+            depth: None,
+            retract: HALF_MM,
+            mode: Mode::Idle,
+            text: heapless::Vec::new(),
+            ends: heapless::Vec::new(),
+            segments: heapless::Vec::new(),
+            first: [0; 2],
+            from: [0; 2],
+            motion: Motion::Rapid,
+            held: None,
+        }
+    }
+
+    /// Whether the blocks streaming in are a profile's (held, or refused
+    /// with it).
+    pub fn holding(&self) -> bool {
+        !matches!(self.mode, Mode::Idle)
+    }
+
+    /// A reset: a profile being read is dropped (the one held whole
+    /// stays).
+    pub fn abandon(&mut self) {
+        if self.holding() {
+            self.mode = Mode::Idle;
+            self.held = None;
+            self.clear();
+        }
+    }
+
+    fn clear(&mut self) {
+        self.text.clear();
+        self.ends.clear();
+        self.segments.clear();
+    }
+
+    /// The held blocks' texts, in order.
+    fn lines(&self) -> impl Iterator<Item = &str> {
+        let mut start = 0usize;
+        self.ends.iter().map(move |&end| {
+            let line = self
+                .text
+                .get(start..usize::from(end))
+                .and_then(|b| core::str::from_utf8(b).ok())
+                .unwrap_or("");
+            start = usize::from(end);
+            line
+        })
+    }
+}
+
+const fn refuse_profile(why: &'static str) -> Refusal<'static> {
+    Refusal::Missing(why)
+}
+
+impl Session {
+    /// A cycle block: `G71`/`G72` reads its profile from the blocks that
+    /// follow (Fanuc's first block only sets the depth and the retract);
+    /// `G70` finishes along the profile held.
+    pub(super) fn cycle_block<'a, I: Io>(
+        &mut self,
+        b: &crate::gcode::Block,
+        c: CycleWords,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<Block, Refusal<'a>> {
+        if self.contour.active() {
+            return Err(Refusal::Busy("a turning cycle with nose compensation on (G40 first)"));
+        }
+        if b.motion.is_some() || b.x.is_some() || b.z.is_some() || b.tool.is_some() {
+            return Err(Refusal::Missing(
+                "a cycle block takes no motion, axis or tool words: put them on their own line",
+            ));
+        }
+        let diam = b.diameter.unwrap_or(self.cfg.diam);
+        let radius = |l: Length| {
+            let a = l.as_angstrom();
+            if diam {
+                crate::length::div_round_half_away(a, 2)
+            } else {
+                a
+            }
+        };
+        self.last_moves = crate::comp::Moves::new();
+        if c.kind == CycleKind::Finish {
+            return self.finish_cycle(b, c, crc, io).map(|()| Block::Run);
+        }
+        let (p, q) = match (c.p, c.q) {
+            (None, None) => {
+                // Fanuc's first block: the depth and the retract.
+                let depth = match c.kind {
+                    CycleKind::Face => c.w,
+                    _ => c.u,
+                };
+                if c.d.is_some() || (c.kind == CycleKind::Face && c.u.is_some()) {
+                    return Err(Refusal::Missing(
+                        "the first of the two blocks takes the depth (G71 U, G72 W) and the retract R",
+                    ));
+                }
+                let depth = depth.ok_or(Refusal::Missing(
+                    "G71 U (G72 W) and R: the depth of cut and the retract, or P and Q",
+                ))?;
+                if depth.as_angstrom() <= 0 {
+                    return Err(Refusal::Value("U", "the depth of cut must be above 0"));
+                }
+                if c.r.is_some_and(|r| r.as_angstrom() < 0) {
+                    return Err(Refusal::Value("R", "the retract is 0 or more"));
+                }
+                self.cycles.depth = Some(depth);
+                if let Some(r) = c.r {
+                    self.cycles.retract = r;
+                }
+                return Ok(Block::Run);
+            }
+            (Some(p), Some(q)) => (p, q),
+            _ => return Err(Refusal::Missing("G71 and G72 need P and Q: the profile's blocks")),
+        };
+        let depth = c
+            .d
+            .or(self.cycles.depth)
+            .ok_or(Refusal::Missing(
+                "no depth of cut: D, or G71 U (G72 W) and R in a block before",
+            ))?;
+        if depth.as_angstrom() <= 0 {
+            return Err(Refusal::Value("D", "the depth of cut must be above 0"));
+        }
+        if let Some(f) = b.f {
+            if f.as_angstrom() <= 0 {
+                return Err(Refusal::Value("F", "the roughing feed must be above 0"));
+            }
+        }
+        let allow = [
+            c.u.map_or(0, radius),
+            c.w.map_or(0, |w| w.as_angstrom()),
+        ];
+        let retract = c.r.unwrap_or(self.cycles.retract).as_angstrom().max(0);
+        let pending = Pending {
+            kind: c.kind,
+            p,
+            q,
+            allow,
+            depth: depth.as_angstrom(),
+            retract,
+            feed: b.f,
+        };
+        let cy = &mut self.cycles;
+        cy.clear();
+        cy.held = None;
+        cy.from = [self.prog[0].as_angstrom(), self.prog[1].as_angstrom()];
+        cy.motion = self.modal.motion;
+        cy.mode = Mode::Holding(pending);
+        Ok(Block::Run)
+    }
+
+    /// A block that streams in while a profile is held or refused.
+    pub(super) fn profile_line<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Result<(), Refusal<'a>> {
+        self.last_moves = crate::comp::Moves::new();
+        let pending = match self.cycles.mode {
+            Mode::Idle => return Ok(()),
+            Mode::Refusing(p, q) => {
+                let n = parse(text, self.dialect, self.modal.units).ok().and_then(|b| b.n);
+                if n == Some(q) {
+                    self.cycles.mode = Mode::Idle;
+                }
+                let mut line = super::reply::ReplyLine::new();
+                let _ = write!(
+                    line,
+                    "ERR VALUE N inside the profile (N{p} to N{q}) of a refused cycle: not run"
+                );
+                io.send(line.finish());
+                return Ok(());
+            }
+            Mode::Holding(p) => p,
+        };
+        match self.hold(text, pending) {
+            Ok(Some(count)) => {
+                super::session::send_ok(
+                    io,
+                    Some(format_args!(
+                        "NX=0 NZ=0 PX={} PZ={} SEQ=00000000 HELD={count}",
+                        self.pos.x.get(),
+                        self.pos.z.get()
+                    )),
+                );
+                Ok(())
+            }
+            Ok(None) => {
+                // Its last block: rough now.
+                let start = self.pos;
+                let mut crc = Crc32::new();
+                match self.rough(pending, &mut crc, io) {
+                    Ok(()) => {
+                        self.cycles.mode = Mode::Idle;
+                        self.cycles.held = Some((pending.p, pending.q));
+                        let summary = super::session::MotionSummary::new(start, self.pos, &crc);
+                        super::session::send_ok(io, Some(format_args!("{summary}")));
+                        Ok(())
+                    }
+                    Err(e) => {
+                        self.cycles.mode = Mode::Idle;
+                        self.cycles.clear();
+                        Err(e)
+                    }
+                }
+            }
+            Err(e) => {
+                let n = parse(text, self.dialect, self.modal.units).ok().and_then(|b| b.n);
+                self.cycles.mode = if n == Some(pending.q) {
+                    Mode::Idle
+                } else {
+                    Mode::Refusing(pending.p, pending.q)
+                };
+                self.cycles.clear();
+                Err(e)
+            }
+        }
+    }
+
+    /// Holds one profile block: its element, its text. `Some(count)` while
+    /// more are to come, `None` once block `Q` is in.
+    fn hold(&mut self, text: &str, pending: Pending) -> Result<Option<usize>, Refusal<'static>> {
+        let b = parse(text, self.dialect, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
+        let first = self.cycles.ends.is_empty();
+        if first && b.n != Some(pending.p) {
+            return Err(refuse_profile(
+                "the profile must begin with the block numbered P",
+            ));
+        }
+        let other = b.spindle.is_some()
+            || b.coolant.is_some()
+            || b.stop.is_some()
+            || b.tool.is_some()
+            || b.dwell.is_some()
+            || b.special.is_some()
+            || b.wcs.is_some()
+            || b.set_work.is_some()
+            || b.units.is_some()
+            || b.cycle.is_some()
+            || b.position_offset.is_some()
+            || b.machine_m.is_some()
+            || b.gear.is_some()
+            || b.tool_change
+            || b.tool_offset.is_some()
+            || b.dynamic_nose.is_some()
+            || b.kind != crate::gcode::LineKind::Words;
+        if other {
+            return Err(refuse_profile(
+                "a profile block takes G00-G03, G40-G42, X Z U W I K R, F and S only",
+            ));
+        }
+        // Its element.
+        let diam = b.diameter.unwrap_or(self.cfg.diam);
+        let cy = &mut self.cycles;
+        let at = match cy.segments.last() {
+            Some(g) => g.to,
+            None if first => cy.from,
+            None => cy.first,
+        };
+        let motion = b.motion.unwrap_or(cy.motion);
+        let mut to = at;
+        if let Some(x) = block_x(&b, diam) {
+            let x = x.as_angstrom();
+            to[0] = if b.incremental_x { at[0] + x } else { x };
+        }
+        if let Some(z) = b.z {
+            let z = z.as_angstrom();
+            to[1] = if b.incremental_z { at[1] + z } else { z };
+        }
+        let arc = match motion {
+            Motion::Rapid | Motion::Linear => {
+                if b.i.is_some() || b.k.is_some() || b.r.is_some() {
+                    return Err(Refusal::Missing("I, K and R need G02 or G03"));
+                }
+                None
+            }
+            Motion::ArcCw | Motion::ArcCcw => {
+                let dir = if motion == Motion::ArcCw {
+                    ArcDir::Cw
+                } else {
+                    ArcDir::Ccw
+                };
+                let len = |a: i64| Length::from_angstrom(a).ok_or(Refusal::Range("the profile lies beyond 99999.999999 mm"));
+                let centre = match (b.i.is_some() || b.k.is_some(), b.r) {
+                    (true, None) => [
+                        at[0] + b.i.map_or(0, |i| i.as_angstrom()),
+                        at[1] + b.k.map_or(0, |k| k.as_angstrom()),
+                    ],
+                    (false, Some(r)) => {
+                        let c = centre_from_radius([len(at[0])?, len(at[1])?], [len(to[0])?, len(to[1])?], r, dir)
+                            .map_err(Refusal::from)?;
+                        [c[0].as_angstrom(), c[1].as_angstrom()]
+                    }
+                    (true, Some(_)) => return Err(Refusal::Missing("give I and K or R, not both")),
+                    (false, None) => return Err(Refusal::Missing("an arc needs I and K, or R")),
+                };
+                Some((centre, dir))
+            }
+        };
+        cy.motion = motion;
+        if first {
+            // The first block goes to the profile's first point.
+            cy.first = to;
+        } else if to != at {
+            cy.segments
+                .push(Segment { to, arc })
+                .map_err(|_| Refusal::Range("a profile of more than 128 blocks"))?;
+        }
+        // Its text, without comments.
+        let mut paren = false;
+        for &byte in text.as_bytes() {
+            match byte {
+                b';' if !paren => break,
+                b'(' => paren = true,
+                b')' if paren => paren = false,
+                _ if paren => {}
+                _ => cy
+                    .text
+                    .push(byte)
+                    .map_err(|_| Refusal::Range("a profile of more than 4096 bytes"))?,
+            }
+        }
+        let end = u16::try_from(cy.text.len()).unwrap_or(u16::MAX);
+        cy.ends
+            .push(end)
+            .map_err(|_| Refusal::Range("a profile of more than 128 blocks"))?;
+        if b.n == Some(pending.q) {
+            Ok(None)
+        } else {
+            Ok(Some(cy.ends.len()))
+        }
+    }
+
+    /// The roughing of the held profile: every move checked first, then
+    /// run.
+    fn rough<I: Io>(&mut self, pending: Pending, crc: &mut Crc32, io: &mut I) -> Result<(), Refusal<'static>> {
+        let cy = &self.cycles;
+        if cy.segments.is_empty() {
+            return Err(Refusal::Geometry(CycleError::Empty.as_str()));
+        }
+        // Translated by the allowances.
+        let shift = |p: [i64; 2]| [p[0] + pending.allow[0], p[1] + pending.allow[1]];
+        let mut moved = heapless::Vec::<Segment, PROFILE_BLOCKS>::new();
+        for g in &cy.segments {
+            let _ = moved.push(Segment {
+                to: shift(g.to),
+                arc: g.arc.map(|(c, d)| (shift(c), d)),
+            });
+        }
+        let along = match pending.kind {
+            CycleKind::Face => Along::X,
+            _ => Along::Z,
+        };
+        let s = cy.from;
+        let roughing = Roughing::new(along, s, shift(cy.first), &moved, pending.depth, pending.retract)
+            .map_err(|e| Refusal::Geometry(e.as_str()))?;
+        // The feed: the cycle's F, else the one in force.
+        let mut modal = self.modal;
+        if pending.feed.is_some() {
+            modal.feed = pending.feed;
+        }
+        let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
+        // Checked whole before anything moves.
+        let mut check = Ok(());
+        let (mut cmd, mut pos) = (self.cmd, self.pos);
+        let mut last = s;
+        roughing.steps(&mut |step| {
+            if check.is_err() {
+                return;
+            }
+            check = self
+                .cycle_move(step, last, &modal, &spindle, cmd, pos, io)
+                .map(|p| {
+                    (cmd, pos) = (p.end(), p.registers());
+                });
+            last = step_end(step);
+        });
+        check?;
+        let mut last = s;
+        let mut out = Ok(());
+        // Each move again, planned from where the one before left the
+        // machine, and run.
+        roughing.steps(&mut |step| {
+            if out.is_err() {
+                return;
+            }
+            match self.cycle_move(step, last, &modal, &spindle, self.cmd, self.pos, io) {
+                Ok(p) => *crc = self.run_planned(&p, *crc, io),
+                Err(e) => out = Err(e),
+            }
+            last = step_end(step);
+        });
+        out?;
+        self.prog = [
+            Length::from_angstrom(s[0]).unwrap_or(self.prog[0]),
+            Length::from_angstrom(s[1]).unwrap_or(self.prog[1]),
+        ];
+        Ok(())
+    }
+
+    /// Plans one roughing move (work coordinates, from `from`) from the
+    /// machine's `cmd` and registers `pos`.
+    #[allow(clippy::too_many_arguments)]
+    fn cycle_move<I: Io>(
+        &self,
+        step: Step,
+        from: [i64; 2],
+        modal: &crate::interp::Modal,
+        spindle: &crate::interp::SpindleState,
+        cmd: [Length; 2],
+        pos: crate::interleave::ImpulsePoint,
+        io: &mut I,
+    ) -> Result<Planned, Refusal<'static>> {
+        let off = self.offsets.vector(&self.sel).ok_or(Refusal::Range(
+            "the offsets in effect add beyond 99999.999999 mm",
+        ))?;
+        let (to, kind, feeds) = match step {
+            Step::Rapid(p) => (p, MoveKind::Line { rapid: true }, false),
+            Step::Feed(p) => (p, MoveKind::Line { rapid: false }, true),
+            Step::Arc(p, c, dir) => (
+                p,
+                MoveKind::Arc {
+                    centre: shifted(c, off)?,
+                    dir,
+                },
+                true,
+            ),
+        };
+        let feed = if feeds {
+            let x = Length::from_angstrom(from[0]).unwrap_or(Length::ZERO);
+            let f = path_feed(modal, spindle, x).map_err(|e| Refusal::Value("F", e.as_str()))?;
+            let f = f.ok_or(Refusal::Value(
+                "F",
+                "not programmed: a feed move needs F (mm/min)",
+            ))?;
+            Some(self.overridden(f, modal.feed_mode))
+        } else {
+            None
+        };
+        let m = Move {
+            to: shifted(to, off)?,
+            kind,
+            origin: Origin::Current,
+        };
+        self.plan_move(cmd, pos, &m, feed, io)
+    }
+
+    /// `G70 P Q [F]`: the held profile's blocks run as written, from where
+    /// the tool stands, then back to that point.
+    fn finish_cycle<I: Io>(
+        &mut self,
+        b: &crate::gcode::Block,
+        c: CycleWords,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<(), Refusal<'static>> {
+        if c.d.is_some() || c.r.is_some() {
+            return Err(Refusal::Missing("G70 takes P and Q (and F)"));
+        }
+        if c.u.is_some_and(|u| u.as_angstrom() != 0) || c.w.is_some_and(|w| w.as_angstrom() != 0) {
+            return Err(Refusal::Missing(
+                "G70 finishes on the profile: its allowances are G71's and G72's U and W",
+            ));
+        }
+        let (p, q) = (c.p.ok_or(Refusal::Missing("G70 needs P and Q"))?, c.q.ok_or(Refusal::Missing("G70 needs P and Q"))?);
+        if self.cycles.held != Some((p, q)) {
+            return Err(Refusal::Missing(
+                "G70 finishes the profile a G71 or G72 held last: no such P and Q",
+            ));
+        }
+        if let Some(f) = b.f {
+            if f.as_angstrom() <= 0 {
+                return Err(Refusal::Value("F", "the finishing feed must be above 0"));
+            }
+        }
+        // The profile must end with nose compensation off: the return to
+        // the start point is not a compensated move.
+        let mut compensating = self.contour.active();
+        for line in self.cycles.lines() {
+            if let Ok(pb) = parse(line, self.dialect, self.modal.units) {
+                match pb.compensation {
+                    Some(crate::gcode::Compensation::Off) => compensating = false,
+                    Some(_) => compensating = true,
+                    None => {}
+                }
+            }
+        }
+        if compensating {
+            return Err(Refusal::Missing(
+                "the profile leaves nose compensation on: end it with G40 before Q",
+            ));
+        }
+        if let Some(f) = b.f {
+            self.modal.feed = Some(f);
+        }
+        let back = self.prog;
+        let lines = self.cycles.ends.len();
+        for k in 0..lines {
+            // One block at a time from the held text (a copy: the session
+            // runs it).
+            let mut line = heapless::String::<{ super::framing::MAX_LINE }>::new();
+            if let Some(t) = self.cycles.lines().nth(k) {
+                let _ = line.push_str(t);
+            }
+            self.gcode_block(&line, crc, io)?;
+        }
+        // Back to the start point: X first, then Z, at the rapid rate.
+        let here = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
+        let (from, back) = (here(self.prog), here(back));
+        for to in [[back[0], from[1]], back] {
+            let modal = self.modal;
+            let spindle = self.aux.spindle;
+            let plan = self.cycle_move(Step::Rapid(to), to, &modal, &spindle, self.cmd, self.pos, io)?;
+            *crc = self.run_planned(&plan, *crc, io);
+        }
+        self.prog = [
+            Length::from_angstrom(back[0]).unwrap_or(self.prog[0]),
+            Length::from_angstrom(back[1]).unwrap_or(self.prog[1]),
+        ];
+        Ok(())
+    }
+}
+
+/// Where a step ends.
+fn step_end(step: Step) -> [i64; 2] {
+    match step {
+        Step::Rapid(p) | Step::Feed(p) | Step::Arc(p, _, _) => p,
+    }
+}
