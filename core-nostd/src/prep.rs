@@ -6,15 +6,18 @@
 //! start, its ramps with their exact ticks, a hold's braking, a resume,
 //! `TSEQ` and the registers) happens here, outside the step interrupt, and
 //! each event goes into a bounded single-producer/single-consumer queue as
-//! a [`Ready`] entry: its tick, its STEP/DIR bits and the CRC state `TSEQ`
-//! has after it. The step interrupt pops an entry, writes the pins, arms
-//! its next alarm and keeps what it issued in an [`Issued`]: no division,
-//! no square root, no plan, no lock.
+//! a [`Ready`] entry of 8 bytes: its tick and its STEP/DIR bits, or a mark
+//! (a run's start and end, a block's start). The step interrupt pops an
+//! entry, writes the pins, arms its next alarm and counts the entries it
+//! has passed: no division, no square root, no plan, no lock.
 //!
-//! What the protocol reports is what was issued: `SYNC`'s record and the
-//! `STATUS` registers come from the [`Issued`] side, and a reset drops the
-//! entries not yet issued and puts the stepper's registers and record back
-//! to those of the events actually issued ([`Prep::abort`]). A feed hold
+//! What the protocol reports is what was issued. The prep keeps, beside
+//! each entry in the queue, what will have been issued once the step
+//! interrupt has passed it (registers, `SYNC`'s record with `TSEQ`, the
+//! block running): [`Prep::issued`] reads it from the step interrupt's
+//! count. A reset drops the entries not yet passed and puts the stepper's
+//! registers and record back to those of the events actually issued
+//! ([`Prep::abort`]). A feed hold
 //! acts on the stepper, so it takes effect after the entries already
 //! prepared: they are on the path, and the braking starts from the last of
 //! them.
@@ -33,58 +36,42 @@ use heapless::spsc::Producer;
 /// the step interrupt must be able to go on through.
 pub const READY_SLOTS: usize = 256;
 
-/// One ready entry for the step interrupt.
+/// One ready entry for the step interrupt: 8 bytes. What `SYNC`,
+/// `STATUS` and a reset need of it stays with the prep ([`Prep::issued`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ready {
-    /// A step event.
-    Step(ReadyStep),
+    /// A step event at its tick in its run, modulo 2³² (the step
+    /// interrupt adds it to the run's origin on a 32-bit counter).
+    Step {
+        /// The tick.
+        tick: u32,
+        /// The STEP and DIR bits.
+        event: StepEvent,
+    },
     /// A run begins: its tick 0 is when the step interrupt comes to this.
     RunStart,
-    /// A block begins (or what is left of one after a resume): the
-    /// spindle speed it carries (10⁻³ rpm), and as a reset would report
-    /// it, its events issued before this entry and all of them.
+    /// A block begins: the spindle speed it carries (10⁻³ rpm).
     Block {
         /// The spindle speed, 10⁻³ rpm.
         rpm: u32,
-        /// Its events issued before.
-        done: u32,
-        /// All its events.
-        of: u32,
     },
-    /// A fixed-rate run's events follow (its length is asked of the
-    /// stepper at a reset: counting it walks its events).
-    Fixed,
-    /// The run ended, this many ticks after it began.
-    RunEnd {
-        /// Ticks of the run.
-        ticks: u64,
-    },
+    /// The run ended: the axes are at rest.
+    RunEnd,
 }
 
-/// A step event ready to issue.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ReadyStep {
-    /// Its tick in its run, modulo 2³² (the step interrupt adds it to the
-    /// run's origin on a 32-bit counter).
-    pub tick: u32,
-    /// The STEP and DIR bits.
-    pub event: StepEvent,
-    /// `TSEQ`'s CRC state after this event.
-    pub crc: Crc32,
-}
-
-/// What the step interrupt has issued: the registers, the record `SYNC`
-/// reports, and the block running as a reset reports it.
+/// What the step interrupt has issued once it has passed a given entry:
+/// the registers, the record `SYNC` reports, and the block running as a
+/// reset reports it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Issued {
     registers: ImpulsePoint,
     events: u64,
     crc: Crc32,
     run_ticks: u64,
-    /// Events of the running block issued, and all of them (`None`: a
-    /// fixed-rate run).
+    /// Events of the running block issued, and all of them (`u32::MAX`:
+    /// a fixed-rate run, counted at a reset).
     done: u32,
-    of: Option<u32>,
+    of: u32,
 }
 
 impl Default for Issued {
@@ -92,6 +79,9 @@ impl Default for Issued {
         Self::new()
     }
 }
+
+/// `Issued::of` of a fixed-rate run.
+const FIXED: u32 = u32::MAX;
 
 impl Issued {
     /// Nothing issued, registers at 0.
@@ -105,38 +95,7 @@ impl Issued {
             crc: Crc32::new(),
             run_ticks: 0,
             done: 0,
-            of: Some(0),
-        }
-    }
-
-    /// A step event was issued: additions and copies only.
-    #[inline(always)]
-    pub fn step(&mut self, s: &ReadyStep) {
-        let (dx, dz) = s.event.moves();
-        self.registers.x.0 = self.registers.x.0.wrapping_add(i32::from(dx));
-        self.registers.z.0 = self.registers.z.0.wrapping_add(i32::from(dz));
-        self.events = self.events.wrapping_add(1);
-        self.crc = s.crc;
-        self.done = self.done.wrapping_add(1);
-    }
-
-    /// A mark other than a step passed the step interrupt.
-    #[inline(always)]
-    pub fn mark(&mut self, r: &Ready) {
-        match *r {
-            Ready::Block { done, of, .. } => (self.done, self.of) = (done, Some(of)),
-            Ready::Fixed => (self.done, self.of) = (0, None),
-            Ready::RunEnd { ticks } => (self.run_ticks, self.done, self.of) = (ticks, 0, Some(0)),
-            Ready::RunStart | Ready::Step(_) => {}
-        }
-    }
-
-    /// Applies any entry (a step or a mark), as the step interrupt does.
-    #[inline(always)]
-    pub fn apply(&mut self, r: &Ready) {
-        match r {
-            Ready::Step(s) => self.step(s),
-            other => self.mark(other),
+            of: 0,
         }
     }
 
@@ -145,28 +104,36 @@ impl Issued {
         self.registers
     }
 
-    /// Sets them, at rest (`ZERO`, a price change).
-    pub fn set_registers(&mut self, registers: ImpulsePoint) {
-        self.registers = registers;
-    }
-
     /// The record of what was issued since it was last taken.
     pub const fn record(&self) -> Record {
         Record::restore(self.events, self.crc, self.run_ticks)
     }
-
-    /// Takes the record (`SYNC`); it starts again.
-    pub fn take_record(&mut self) -> Record {
-        let r = self.record();
-        (self.events, self.crc, self.run_ticks) = (0, Crc32::new(), 0);
-        r
-    }
 }
 
-/// The stepper and the work of preparing its events.
-#[derive(Clone, Debug, Default)]
+/// The stepper, the work of preparing its events, and what the step
+/// interrupt has issued after each entry still in the queue (or just
+/// taken from it).
+#[derive(Clone, Debug)]
 pub struct Prep {
     stepper: Stepper<AHEAD>,
+    /// What was issued after entry `k`, at `k mod READY_SLOTS`: written
+    /// as the entry is pushed, read once the step interrupt has passed
+    /// it. The queue holds fewer than `READY_SLOTS` entries, so the slot
+    /// of the entry passed last is not written again until it passes the
+    /// next one.
+    history: [Issued; READY_SLOTS],
+    /// Entries pushed since power-on (wrapping).
+    pushed: u32,
+    /// What was issued when the step interrupt had passed `base.0`
+    /// entries and nothing had been pushed since (a reset, `ZERO`,
+    /// `SYNC`).
+    base: (u32, Issued),
+}
+
+impl Default for Prep {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Prep {
@@ -174,6 +141,9 @@ impl Prep {
     pub const fn new() -> Prep {
         Prep {
             stepper: Stepper::new(),
+            history: [Issued::new(); READY_SLOTS],
+            pushed: 0,
+            base: (0, Issued::new()),
         }
     }
 
@@ -193,60 +163,73 @@ impl Prep {
         self.stepper.has_room()
     }
 
-    /// Whether it has work it could prepare (something started, not held).
+    /// Whether nothing is started or being prepared (a hold keeps what it
+    /// stopped).
     pub fn is_idle(&self) -> bool {
         self.stepper.is_idle()
+    }
+
+    /// Entries pushed since power-on (wrapping): the step interrupt has
+    /// passed them all when its own count equals this.
+    pub const fn pushed(&self) -> u32 {
+        self.pushed
     }
 
     /// Prepares events into `out` until it is full or nothing is left to
     /// prepare (or a hold holds it); returns the entries added.
     pub fn fill(&mut self, out: &mut Producer<'_, Ready>) -> usize {
         let mut n = 0;
-        // One pull makes at most two entries.
-        while out.capacity() - out.len() >= 2 {
+        while out.ready() {
             let Some(p) = self.stepper.pull() else { break };
-            n += self.put(p, out);
+            self.put(p, out);
+            n += 1;
         }
         n
     }
 
-    /// The entries of one pull: a run's start carries what it starts (the
-    /// rest of a held block, a fixed-rate run).
-    fn put(&mut self, p: Pulled, out: &mut Producer<'_, Ready>) -> usize {
-        let first = match p {
-            Pulled::Step(event, tick) => Ready::Step(ReadyStep {
+    /// The entry of one pull, and what will have been issued after it.
+    fn put(&mut self, p: Pulled, out: &mut Producer<'_, Ready>) {
+        let entry = match p {
+            Pulled::Step(event, tick) => Ready::Step {
                 tick: tick as u32,
                 event,
-                crc: self.stepper.crc(),
-            }),
-            Pulled::BlockStart(_) => self.running(),
+            },
+            Pulled::BlockStart(_) => Ready::Block {
+                rpm: self.stepper.spindle(),
+            },
             Pulled::RunStart => Ready::RunStart,
-            Pulled::RunEnd(ticks) => Ready::RunEnd { ticks },
+            Pulled::RunEnd(_) => Ready::RunEnd,
         };
-        // `fill` and `resume` leave room for two.
-        let _ = out.enqueue(first);
-        if p != Pulled::RunStart || self.stepper.running().is_none() {
-            return 1;
+        let s = &self.stepper;
+        let record = s.record();
+        let (done, of) = match s.running() {
+            Some((done, of)) => (done, of.unwrap_or(FIXED)),
+            None => (0, 0),
+        };
+        let after = Issued {
+            registers: s.issued(),
+            events: record.events(),
+            crc: record.crc(),
+            run_ticks: record.run_ticks(),
+            done,
+            of,
+        };
+        if let Some(slot) = self.history.get_mut(self.pushed as usize % READY_SLOTS) {
+            *slot = after;
         }
-        let _ = out.enqueue(self.running());
-        2
+        self.pushed = self.pushed.wrapping_add(1);
+        // The callers checked for room.
+        let _ = out.enqueue(entry);
     }
 
-    /// The mark of the item the stepper runs now.
-    fn running(&self) -> Ready {
-        match self.stepper.running() {
-            Some((done, Some(of))) => Ready::Block {
-                rpm: self.stepper.spindle(),
-                done,
-                of,
-            },
-            Some((_, None)) => Ready::Fixed,
-            None => Ready::Block {
-                rpm: self.stepper.spindle(),
-                done: 0,
-                of: 0,
-            },
+    /// What was issued once the step interrupt has passed `passed`
+    /// entries since power-on (its own count, at most [`Prep::pushed`]).
+    pub fn issued(&self, passed: u32) -> Issued {
+        if passed == self.base.0 {
+            return self.base.1;
         }
+        let k = passed.wrapping_sub(1) as usize % READY_SLOTS;
+        self.history.get(k).copied().unwrap_or(self.base.1)
     }
 
     /// Feed hold: from the last event prepared (those in the queue are on
@@ -255,10 +238,10 @@ impl Prep {
         self.stepper.hold();
     }
 
-    /// Resume after a hold: its run's start goes into `out` (which needs
-    /// room for two entries: false, and nothing done, when it has not).
+    /// Resume after a hold: its run's start goes into `out` (false, and
+    /// nothing done, when it has no room).
     pub fn resume(&mut self, out: &mut Producer<'_, Ready>) -> bool {
-        if out.capacity() - out.len() < 2 {
+        if !out.ready() {
             return false;
         }
         if let Some(p) = self.stepper.resume() {
@@ -279,61 +262,75 @@ impl Prep {
         self.stepper.hungry()
     }
 
-    /// Reset, once the step interrupt has stopped: `dropped` are the
-    /// entries it had not issued, in order, and `issued` what it had. The
-    /// stepper drops everything; its registers and record become those of
-    /// the events issued. Reports the block that was running at the step
+    /// Reset, once the step interrupt has stopped: it had passed `passed`
+    /// entries, and `dropped` are those it had not, in order. The stepper
+    /// drops everything; its registers and record become those of the
+    /// events issued. Reports the block that was running at the step
     /// interrupt.
-    pub fn abort(
-        &mut self,
-        issued: &mut Issued,
-        dropped: impl IntoIterator<Item = Ready>,
-    ) -> Aborted {
+    pub fn abort(&mut self, passed: u32, dropped: impl IntoIterator<Item = Ready>) -> Aborted {
+        let issued = self.issued(passed);
         // Steps dropped before the first mark: the rest of the item the
         // step interrupt was issuing, if the mark ends it.
         let (mut before, mut marked) = (0u32, false);
         for r in dropped {
             match r {
-                Ready::Step(_) if !marked => before += 1,
-                Ready::Step(_) => {}
+                Ready::Step { .. } if !marked => before += 1,
+                Ready::Step { .. } => {}
                 _ => marked = true,
             }
         }
         let prepared = self.stepper.abort();
-        let found = match issued.of {
-            Some(of) => Aborted {
+        let found = if issued.of != FIXED {
+            Aborted {
                 done: issued.done,
-                of,
-            },
+                of: issued.of,
+            }
+        } else {
             // A fixed-rate run: its events issued, dropped, and those the
             // stepper had not handed out if it was still in it.
-            None => {
-                let left = if marked {
-                    0
-                } else {
-                    prepared.of.saturating_sub(prepared.done)
-                };
-                Aborted {
-                    done: issued.done,
-                    of: issued.done.saturating_add(before).saturating_add(left),
-                }
+            let left = if marked {
+                0
+            } else {
+                prepared.of.saturating_sub(prepared.done)
+            };
+            Aborted {
+                done: issued.done,
+                of: issued.done.saturating_add(before).saturating_add(left),
             }
         };
         self.stepper.set_issued(issued.registers);
         self.stepper.set_record(issued.record());
-        (issued.done, issued.of) = (0, Some(0));
+        self.pushed = passed;
+        self.base = (
+            passed,
+            Issued {
+                done: 0,
+                of: 0,
+                ..issued
+            },
+        );
         found
     }
 
-    /// Sets the registers, at rest (`ZERO`, a price change).
-    pub fn set_issued(&mut self, registers: ImpulsePoint) {
+    /// Sets the registers, at rest (`ZERO`, a price change): the step
+    /// interrupt has passed `passed` entries, all there were.
+    pub fn set_issued(&mut self, passed: u32, registers: ImpulsePoint) {
         self.stepper.set_issued(registers);
+        let mut base = self.issued(passed);
+        base.registers = registers;
+        self.base = (passed, base);
     }
 
-    /// Takes the stepper's record: it starts again with the issued side's
-    /// ([`Issued::take_record`]), at rest.
-    pub fn take_record(&mut self) -> Record {
-        self.stepper.take_record()
+    /// Takes the record of what was issued (`SYNC`), at rest: the step
+    /// interrupt has passed `passed` entries, all there were. Both records
+    /// start again.
+    pub fn take_record(&mut self, passed: u32) -> Record {
+        let _ = self.stepper.take_record();
+        let mut base = self.issued(passed);
+        let record = base.record();
+        (base.events, base.crc, base.run_ticks) = (0, Crc32::new(), 0);
+        self.base = (passed, base);
+        record
     }
 
     /// The spindle speed of the block that started last (10⁻³ rpm).
@@ -388,37 +385,58 @@ mod tests {
         items
     }
 
-    /// A queue of `N` slots, filled and emptied as the prep and the step
-    /// interrupt do, items handed over as room allows; `at(k, prep)` runs
-    /// before the k-th entry is issued. Returns the entries issued.
-    fn issue<const N: usize>(
-        items: &[Item],
-        prep: &mut Prep,
-        issued: &mut Issued,
-        mut at: impl FnMut(usize, &mut Prep, &mut Issued) -> bool,
-    ) -> Vec<Ready> {
-        let mut q: Queue<Ready, N> = Queue::new();
-        let (mut tx, mut rx) = q.split();
-        let mut items = items.iter().cloned();
-        let mut out = Vec::new();
-        loop {
-            while prep.has_room() {
-                match items.next() {
-                    Some(i) => prep.push(i).unwrap(),
+    /// The prep and a queue of `N` slots filled and emptied as the step
+    /// interrupt empties it, items handed over as room allows.
+    struct Bench<'q, I: Iterator<Item = Item>> {
+        prep: Prep,
+        tx: Producer<'q, Ready>,
+        rx: heapless::spsc::Consumer<'q, Ready>,
+        items: I,
+        /// Entries the step interrupt passed, and those it took.
+        passed: u32,
+        taken: Vec<Ready>,
+    }
+
+    impl<I: Iterator<Item = Item>> Bench<'_, I> {
+        /// The step interrupt takes one entry, if there is one.
+        fn issue(&mut self) -> Option<Ready> {
+            while self.prep.has_room() {
+                match self.items.next() {
+                    Some(i) => self.prep.push(i).unwrap(),
                     None => break,
                 }
             }
-            prep.fill(&mut tx);
-            let Some(r) = rx.dequeue() else { break };
-            issued.apply(&r);
-            out.push(r);
-            if !at(out.len(), prep, issued) {
-                let dropped: Vec<Ready> = core::iter::from_fn(|| rx.dequeue()).collect();
-                let _ = prep.abort(issued, dropped);
-                break;
-            }
+            self.prep.fill(&mut self.tx);
+            let r = self.rx.dequeue()?;
+            self.passed += 1;
+            self.taken.push(r);
+            Some(r)
         }
-        out
+
+        fn issued(&self) -> Issued {
+            self.prep.issued(self.passed)
+        }
+
+        /// A reset now.
+        fn abort(&mut self) -> Aborted {
+            let dropped: Vec<Ready> = core::iter::from_fn(|| self.rx.dequeue()).collect();
+            self.prep.abort(self.passed, dropped)
+        }
+    }
+
+    fn bench<'q, const N: usize, I: Iterator<Item = Item>>(
+        q: &'q mut Queue<Ready, N>,
+        items: I,
+    ) -> Bench<'q, I> {
+        let (tx, rx) = q.split();
+        Bench {
+            prep: Prep::new(),
+            tx,
+            rx,
+            items,
+            passed: 0,
+            taken: Vec::new(),
+        }
     }
 
     /// What the stepper alone hands out for the same items.
@@ -436,94 +454,84 @@ mod tests {
         entries
             .iter()
             .filter_map(|r| match r {
-                Ready::Step(s) => Some((s.event.bits(), s.tick)),
+                Ready::Step { tick, event } => Some((event.bits(), *tick)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn pulled_steps(p: &[Pulled]) -> Vec<(u8, u32)> {
+        p.iter()
+            .filter_map(|p| match p {
+                Pulled::Step(e, t) => Some((e.bits(), *t as u32)),
                 _ => None,
             })
             .collect()
     }
 
     #[test]
-    fn the_ready_events_are_what_the_stepper_hands_out_ticks_tseq_and_registers() {
+    fn the_ready_events_are_what_the_stepper_hands_out_and_what_was_issued_follows_them() {
         let items = run(&[0, -3_000, -3_500, -9_000, -9_100, -20_000], None);
         let (want, mut stepper) = pulled(&items);
-        let (mut prep, mut issued) = (Prep::new(), Issued::new());
-        let got = issue::<16>(&items, &mut prep, &mut issued, |_, _, _| true);
-        let want_steps: Vec<(u8, u32)> = want
-            .iter()
-            .filter_map(|p| match p {
-                Pulled::Step(e, t) => Some((e.bits(), *t as u32)),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(steps(&got), want_steps);
-        assert_eq!(want_steps.len(), 2000);
-        // Run and block marks in the same places.
-        let got_marks: Vec<&str> = got
-            .iter()
-            .filter_map(|r| match r {
-                Ready::RunStart => Some("start"),
-                Ready::Block { .. } => Some("block"),
-                Ready::RunEnd { .. } => Some("end"),
-                _ => None,
-            })
-            .collect();
-        let want_marks: Vec<&str> = want
-            .iter()
-            .filter_map(|p| match p {
-                Pulled::RunStart => Some("start"),
-                Pulled::BlockStart(_) => Some("block"),
-                Pulled::RunEnd(_) => Some("end"),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(got_marks, want_marks);
-        assert_eq!(issued.registers(), stepper.issued());
-        let (a, b) = (issued.take_record(), stepper.take_record());
-        assert_eq!(
-            (a.events(), a.tseq(), a.run_ticks()),
-            (b.events(), b.tseq(), b.run_ticks())
-        );
-        assert_eq!(prep.take_record().tseq(), b.tseq());
-        assert!(prep.is_idle());
-    }
-
-    #[test]
-    fn each_step_carries_tseq_as_it_stands_after_it() {
-        let items = run(&[0, -1_000], Some("600"));
-        let (mut prep, mut issued) = (Prep::new(), Issued::new());
-        let mut record = Record::new();
-        let got = issue::<8>(&items, &mut prep, &mut issued, |_, _, _| true);
-        for r in &got {
-            if let Ready::Step(s) = r {
-                // The tick in the run is below 2³² here.
-                record.event(s.event, u64::from(s.tick));
-                assert_eq!(s.crc, record.crc());
-            }
+        let mut q: Queue<Ready, 16> = Queue::new();
+        let mut b = bench(&mut q, items.iter().cloned());
+        // After every entry: the registers and the record of the steps
+        // taken so far, as a stepper that handed out only those has them.
+        let mut alone = Stepper::<AHEAD>::new();
+        let mut alone_items = items.iter().cloned();
+        while let Some(r) = b.issue() {
+            let p = loop {
+                if let Some(p) = alone.pull() {
+                    break p;
+                }
+                alone.push(alone_items.next().unwrap()).unwrap();
+            };
+            let kind = |r: &Ready| core::mem::discriminant(r);
+            let as_ready = match p {
+                Pulled::Step(event, tick) => Ready::Step {
+                    tick: tick as u32,
+                    event,
+                },
+                Pulled::RunStart => Ready::RunStart,
+                Pulled::BlockStart(_) => Ready::Block { rpm: 0 },
+                Pulled::RunEnd(_) => Ready::RunEnd,
+            };
+            assert_eq!(kind(&r), kind(&as_ready));
+            assert_eq!(r, as_ready);
+            let i = b.issued();
+            assert_eq!(i.registers(), alone.issued());
+            let (x, y) = (i.record(), alone.record());
+            assert_eq!(
+                (x.events(), x.tseq(), x.run_ticks()),
+                (y.events(), y.tseq(), y.run_ticks())
+            );
         }
-        assert_eq!(issued.record().tseq(), record.tseq());
+        assert_eq!(steps(&b.taken), pulled_steps(&want));
+        assert_eq!(steps(&b.taken).len(), 2000);
+        assert_eq!(b.issued().registers(), stepper.issued());
+        let r = b.prep.take_record(b.passed);
+        let w = stepper.take_record();
+        assert_eq!(
+            (r.events(), r.tseq(), r.run_ticks()),
+            (w.events(), w.tseq(), w.run_ticks())
+        );
+        assert_eq!(b.issued().record().events(), 0);
+        assert!(b.prep.is_idle());
     }
 
     #[test]
     fn a_hold_takes_effect_after_the_entries_prepared_and_a_resume_ends_on_the_path() {
         let items = run(&[0, -20_000], Some("1200"));
-        let (mut prep, mut issued) = (Prep::new(), Issued::new());
-        // The hold comes when 1000 entries have been issued; up to 31
-        // more are prepared and go first.
         let mut q: Queue<Ready, 32> = Queue::new();
-        let (mut tx, mut rx) = q.split();
-        for i in &items {
-            prep.push(i.clone()).unwrap();
+        let mut b = bench(&mut q, items.iter().cloned());
+        // The hold comes when 1000 entries have been taken; up to 31 more
+        // are prepared and go first.
+        while b.passed < 1000 {
+            b.issue().unwrap();
         }
-        let mut got = Vec::new();
-        while got.len() < 1000 {
-            prep.fill(&mut tx);
-            let r = rx.dequeue().unwrap();
-            issued.apply(&r);
-            got.push(r);
-        }
-        let prepared = rx.len();
+        let prepared = b.rx.len();
         assert!(prepared > 20);
-        // The stepper alone, held after the same events.
+        // The stepper alone, held after the same entries.
         let mut s = Stepper::<AHEAD>::new();
         for i in &items {
             s.push(i.clone()).unwrap();
@@ -534,108 +542,68 @@ mod tests {
         }
         s.hold();
         alone.extend(core::iter::from_fn(|| s.pull()));
-        prep.hold();
-        loop {
-            prep.fill(&mut tx);
-            let Some(r) = rx.dequeue() else { break };
-            issued.apply(&r);
-            got.push(r);
-        }
-        assert_eq!(prep.motion(), Motion::Held);
-        let alone_steps: Vec<(u8, u32)> = alone
-            .iter()
-            .filter_map(|p| match p {
-                Pulled::Step(e, t) => Some((e.bits(), *t as u32)),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(steps(&got), alone_steps);
-        assert!(matches!(got.last(), Some(Ready::RunEnd { .. })));
-        assert_eq!(issued.registers(), s.issued());
+        b.prep.hold();
+        while b.issue().is_some() {}
+        assert_eq!(b.prep.motion(), Motion::Held);
+        assert_eq!(steps(&b.taken), pulled_steps(&alone));
+        assert_eq!(b.taken.last(), Some(&Ready::RunEnd));
+        assert_eq!(b.issued().registers(), s.issued());
+        assert_eq!(b.issued().record().tseq(), s.record().tseq());
         // Resume: the rest of the block, then the run's end, on its point.
-        assert!(prep.resume(&mut tx));
-        assert_eq!(rx.dequeue(), Some(Ready::RunStart));
-        let mark = rx.dequeue().unwrap();
-        let before = steps(&got).len() as u32;
-        assert_eq!(
-            mark,
-            Ready::Block {
-                rpm: 0,
-                done: before,
-                of: 2000
-            }
-        );
-        issued.apply(&mark);
-        loop {
-            prep.fill(&mut tx);
-            let Some(r) = rx.dequeue() else { break };
-            issued.apply(&r);
-        }
-        assert_eq!(issued.registers().z, Impulses(-2000));
-        assert_eq!(prep.motion(), Motion::Idle);
+        assert!(b.prep.resume(&mut b.tx));
+        assert_eq!(b.issue(), Some(Ready::RunStart));
+        while b.issue().is_some() {}
+        assert_eq!(b.issued().registers().z, Impulses(-2000));
+        assert_eq!(steps(&b.taken).len(), 2000);
+        assert_eq!(b.prep.motion(), Motion::Idle);
     }
 
     #[test]
     fn a_hold_at_rest_keeps_what_is_started_after_it_until_the_resume() {
-        let (mut prep, mut issued) = (Prep::new(), Issued::new());
-        prep.hold();
         let mut q: Queue<Ready, 32> = Queue::new();
-        let (mut tx, mut rx) = q.split();
-        for i in run(&[0, -1_000], None) {
-            prep.push(i).unwrap();
-        }
-        assert_eq!(prep.fill(&mut tx), 0);
-        assert_eq!(prep.motion(), Motion::Held);
-        assert!(prep.resume(&mut tx));
-        loop {
-            prep.fill(&mut tx);
-            let Some(r) = rx.dequeue() else { break };
-            issued.apply(&r);
-        }
-        assert_eq!(issued.registers().z, Impulses(-100));
+        let mut b = bench(&mut q, run(&[0, -1_000], None).into_iter());
+        b.prep.hold();
+        assert_eq!(b.issue(), None);
+        assert_eq!(b.prep.motion(), Motion::Held);
+        assert!(b.prep.resume(&mut b.tx));
+        while b.issue().is_some() {}
+        assert_eq!(b.issued().registers().z, Impulses(-100));
+        assert_eq!(b.prep.motion(), Motion::Idle);
     }
 
     #[test]
     fn a_reset_counts_only_the_events_issued() {
         let items = run(&[0, -2_000, -5_000], Some("1200"));
         let (want, _) = pulled(&items);
-        let positions: Vec<i32> = want
+        let positions: Vec<i32> = pulled_steps(&want)
             .iter()
-            .filter_map(|p| match p {
-                Pulled::Step(e, _) => Some(i32::from(e.moves().1)),
-                _ => None,
-            })
+            .map(|&(bits, _)| i32::from(StepEvent::from_bits(bits).moves().1))
             .scan(0, |z, d| {
                 *z += d;
                 Some(*z)
             })
             .collect();
-        for stop in [1usize, 150, 203, 204, 260, 501, 503] {
-            let (mut prep, mut issued) = (Prep::new(), Issued::new());
-            let mut found = None;
-            let got = issue::<64>(&items, &mut prep, &mut issued, |k, p, i| {
-                if k < stop {
-                    return true;
-                }
-                found = Some(*i);
-                let _ = p;
-                false
-            });
-            let n = steps(&got).len();
+        for stop in [1u32, 150, 203, 204, 260, 501, 503] {
+            let mut q: Queue<Ready, 64> = Queue::new();
+            let mut b = bench(&mut q, items.iter().cloned());
+            while b.passed < stop {
+                b.issue().unwrap();
+            }
+            let _ = b.abort();
+            let n = steps(&b.taken).len();
             let z = if n == 0 { 0 } else { positions[n - 1] };
-            assert_eq!(issued.registers().z, Impulses(z), "stop {stop}");
-            assert_eq!(prep.stepper().issued().z, Impulses(z));
+            assert_eq!(b.issued().registers().z, Impulses(z), "stop {stop}");
+            assert_eq!(b.prep.stepper().issued().z, Impulses(z));
             // SYNC after the reset: the events issued and their TSEQ.
             let mut record = Record::new();
-            for r in &got {
-                if let Ready::Step(s) = r {
-                    record.event(s.event, u64::from(s.tick));
-                }
+            for (bits, tick) in steps(&b.taken) {
+                record.event(StepEvent::from_bits(bits), u64::from(tick));
             }
-            let r = prep.take_record();
+            let r = b.prep.take_record(b.passed);
             assert_eq!((r.events(), r.tseq()), (n as u64, record.tseq()));
-            assert!(prep.is_idle());
-            let _ = found;
+            assert!(b.prep.is_idle());
+            // The next run counts on from there.
+            assert_eq!(b.prep.pushed(), b.passed);
         }
     }
 
@@ -645,32 +613,19 @@ mod tests {
         // prep is in the second block while the first still issues.
         let items = run(&[0, -2_000, -5_000], Some("1200"));
         for (stop, want) in [
+            (2, Aborted { done: 0, of: 200 }),
             (2 + 150, Aborted { done: 150, of: 200 }),
             (2 + 180, Aborted { done: 180, of: 200 }),
+            (2 + 200, Aborted { done: 200, of: 200 }),
             (2 + 200 + 1 + 40, Aborted { done: 40, of: 300 }),
+            (2 + 200 + 1 + 300 + 1, Aborted { done: 0, of: 0 }),
         ] {
-            let (mut prep, mut issued) = (Prep::new(), Issued::new());
             let mut q: Queue<Ready, 64> = Queue::new();
-            let (mut tx, mut rx) = q.split();
-            let mut items = items.iter().cloned();
-            let mut k = 0;
-            let found = loop {
-                while prep.has_room() {
-                    match items.next() {
-                        Some(i) => prep.push(i).unwrap(),
-                        None => break,
-                    }
-                }
-                prep.fill(&mut tx);
-                let r = rx.dequeue().unwrap();
-                issued.apply(&r);
-                k += 1;
-                if k == stop {
-                    let dropped: Vec<Ready> = core::iter::from_fn(|| rx.dequeue()).collect();
-                    break prep.abort(&mut issued, dropped);
-                }
-            };
-            assert_eq!(found, want, "stop {stop}");
+            let mut b = bench(&mut q, items.iter().cloned());
+            while b.passed < stop {
+                b.issue().unwrap();
+            }
+            assert_eq!(b.abort(), want, "stop {stop}");
         }
     }
 
@@ -692,37 +647,40 @@ mod tests {
         let n = arc.events().count() as u32;
         let rate = FixedRate::new(TickRate::TIMER, 50_000);
         for (stop, queue_holds_the_end) in [(40usize, false), (n as usize - 5, true)] {
-            let (mut prep, mut issued) = (Prep::new(), Issued::new());
-            prep.set_issued(from);
-            issued.set_registers(from);
             let mut q: Queue<Ready, 32> = Queue::new();
-            let (mut tx, mut rx) = q.split();
-            prep.push(Item::Fixed(FixedRun::new(rate, arc.events())))
-                .unwrap();
-            let mut k = 0;
-            let found = loop {
-                prep.fill(&mut tx);
-                let r = rx.dequeue().unwrap();
-                issued.apply(&r);
-                if let Ready::Step(_) = r {
-                    k += 1;
+            let item = Item::Fixed(FixedRun::new(rate, arc.events()));
+            let mut b = bench(&mut q, core::iter::once(item));
+            b.prep.set_issued(0, from);
+            while steps(&b.taken).len() < stop {
+                b.issue().unwrap();
+            }
+            let ends = {
+                // What the queue holds, dropped by the reset.
+                let mut q2 = Vec::new();
+                while let Some(r) = b.rx.dequeue() {
+                    q2.push(r);
                 }
-                if k == stop {
-                    let dropped: Vec<Ready> = core::iter::from_fn(|| rx.dequeue()).collect();
-                    assert_eq!(
-                        dropped.iter().any(|r| matches!(r, Ready::RunEnd { .. })),
-                        queue_holds_the_end
-                    );
-                    break prep.abort(&mut issued, dropped);
-                }
+                let ends = q2.contains(&Ready::RunEnd);
+                let found = b.prep.abort(b.passed, q2);
+                assert_eq!(
+                    found,
+                    Aborted {
+                        done: stop as u32,
+                        of: n
+                    }
+                );
+                ends
             };
-            assert_eq!(
-                found,
-                Aborted {
-                    done: stop as u32,
-                    of: n
+            assert_eq!(ends, queue_holds_the_end);
+            assert_eq!(b.issued().registers(), {
+                let mut p = from;
+                for (bits, _) in steps(&b.taken) {
+                    let (dx, dz) = StepEvent::from_bits(bits).moves();
+                    p.x.0 += i32::from(dx);
+                    p.z.0 += i32::from(dz);
                 }
-            );
+                p
+            });
         }
     }
 }

@@ -519,10 +519,9 @@ impl<const R: usize> Stepper<R> {
         self.issued = registers;
     }
 
-    /// TSEQ's CRC state after the last event handed out.
-    #[inline(always)]
-    pub const fn crc(&self) -> crate::crc32::Crc32 {
-        self.record.crc()
+    /// The record of what was handed out, as it stands.
+    pub const fn record(&self) -> &Record {
+        &self.record
     }
 
     /// Replaces the record (a reset: what was issued, not what was handed
