@@ -26,7 +26,7 @@ use crate::crc32::Crc32;
 use crate::interleave::{ImpulsePoint, StepEvent};
 use crate::step::Record;
 use crate::stepper::{Aborted, Item, Motion, Pulled, Stepper, AHEAD};
-use heapless::spsc::Producer;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// Slots of the ready queue, a power of two; it holds one fewer entry.
 ///
@@ -57,6 +57,189 @@ pub enum Ready {
     },
     /// The run ended: the axes are at rest.
     RunEnd,
+}
+
+impl Ready {
+    const STEP: u32 = 0;
+    const RUN_START: u32 = 1 << 8;
+    const BLOCK: u32 = 2 << 8;
+    const RUN_END: u32 = 3 << 8;
+
+    /// As two words: the tick or the speed, and the kind with the bits.
+    #[inline(always)]
+    const fn words(self) -> (u32, u32) {
+        match self {
+            Ready::Step { tick, event } => (tick, Self::STEP | event.bits() as u32),
+            Ready::RunStart => (0, Self::RUN_START),
+            Ready::Block { rpm } => (rpm, Self::BLOCK),
+            Ready::RunEnd => (0, Self::RUN_END),
+        }
+    }
+
+    #[inline(always)]
+    const fn from_words(w0: u32, w1: u32) -> Ready {
+        match w1 & 0xFF00 {
+            Self::STEP => Ready::Step {
+                tick: w0,
+                event: StepEvent::from_bits(w1 as u8),
+            },
+            Self::RUN_START => Ready::RunStart,
+            Self::BLOCK => Ready::Block { rpm: w0 },
+            _ => Ready::RunEnd,
+        }
+    }
+}
+
+/// The ready queue: [`READY_SLOTS`] slots of two words, a ring between
+/// one producer (the prep) and one consumer (the step interrupt), both
+/// lock-free: each side writes only its own index, the slots are
+/// published by the producer's index (release) and freed by the
+/// consumer's. Atomics only, so it can be a `static`; the index wraps with
+/// a mask, no division.
+pub struct ReadyQueue {
+    slots: [[AtomicU32; 2]; READY_SLOTS],
+    /// Entries taken (the consumer's), and entries put (the producer's),
+    /// both since the queue was made, wrapping.
+    head: AtomicU32,
+    tail: AtomicU32,
+    split: AtomicBool,
+}
+
+impl Default for ReadyQueue {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ReadyQueue {
+    /// An empty queue.
+    pub const fn new() -> ReadyQueue {
+        #[allow(clippy::declare_interior_mutable_const)] // only as a pattern to fill the array
+        const SLOT: [AtomicU32; 2] = [AtomicU32::new(0), AtomicU32::new(0)];
+        ReadyQueue {
+            slots: [SLOT; READY_SLOTS],
+            head: AtomicU32::new(0),
+            tail: AtomicU32::new(0),
+            split: AtomicBool::new(false),
+        }
+    }
+
+    /// Entries it can hold: one fewer than its slots (see [`Prep`]).
+    pub const CAPACITY: u32 = READY_SLOTS as u32 - 1;
+
+    /// Its two ends, once: later calls get `None`.
+    pub fn split(&self) -> Option<(ReadyTx<'_>, ReadyRx<'_>)> {
+        if self.split.swap(true, Ordering::AcqRel) {
+            return None;
+        }
+        Some((ReadyTx { q: self }, ReadyRx { q: self }))
+    }
+
+    #[inline(always)]
+    fn slot(&self, k: u32) -> &[AtomicU32; 2] {
+        // READY_SLOTS is a power of two: the mask keeps the index in range.
+        &self.slots[k as usize & (READY_SLOTS - 1)]
+    }
+
+    /// Entries in it.
+    #[inline(always)]
+    pub fn len(&self) -> u32 {
+        self.tail
+            .load(Ordering::Acquire)
+            .wrapping_sub(self.head.load(Ordering::Acquire))
+    }
+
+    /// Whether it is empty.
+    #[inline(always)]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The producer's end of a [`ReadyQueue`].
+pub struct ReadyTx<'a> {
+    q: &'a ReadyQueue,
+}
+
+impl ReadyTx<'_> {
+    /// Whether an entry fits.
+    #[inline(always)]
+    pub fn ready(&self) -> bool {
+        self.q.len() < ReadyQueue::CAPACITY
+    }
+
+    /// Entries in the queue.
+    pub fn len(&self) -> u32 {
+        self.q.len()
+    }
+
+    /// Whether the queue is empty.
+    pub fn is_empty(&self) -> bool {
+        self.q.is_empty()
+    }
+
+    /// Puts an entry behind the others; a full queue hands it back.
+    #[inline(always)]
+    pub fn enqueue(&mut self, r: Ready) -> Result<(), Ready> {
+        if !self.ready() {
+            return Err(r);
+        }
+        let tail = self.q.tail.load(Ordering::Relaxed);
+        let (w0, w1) = r.words();
+        let slot = self.q.slot(tail);
+        slot[0].store(w0, Ordering::Relaxed);
+        slot[1].store(w1, Ordering::Relaxed);
+        self.q.tail.store(tail.wrapping_add(1), Ordering::Release);
+        Ok(())
+    }
+}
+
+/// The consumer's end of a [`ReadyQueue`].
+pub struct ReadyRx<'a> {
+    q: &'a ReadyQueue,
+}
+
+impl ReadyRx<'_> {
+    /// The first entry, left in the queue.
+    #[inline(always)]
+    pub fn peek(&self) -> Option<Ready> {
+        let head = self.q.head.load(Ordering::Relaxed);
+        if self.q.tail.load(Ordering::Acquire) == head {
+            return None;
+        }
+        let slot = self.q.slot(head);
+        Some(Ready::from_words(
+            slot[0].load(Ordering::Relaxed),
+            slot[1].load(Ordering::Relaxed),
+        ))
+    }
+
+    /// Frees the first entry (after [`ReadyRx::peek`] found one).
+    #[inline(always)]
+    pub fn pop(&mut self) {
+        let head = self.q.head.load(Ordering::Relaxed);
+        if self.q.tail.load(Ordering::Relaxed) != head {
+            self.q.head.store(head.wrapping_add(1), Ordering::Release);
+        }
+    }
+
+    /// Takes the first entry.
+    #[inline(always)]
+    pub fn dequeue(&mut self) -> Option<Ready> {
+        let r = self.peek()?;
+        self.pop();
+        Some(r)
+    }
+
+    /// Entries in the queue.
+    pub fn len(&self) -> u32 {
+        self.q.len()
+    }
+
+    /// Whether the queue is empty.
+    pub fn is_empty(&self) -> bool {
+        self.q.is_empty()
+    }
 }
 
 /// What the step interrupt has issued once it has passed a given entry:
@@ -177,7 +360,7 @@ impl Prep {
 
     /// Prepares events into `out` until it is full or nothing is left to
     /// prepare (or a hold holds it); returns the entries added.
-    pub fn fill(&mut self, out: &mut Producer<'_, Ready>) -> usize {
+    pub fn fill(&mut self, out: &mut ReadyTx<'_>) -> usize {
         let mut n = 0;
         while out.ready() {
             let Some(p) = self.stepper.pull() else { break };
@@ -188,7 +371,7 @@ impl Prep {
     }
 
     /// The entry of one pull, and what will have been issued after it.
-    fn put(&mut self, p: Pulled, out: &mut Producer<'_, Ready>) {
+    fn put(&mut self, p: Pulled, out: &mut ReadyTx<'_>) {
         let entry = match p {
             Pulled::Step(event, tick) => Ready::Step {
                 tick: tick as u32,
@@ -240,7 +423,7 @@ impl Prep {
 
     /// Resume after a hold: its run's start goes into `out` (false, and
     /// nothing done, when it has no room).
-    pub fn resume(&mut self, out: &mut Producer<'_, Ready>) -> bool {
+    pub fn resume(&mut self, out: &mut ReadyTx<'_>) -> bool {
         if !out.ready() {
             return false;
         }
@@ -355,7 +538,6 @@ mod tests {
     use crate::plan::{q32, Block, Planner, Rates, WINDOW};
     use crate::step::{FixedRate, TickRate};
     use crate::stepper::FixedRun;
-    use heapless::spsc::Queue;
     use std::vec::Vec;
 
     /// Blocks along Z through the points `um` (µm), at a feed (mm/min) or
@@ -389,8 +571,10 @@ mod tests {
     /// interrupt empties it, items handed over as room allows.
     struct Bench<'q, I: Iterator<Item = Item>> {
         prep: Prep,
-        tx: Producer<'q, Ready>,
-        rx: heapless::spsc::Consumer<'q, Ready>,
+        tx: ReadyTx<'q>,
+        rx: ReadyRx<'q>,
+        /// Entries the queue may hold here (fewer than it can).
+        room: u32,
         items: I,
         /// Entries the step interrupt passed, and those it took.
         passed: u32,
@@ -406,11 +590,26 @@ mod tests {
                     None => break,
                 }
             }
-            self.prep.fill(&mut self.tx);
+            // Only `room` entries: the prep stops where a smaller queue
+            // would be full.
+            while self.tx.len() < self.room {
+                let before = self.tx.len();
+                self.fill_one();
+                if self.tx.len() == before {
+                    break;
+                }
+            }
             let r = self.rx.dequeue()?;
             self.passed += 1;
             self.taken.push(r);
             Some(r)
+        }
+
+        /// The prep's work for one more entry.
+        fn fill_one(&mut self) {
+            if let Some(p) = self.prep.stepper.pull() {
+                self.prep.put(p, &mut self.tx);
+            }
         }
 
         fn issued(&self) -> Issued {
@@ -424,15 +623,13 @@ mod tests {
         }
     }
 
-    fn bench<'q, const N: usize, I: Iterator<Item = Item>>(
-        q: &'q mut Queue<Ready, N>,
-        items: I,
-    ) -> Bench<'q, I> {
-        let (tx, rx) = q.split();
+    fn bench<I: Iterator<Item = Item>>(q: &ReadyQueue, room: u32, items: I) -> Bench<'_, I> {
+        let (tx, rx) = q.split().unwrap();
         Bench {
             prep: Prep::new(),
             tx,
             rx,
+            room,
             items,
             passed: 0,
             taken: Vec::new(),
@@ -473,8 +670,8 @@ mod tests {
     fn the_ready_events_are_what_the_stepper_hands_out_and_what_was_issued_follows_them() {
         let items = run(&[0, -3_000, -3_500, -9_000, -9_100, -20_000], None);
         let (want, mut stepper) = pulled(&items);
-        let mut q: Queue<Ready, 16> = Queue::new();
-        let mut b = bench(&mut q, items.iter().cloned());
+        let q = ReadyQueue::new();
+        let mut b = bench(&q, 15, items.iter().cloned());
         // After every entry: the registers and the record of the steps
         // taken so far, as a stepper that handed out only those has them.
         let mut alone = Stepper::<AHEAD>::new();
@@ -522,8 +719,8 @@ mod tests {
     #[test]
     fn a_hold_takes_effect_after_the_entries_prepared_and_a_resume_ends_on_the_path() {
         let items = run(&[0, -20_000], Some("1200"));
-        let mut q: Queue<Ready, 32> = Queue::new();
-        let mut b = bench(&mut q, items.iter().cloned());
+        let q = ReadyQueue::new();
+        let mut b = bench(&q, 31, items.iter().cloned());
         // The hold comes when 1000 entries have been taken; up to 31 more
         // are prepared and go first.
         while b.passed < 1000 {
@@ -537,7 +734,7 @@ mod tests {
             s.push(i.clone()).unwrap();
         }
         let mut alone = Vec::new();
-        while alone.len() < 1000 + prepared {
+        while alone.len() < 1000 + prepared as usize {
             alone.push(s.pull().unwrap());
         }
         s.hold();
@@ -560,8 +757,8 @@ mod tests {
 
     #[test]
     fn a_hold_at_rest_keeps_what_is_started_after_it_until_the_resume() {
-        let mut q: Queue<Ready, 32> = Queue::new();
-        let mut b = bench(&mut q, run(&[0, -1_000], None).into_iter());
+        let q = ReadyQueue::new();
+        let mut b = bench(&q, 31, run(&[0, -1_000], None).into_iter());
         b.prep.hold();
         assert_eq!(b.issue(), None);
         assert_eq!(b.prep.motion(), Motion::Held);
@@ -584,8 +781,8 @@ mod tests {
             })
             .collect();
         for stop in [1u32, 150, 203, 204, 260, 501, 503] {
-            let mut q: Queue<Ready, 64> = Queue::new();
-            let mut b = bench(&mut q, items.iter().cloned());
+            let q = ReadyQueue::new();
+            let mut b = bench(&q, 63, items.iter().cloned());
             while b.passed < stop {
                 b.issue().unwrap();
             }
@@ -620,8 +817,8 @@ mod tests {
             (2 + 200 + 1 + 40, Aborted { done: 40, of: 300 }),
             (2 + 200 + 1 + 300 + 1, Aborted { done: 0, of: 0 }),
         ] {
-            let mut q: Queue<Ready, 64> = Queue::new();
-            let mut b = bench(&mut q, items.iter().cloned());
+            let q = ReadyQueue::new();
+            let mut b = bench(&q, 63, items.iter().cloned());
             while b.passed < stop {
                 b.issue().unwrap();
             }
@@ -647,9 +844,9 @@ mod tests {
         let n = arc.events().count() as u32;
         let rate = FixedRate::new(TickRate::TIMER, 50_000);
         for (stop, queue_holds_the_end) in [(40usize, false), (n as usize - 5, true)] {
-            let mut q: Queue<Ready, 32> = Queue::new();
+            let q = ReadyQueue::new();
             let item = Item::Fixed(FixedRun::new(rate, arc.events()));
-            let mut b = bench(&mut q, core::iter::once(item));
+            let mut b = bench(&q, 31, core::iter::once(item));
             b.prep.set_issued(0, from);
             while steps(&b.taken).len() < stop {
                 b.issue().unwrap();
@@ -681,6 +878,37 @@ mod tests {
                 }
                 p
             });
+        }
+    }
+
+    #[test]
+    fn the_ready_queue_holds_one_fewer_than_its_slots_and_wraps() {
+        let q = ReadyQueue::new();
+        let (mut tx, mut rx) = q.split().unwrap();
+        assert!(q.split().is_none());
+        let e = |k: u32| Ready::Step {
+            tick: k,
+            event: StepEvent::from_bits((k % 16) as u8),
+        };
+        let mut next = 0u32;
+        let mut put = 0u32;
+        for round in 0..10u32 {
+            while tx.enqueue(e(put)).is_ok() {
+                put += 1;
+            }
+            assert_eq!(tx.len(), ReadyQueue::CAPACITY);
+            assert_eq!(tx.enqueue(Ready::RunEnd), Err(Ready::RunEnd));
+            for _ in 0..(100 + 13 * round) {
+                assert_eq!(rx.dequeue(), Some(e(next)));
+                next += 1;
+            }
+        }
+        for r in [Ready::RunStart, Ready::Block { rpm: 7_000 }, Ready::RunEnd] {
+            while rx.dequeue().is_some() {}
+            tx.enqueue(r).unwrap();
+            assert_eq!(rx.peek(), Some(r));
+            rx.pop();
+            assert!(rx.is_empty());
         }
     }
 }
