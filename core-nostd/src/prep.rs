@@ -47,6 +47,9 @@ pub enum Ready {
         tick: u32,
         /// The STEP and DIR bits.
         event: StepEvent,
+        /// The DIR line of one of its stepping axes changes: the drive's
+        /// set-up time goes before it.
+        turns: bool,
     },
     /// A run begins: its tick 0 is when the step interrupt comes to this.
     RunStart,
@@ -64,12 +67,16 @@ impl Ready {
     const RUN_START: u32 = 1 << 8;
     const BLOCK: u32 = 2 << 8;
     const RUN_END: u32 = 3 << 8;
+    const TURNS: u32 = 1 << 4;
 
     /// As two words: the tick or the speed, and the kind with the bits.
     #[inline(always)]
     const fn words(self) -> (u32, u32) {
         match self {
-            Ready::Step { tick, event } => (tick, Self::STEP | event.bits() as u32),
+            Ready::Step { tick, event, turns } => (
+                tick,
+                Self::STEP | event.bits() as u32 | if turns { Self::TURNS } else { 0 },
+            ),
             Ready::RunStart => (0, Self::RUN_START),
             Ready::Block { rpm } => (rpm, Self::BLOCK),
             Ready::RunEnd => (0, Self::RUN_END),
@@ -81,7 +88,8 @@ impl Ready {
         match w1 & 0xFF00 {
             Self::STEP => Ready::Step {
                 tick: w0,
-                event: StepEvent::from_bits(w1 as u8),
+                event: StepEvent::from_bits(w1 as u8 & 0x0F),
+                turns: w1 & Self::TURNS != 0,
             },
             Self::RUN_START => Ready::RunStart,
             Self::BLOCK => Ready::Block { rpm: w0 },
@@ -124,8 +132,11 @@ impl ReadyQueue {
         }
     }
 
-    /// Entries it can hold: one fewer than its slots (see [`Prep`]).
-    pub const CAPACITY: u32 = READY_SLOTS as u32 - 1;
+    /// Entries it can hold: two fewer than its slots, so that what was
+    /// issued after the two entries taken last stays in the prep's
+    /// history while the step interrupt holds the second for its tick
+    /// (see [`Prep`]).
+    pub const CAPACITY: u32 = READY_SLOTS as u32 - 2;
 
     /// Its two ends, once: later calls get `None`.
     pub fn split(&self) -> Option<(ReadyTx<'_>, ReadyRx<'_>)> {
@@ -153,6 +164,13 @@ impl ReadyQueue {
     #[inline(always)]
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Entries taken from it since it was made (wrapping): the step
+    /// interrupt's progress, which a supervisor can watch.
+    #[inline(always)]
+    pub fn taken(&self) -> u32 {
+        self.head.load(Ordering::Acquire)
     }
 }
 
@@ -229,6 +247,12 @@ impl ReadyRx<'_> {
         let r = self.peek()?;
         self.pop();
         Some(r)
+    }
+
+    /// Entries taken since the queue was made (wrapping).
+    #[inline(always)]
+    pub fn taken(&self) -> u32 {
+        self.q.head.load(Ordering::Relaxed)
     }
 
     /// Entries in the queue.
@@ -311,6 +335,9 @@ pub struct Prep {
     /// entries and nothing had been pushed since (a reset, `ZERO`,
     /// `SYNC`).
     base: (u32, Issued),
+    /// The DIR lines (negative) as the events prepared leave them, X
+    /// and Z; unknown at first and after a reset.
+    dirs: [Option<bool>; 2],
 }
 
 impl Default for Prep {
@@ -327,6 +354,7 @@ impl Prep {
             history: [Issued::new(); READY_SLOTS],
             pushed: 0,
             base: (0, Issued::new()),
+            dirs: [None; 2],
         }
     }
 
@@ -373,10 +401,23 @@ impl Prep {
     /// The entry of one pull, and what will have been issued after it.
     fn put(&mut self, p: Pulled, out: &mut ReadyTx<'_>) {
         let entry = match p {
-            Pulled::Step(event, tick) => Ready::Step {
-                tick: tick as u32,
-                event,
-            },
+            Pulled::Step(event, tick) => {
+                let mut turns = false;
+                for (axis, steps, neg) in [
+                    (0, event.x_steps(), event.x_negative()),
+                    (1, event.z_steps(), event.z_negative()),
+                ] {
+                    if let (true, Some(dir)) = (steps, self.dirs.get_mut(axis)) {
+                        turns |= *dir != Some(neg);
+                        *dir = Some(neg);
+                    }
+                }
+                Ready::Step {
+                    tick: tick as u32,
+                    event,
+                    turns,
+                }
+            }
             Pulled::BlockStart(_) => Ready::Block {
                 rpm: self.stepper.spindle(),
             },
@@ -446,7 +487,8 @@ impl Prep {
     }
 
     /// Reset, once the step interrupt has stopped: it had passed `passed`
-    /// entries, and `dropped` are those it had not, in order. The stepper
+    /// entries, and `dropped` are those it had not, in order (it has
+    /// taken them all from the queue). The stepper
     /// drops everything; its registers and record become those of the
     /// events issued. Reports the block that was running at the step
     /// interrupt.
@@ -483,9 +525,12 @@ impl Prep {
         };
         self.stepper.set_issued(issued.registers);
         self.stepper.set_record(issued.record());
-        self.pushed = passed;
+        // What the dropped entries would have set is unknown to the pins.
+        self.dirs = [None; 2];
+        // The step interrupt has taken every entry pushed: dropped ones
+        // count as passed from now on.
         self.base = (
-            passed,
+            self.pushed,
             Issued {
                 done: 0,
                 of: 0,
@@ -619,7 +664,9 @@ mod tests {
         /// A reset now.
         fn abort(&mut self) -> Aborted {
             let dropped: Vec<Ready> = core::iter::from_fn(|| self.rx.dequeue()).collect();
-            self.prep.abort(self.passed, dropped)
+            let found = self.prep.abort(self.passed, dropped.iter().copied());
+            self.passed += dropped.len() as u32;
+            found
         }
     }
 
@@ -651,7 +698,7 @@ mod tests {
         entries
             .iter()
             .filter_map(|r| match r {
-                Ready::Step { tick, event } => Some((event.bits(), *tick)),
+                Ready::Step { tick, event, .. } => Some((event.bits(), *tick)),
                 _ => None,
             })
             .collect()
@@ -684,10 +731,12 @@ mod tests {
                 alone.push(alone_items.next().unwrap()).unwrap();
             };
             let kind = |r: &Ready| core::mem::discriminant(r);
+            let turns = matches!(r, Ready::Step { turns: true, .. });
             let as_ready = match p {
                 Pulled::Step(event, tick) => Ready::Step {
                     tick: tick as u32,
                     event,
+                    turns,
                 },
                 Pulled::RunStart => Ready::RunStart,
                 Pulled::BlockStart(_) => Ready::Block { rpm: 0 },
@@ -858,7 +907,8 @@ mod tests {
                     q2.push(r);
                 }
                 let ends = q2.contains(&Ready::RunEnd);
-                let found = b.prep.abort(b.passed, q2);
+                let found = b.prep.abort(b.passed, q2.iter().copied());
+                b.passed += q2.len() as u32;
                 assert_eq!(
                     found,
                     Aborted {
@@ -882,13 +932,14 @@ mod tests {
     }
 
     #[test]
-    fn the_ready_queue_holds_one_fewer_than_its_slots_and_wraps() {
+    fn the_ready_queue_holds_two_fewer_than_its_slots_and_wraps() {
         let q = ReadyQueue::new();
         let (mut tx, mut rx) = q.split().unwrap();
         assert!(q.split().is_none());
         let e = |k: u32| Ready::Step {
             tick: k,
             event: StepEvent::from_bits((k % 16) as u8),
+            turns: k % 3 == 0,
         };
         let mut next = 0u32;
         let mut put = 0u32;

@@ -1217,10 +1217,10 @@ fn run_qemu(args: &QemuArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
     })
 }
 
-/// The calculators' image (`--features calc`) in QEMU answers every
+/// The controller's one image in QEMU answers every
 /// calculator request as the in-process device does.
 fn calculators_qemu() -> Result<bool, Box<dyn std::error::Error>> {
-    let elf = host_sim::qemu::build_firmware("qemu,calc")?;
+    let elf = host_sim::qemu::build_firmware("qemu")?;
     let mut qemu = host_sim::qemu::Qemu::boot(&elf, true)?;
     let mut client = qemu.connect(Duration::from_secs(60))?;
     let session = host_sim::scenario::calculator_session();
@@ -1230,7 +1230,7 @@ fn calculators_qemu() -> Result<bool, Box<dyn std::error::Error>> {
     let lines = got.iter().filter(|&&b| b == b'\n').count();
     let equal = got == expected;
     println!(
-        "calculators' image (THREAD, WEAR, DEFLECT, TRI, TAPE): {requests} requests, {lines} reply lines, {}",
+        "calculators on the one image (THREAD, WEAR, DEFLECT, TRI, TAPE): {requests} requests, {lines} reply lines, {}",
         if equal {
             "identical to the in-process device"
         } else {
@@ -1361,11 +1361,6 @@ fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {
     let bench = elf.with_file_name("bench");
     println!("Cortex-M4 instruction counts (QEMU netduinoplus2, -icount shift=0):");
     for line in host_sim::qemu::icount_bench(&bench)? {
-        println!("  {line}");
-    }
-    // The calculators' image (`--features calc`): each request in full.
-    let calc = host_sim::qemu::build_firmware("qemu,calc")?.with_file_name("bench");
-    for line in host_sim::qemu::icount_bench(&calc)? {
         println!("  {line}");
     }
     status_latency()

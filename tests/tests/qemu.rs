@@ -46,8 +46,8 @@ fn the_calculators_answer_on_the_board_as_in_process() {
     if !qemu_or_skip() {
         return;
     }
-    // The calculators' image: the same firmware with `--features calc`.
-    let elf = build_firmware("qemu,calc").unwrap();
+    // The one image: the controller with the calculators.
+    let elf = build_firmware("qemu").unwrap();
     let mut qemu = Qemu::boot(&elf, true).unwrap();
     let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
     let session = scenario::calculator_session();

@@ -485,12 +485,6 @@ fn main() -> ! {
         "calibration: delay(100000) = {delay} ticks, empty = {empty}"
     ));
 
-    // The calculators' image measures its requests alone.
-    if cfg!(feature = "calc") {
-        calculators(tim);
-        finish()
-    }
-
     let p = |x, z| ImpulsePoint {
         x: Impulses(x),
         z: Impulses(z),
@@ -565,6 +559,7 @@ fn main() -> ! {
     arcs(tim);
     timed(tim);
     compensation(tim);
+    calculators(tim);
     finish()
 }
 

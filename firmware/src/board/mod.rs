@@ -1,0 +1,565 @@
+//! The board: clocks, pins, USART1, the step clock and the step
+//! interrupt's two timers, by register. Nothing here knows a task.
+//!
+//! | signal | pin | |
+//! |---|---|---|
+//! | USART1 TX / RX | PA9 / PA10 (AF7) | 115200 8N1 |
+//! | X STEP / X DIR | PC0 / PC1 | push-pull |
+//! | Z STEP / Z DIR | PC2 / PC3 | push-pull |
+//! | spindle and coolant | PB6 … PB10 | [`spindle`] |
+//!
+//! Two configurations. The real board runs from an 8 MHz crystal through the
+//! PLL at 168 MHz (APB2 84 MHz, APB1 42 MHz, timers 84 MHz). QEMU 7.2's
+//! `netduinoplus2` emulates no RCC ready bits, so the `qemu` build stays on
+//! the 16 MHz HSI and waits for nothing; QEMU's timers count at 1 GHz.
+
+use core::convert::Infallible;
+use core_nostd::interleave::StepEvent;
+use core_nostd::step::TickRate;
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{ErrorType, OutputPin};
+use stm32f4::stm32f405::{self as pac, Interrupt};
+
+pub mod spindle;
+
+/// Whether the last reset came from the watchdog (the flags are cleared).
+fn was_reset_by_watchdog(rcc: &pac::RCC) -> bool {
+    let by_watchdog = rcc.csr().read().wdgrstf().bit_is_set();
+    rcc.csr().modify(|_, w| w.rmvf().set_bit());
+    by_watchdog
+}
+
+/// Core clock.
+#[cfg(not(feature = "qemu"))]
+pub const SYSCLK_HZ: u32 = 168_000_000;
+#[cfg(feature = "qemu")]
+pub const SYSCLK_HZ: u32 = 16_000_000;
+
+/// USART1's bus clock (APB2).
+#[cfg(not(feature = "qemu"))]
+const PCLK2_HZ: u32 = 84_000_000;
+#[cfg(feature = "qemu")]
+const PCLK2_HZ: u32 = 16_000_000;
+
+/// TIM2's counter clock before its prescaler.
+#[cfg(not(feature = "qemu"))]
+pub const TIM2_CLK_HZ: u32 = 84_000_000;
+#[cfg(feature = "qemu")]
+pub const TIM2_CLK_HZ: u32 = 1_000_000_000;
+
+const BAUD: u32 = 115_200;
+
+/// Brings up clocks, pins, USART1 and TIM2, and readies TIM5 and SysTick
+/// for the step interrupt. Returns the board's devices; their interrupts
+/// are the caller's to enable.
+pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
+    clocks(&dp);
+    let rcc = &dp.RCC;
+    rcc.ahb1enr().modify(|_, w| {
+        w.gpioaen()
+            .set_bit()
+            .gpioben()
+            .set_bit()
+            .gpiocen()
+            .set_bit()
+    });
+    rcc.apb2enr().modify(|_, w| w.usart1en().set_bit());
+    rcc.apb1enr().modify(|_, w| {
+        w.tim2en()
+            .set_bit()
+            .tim3en()
+            .set_bit()
+            .tim4en()
+            .set_bit()
+            .tim5en()
+            .set_bit()
+    });
+
+    // PA9, PA10: alternate function 7, PA10 pulled up.
+    let gpioa = &dp.GPIOA;
+    gpioa
+        .afrh()
+        .modify(|_, w| unsafe { w.afrh9().bits(7).afrh10().bits(7) });
+    gpioa
+        .moder()
+        .modify(|_, w| unsafe { w.moder9().bits(0b10).moder10().bits(0b10) });
+    gpioa
+        .pupdr()
+        .modify(|_, w| unsafe { w.pupdr10().bits(0b01) });
+
+    // PC0..PC3: outputs, low.
+    let gpioc = &dp.GPIOC;
+    gpioc.bsrr().write(|w| {
+        w.br0()
+            .set_bit()
+            .br1()
+            .set_bit()
+            .br2()
+            .set_bit()
+            .br3()
+            .set_bit()
+    });
+    gpioc.moder().modify(|_, w| unsafe {
+        w.moder0()
+            .bits(0b01)
+            .moder1()
+            .bits(0b01)
+            .moder2()
+            .bits(0b01)
+            .moder3()
+            .bits(0b01)
+    });
+
+    let usart = dp.USART1;
+    // Both boards give a divider well below 2^16.
+    let brr = ((PCLK2_HZ + BAUD / 2) / BAUD) as u16;
+    usart.brr().write(|w| unsafe { w.bits(brr) });
+    usart.cr1().write(|w| {
+        w.ue()
+            .set_bit()
+            .te()
+            .set_bit()
+            .re()
+            .set_bit()
+            .rxneie()
+            .set_bit()
+    });
+
+    let mut tim2 = StepTimer { tim: dp.TIM2 };
+    tim2.count_ticks();
+    let alarm = Alarm::new(dp.TIM5);
+    let pulse = Pulse::new(syst, &tim2);
+    if was_reset_by_watchdog(&dp.RCC) {
+        defmt::warn!("the watchdog reset the board");
+    }
+    Board {
+        serial: Serial { usart },
+        tim2,
+        alarm,
+        pulse,
+        spindle: spindle::Spindle::new(dp.TIM4, &dp.GPIOB),
+        watchdog: Watchdog {
+            iwdg: dp.IWDG,
+            tim3: dp.TIM3,
+            dbgmcu: dp.DBGMCU,
+        },
+        flash: dp.FLASH,
+    }
+}
+
+#[cfg(not(feature = "qemu"))]
+fn clocks(dp: &pac::Peripherals) {
+    let rcc = &dp.RCC;
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    while rcc.cr().read().hserdy().bit_is_clear() {}
+    // 168 MHz needs 5 wait states at 3.3 V.
+    dp.FLASH.acr().modify(|_, w| unsafe {
+        w.latency()
+            .bits(5)
+            .prften()
+            .set_bit()
+            .icen()
+            .set_bit()
+            .dcen()
+            .set_bit()
+    });
+    // 8 MHz / 8 × 336 / 2 = 168 MHz; USB 336 / 7 = 48 MHz.
+    rcc.pllcfgr().write(|w| unsafe {
+        w.pllsrc()
+            .set_bit()
+            .pllm()
+            .bits(8)
+            .plln()
+            .bits(336)
+            .pllp()
+            .bits(0b00)
+            .pllq()
+            .bits(7)
+    });
+    rcc.cr().modify(|_, w| w.pllon().set_bit());
+    while rcc.cr().read().pllrdy().bit_is_clear() {}
+    // AHB /1, APB1 /4 (42 MHz), APB2 /2 (84 MHz), system clock from the PLL.
+    rcc.cfgr().modify(|_, w| unsafe {
+        w.hpre()
+            .bits(0)
+            .ppre1()
+            .bits(0b101)
+            .ppre2()
+            .bits(0b100)
+            .sw()
+            .bits(0b10)
+    });
+    while rcc.cfgr().read().sws().bits() != 0b10 {}
+}
+
+#[cfg(feature = "qemu")]
+fn clocks(_: &pac::Peripherals) {
+    // HSI 16 MHz from reset; QEMU 7.2 would hang on any ready-bit wait.
+}
+
+/// USART1 and the timers of the step outputs.
+pub struct Board {
+    /// USART1.
+    pub serial: Serial,
+    /// The run clock of the step events.
+    pub tim2: StepTimer,
+    /// The step interrupt's alarm (TIM5, stopped).
+    pub alarm: Alarm,
+    /// The STEP pulse's end (SysTick, stopped).
+    pub pulse: Pulse,
+    /// The spindle and coolant outputs (low).
+    pub spindle: spindle::Spindle,
+    /// The watchdog and its supervisor's timer (not started).
+    pub watchdog: Watchdog,
+    /// The flash interface, for the offsets kept across power cuts.
+    pub flash: pac::FLASH,
+}
+
+/// What [`crate::supervisor::start`] takes.
+pub struct Watchdog {
+    /// The independent watchdog.
+    pub iwdg: pac::IWDG,
+    /// The supervisor's timer (enabled, not configured).
+    pub tim3: pac::TIM3,
+    /// Debug freeze of both.
+    pub dbgmcu: pac::DBGMCU,
+}
+
+/// USART1: replies out, request bytes in through its interrupt.
+pub struct Serial {
+    usart: pac::USART1,
+}
+
+impl Serial {
+    /// Sends bytes, waiting for the transmitter each time.
+    pub fn send(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            while self.usart.sr().read().txe().bit_is_clear() {}
+            self.usart.dr().write(|w| unsafe { w.bits(u16::from(b)) });
+        }
+    }
+
+    /// Takes received bytes again after [`rx_pause`].
+    pub fn rx_resume(&mut self) {
+        self.usart.cr1().modify(|_, w| w.rxneie().set_bit());
+        // SAFETY: the line's handler shares only its queue and atomics;
+        // its priority was set before the scheduler started.
+        unsafe { pac::NVIC::unmask(Interrupt::USART1) };
+    }
+}
+
+/// The received byte, if USART1 holds one (from its interrupt).
+#[inline(always)]
+pub fn rx_byte() -> Option<u8> {
+    // SAFETY: read-only status access, and the data register, which only
+    // the line's interrupt reads.
+    let usart = unsafe { &*pac::USART1::ptr() };
+    let sr = usart.sr().read();
+    (sr.rxne().bit_is_set() || sr.ore().bit_is_set()).then(|| usart.dr().read().bits() as u8)
+}
+
+/// Whether USART1 holds a received byte.
+#[inline(always)]
+pub fn rx_ready() -> bool {
+    // SAFETY: read-only status access.
+    let sr = unsafe { &*pac::USART1::ptr() }.sr().read();
+    sr.rxne().bit_is_set() || sr.ore().bit_is_set()
+}
+
+/// Stops taking received bytes (its queue is full): the byte stays in
+/// USART1 until [`Serial::rx_resume`]. The NVIC line is masked too: QEMU
+/// 7.2 keeps the USART's interrupt raised while RXNE is set, whatever
+/// RXNEIE says.
+pub fn rx_pause() {
+    // SAFETY: a read-modify-write of CR1 from the line's own interrupt,
+    // the only writer besides `rx_resume`, which runs only once this has
+    // masked the interrupt.
+    unsafe { &*pac::USART1::ptr() }
+        .cr1()
+        .modify(|_, w| w.rxneie().clear_bit());
+    pac::NVIC::mask(Interrupt::USART1);
+}
+
+/// Sleeps until an interrupt unless `ready` already holds; no wake-up is
+/// lost between the check and the sleep.
+/// The check runs with every interrupt masked (the one global critical
+/// section left, a few instructions long): an interrupt that comes then
+/// still wakes the core, and is taken as soon as the check is over.
+pub fn sleep_unless(mut ready: impl FnMut() -> bool) {
+    cortex_m::interrupt::free(|_| {
+        if !ready() {
+            cortex_m::asm::wfi();
+        }
+    });
+}
+
+/// TIM2's count: microseconds, free-running (it wraps after 71 minutes).
+#[inline(always)]
+pub fn ticks() -> u32 {
+    // SAFETY: a read of the counter, which nothing else writes after init.
+    unsafe { &*pac::TIM2::ptr() }.cnt().read().bits()
+}
+
+/// TIM2 as the step clock: a free-running 32-bit counter at the device's
+/// tick rate (1 MHz); runs are timed from its count at their start.
+pub struct StepTimer {
+    tim: pac::TIM2,
+}
+
+impl StepTimer {
+    /// The timer's counter.
+    #[inline(always)]
+    pub fn count(&self) -> u32 {
+        self.tim.cnt().read().bits()
+    }
+
+    /// Counts freely at the device's tick rate.
+    fn count_ticks(&mut self) {
+        let psc = TIM2_CLK_HZ / TickRate::TIMER.hz() - 1;
+        self.start(psc);
+    }
+
+    /// Runs the counter freely at the undivided timer clock (measurements).
+    pub fn free_run(&mut self) {
+        self.start(0);
+    }
+
+    fn start(&mut self, psc: u32) {
+        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        self.tim.psc().write(|w| unsafe { w.bits(psc) });
+        self.tim.arr().write(|w| unsafe { w.bits(u32::MAX) });
+        self.tim.egr().write(|w| w.ug().set_bit());
+        self.tim.dier().modify(|_, w| w.uie().clear_bit());
+        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    }
+}
+
+/// TIM5 counts of one tick of TIM2: QEMU 7.2 schedules a timer's update
+/// right only without a prescaler (it multiplies the current time by
+/// it), so under QEMU TIM5 counts its 1 GHz undivided.
+const ALARM_PER_TICK: u32 = if cfg!(feature = "qemu") { 1000 } else { 1 };
+/// The longest alarm, ticks (4 s: within 32 bits of QEMU's nanoseconds);
+/// a longer wait is armed again when it fires.
+const ALARM_MAX_TICKS: u32 = 4_000_000;
+
+/// TIM5 as the step interrupt's alarm: one-shot, in ticks of TIM2.
+pub struct Alarm {
+    tim: pac::TIM5,
+}
+
+impl Alarm {
+    const CR1: u32 = 0b1100; // URS, OPM
+    const CEN: u32 = 1;
+
+    fn new(tim: pac::TIM5) -> Alarm {
+        let psc = if cfg!(feature = "qemu") {
+            0
+        } else {
+            TIM2_CLK_HZ / TickRate::TIMER.hz() - 1
+        };
+        // SAFETY (all the writes below): TIM5's own registers, raw values
+        // of fields the reference manual documents.
+        tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
+        tim.psc().write(|w| unsafe { w.bits(psc) });
+        // Load the prescaler without an interrupt (URS).
+        tim.egr().write(|w| w.ug().set_bit());
+        tim.sr().write(|w| unsafe { w.bits(0) });
+        tim.dier().write(|w| w.uie().set_bit());
+        Alarm { tim }
+    }
+
+    /// Fires in `ticks` (1 at least).
+    #[inline(always)]
+    pub fn arm(&mut self, ticks: u32) {
+        let t = ticks.clamp(1, ALARM_MAX_TICKS) * ALARM_PER_TICK;
+        // SAFETY: TIM5's own registers: the counter, the period, and CR1
+        // with the bits of `new`.
+        self.tim.cnt().write(|w| unsafe { w.bits(0) });
+        self.tim.arr().write(|w| unsafe { w.bits(t) });
+        self.tim
+            .cr1()
+            .write(|w| unsafe { w.bits(Self::CR1 | Self::CEN) });
+    }
+
+    /// Its interrupt is being answered.
+    #[inline(always)]
+    pub fn clear(&mut self) {
+        // SAFETY: writing 0 clears the update flag.
+        self.tim.sr().write(|w| unsafe { w.bits(0) });
+    }
+
+    /// Stops it.
+    pub fn stop(&mut self) {
+        // SAFETY: as in `arm`, without CEN; the flag cleared.
+        self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
+        self.tim.sr().write(|w| unsafe { w.bits(0) });
+    }
+}
+
+/// SysTick as the timer that ends a STEP pulse: one-shot, in core cycles.
+pub struct Pulse {
+    syst: cortex_m::peripheral::SYST,
+    /// Core cycles per tick of TIM2.
+    per_tick: u32,
+}
+
+impl Pulse {
+    /// ENABLE, TICKINT, the core clock.
+    const ON: u32 = 0b111;
+    const OFF: u32 = 0b100;
+
+    fn new(mut syst: cortex_m::peripheral::SYST, clock: &StepTimer) -> Pulse {
+        use cortex_m::peripheral::syst::SystClkSource;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.disable_interrupt();
+        // On the board the core clock is known; QEMU's is measured against
+        // TIM2 (1000 ticks).
+        let per_tick = if cfg!(feature = "qemu") {
+            syst.set_reload(0x00FF_FFFF);
+            syst.clear_current();
+            syst.enable_counter();
+            let t0 = clock.count();
+            let v0 = cortex_m::peripheral::SYST::get_current();
+            while clock.count().wrapping_sub(t0) < 1000 {}
+            let v1 = cortex_m::peripheral::SYST::get_current();
+            syst.disable_counter();
+            ((v0.wrapping_sub(v1) & 0x00FF_FFFF) / 1000).max(1)
+        } else {
+            SYSCLK_HZ / TickRate::TIMER.hz()
+        };
+        Pulse { syst, per_tick }
+    }
+
+    /// The pulse lasts `ticks` ticks from [`Pulse::arm`].
+    pub fn set_width(&mut self, ticks: u32) {
+        self.syst
+            .set_reload((ticks.max(1) * self.per_tick).min(0x00FF_FFFF));
+    }
+
+    /// Starts the pulse's time; an end of the pulse before that is still
+    /// pending is forgotten (it would end this one early).
+    #[inline(always)]
+    pub fn arm(&mut self) {
+        // SAFETY: SysTick's own registers: a write clears the current
+        // value; CSR with the bits above. ICSR's PENDSTCLR only clears
+        // SysTick's pending state.
+        unsafe {
+            (*cortex_m::peripheral::SCB::PTR).icsr.write(1 << 25);
+            self.syst.cvr.write(0);
+            self.syst.csr.write(Self::ON);
+        }
+    }
+
+    /// Stops it (from its own interrupt, or when a step ends the pulse
+    /// itself).
+    #[inline(always)]
+    pub fn stop() {
+        // SAFETY: SysTick's control register, which only the step
+        // interrupt and this one (at its priority) write.
+        unsafe { (*cortex_m::peripheral::SYST::PTR).csr.write(Self::OFF) }
+    }
+}
+
+/// The STEP and DIR pins in one word of GPIOC's BSRR: X STEP PC0, X DIR
+/// PC1, Z STEP PC2, Z DIR PC3 (DIR high: negative).
+pub mod pins {
+    use super::StepEvent;
+
+    /// Both STEP lines low.
+    pub const FALL: u32 = (1 << 16) | (1 << 18);
+
+    /// The STEP lines of an event high.
+    pub const fn rise(bits: u8) -> u32 {
+        let mut w = 0;
+        if bits & StepEvent::X_STEP != 0 {
+            w |= 1 << 0;
+        }
+        if bits & StepEvent::Z_STEP != 0 {
+            w |= 1 << 2;
+        }
+        w
+    }
+
+    /// The STEP lines low and the DIR lines of an event's stepping axes
+    /// as it needs them.
+    pub const fn fall_dir(bits: u8) -> u32 {
+        let mut w = FALL;
+        if bits & StepEvent::X_STEP != 0 {
+            w |= if bits & StepEvent::X_NEG != 0 {
+                1 << 1
+            } else {
+                1 << 17
+            };
+        }
+        if bits & StepEvent::Z_STEP != 0 {
+            w |= if bits & StepEvent::Z_NEG != 0 {
+                1 << 3
+            } else {
+                1 << 19
+            };
+        }
+        w
+    }
+
+    /// One write of GPIOC's BSRR: atomic, only the bits set change.
+    #[inline(always)]
+    pub fn write(word: u32) {
+        // SAFETY: BSRR writes are atomic and touch only the pins whose
+        // bits are set; these pins belong to the step interrupt.
+        unsafe {
+            (*stm32f4::stm32f405::GPIOC::ptr())
+                .bsrr()
+                .write(|w| w.bits(word))
+        };
+    }
+}
+
+/// Whether time is kept: on the board and in `qemu-paced`; a plain `qemu`
+/// build issues steps and passes dwells as fast as the core runs.
+pub const PACED: bool = cfg!(any(not(feature = "qemu"), feature = "qemu-paced"));
+
+/// Busy-wait delays counted in core cycles.
+pub struct CycleDelay;
+
+impl DelayNs for CycleDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        let cycles = (u64::from(ns) * u64::from(SYSCLK_HZ)).div_ceil(1_000_000_000);
+        cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX));
+    }
+}
+
+/// One pin of GPIOC, driven through its set/reset register.
+pub struct PortCPin(pub u8);
+
+impl ErrorType for PortCPin {
+    type Error = Infallible;
+}
+
+impl OutputPin for PortCPin {
+    #[inline(always)]
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        // SAFETY: BSRR writes are atomic and touch only this pin.
+        let gpioc = unsafe { &*pac::GPIOC::ptr() };
+        gpioc
+            .bsrr()
+            .write(|w| unsafe { w.bits(1u32 << (16 + u32::from(self.0 & 15))) });
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        // SAFETY: as above.
+        let gpioc = unsafe { &*pac::GPIOC::ptr() };
+        gpioc
+            .bsrr()
+            .write(|w| unsafe { w.bits(1u32 << u32::from(self.0 & 15)) });
+        Ok(())
+    }
+}
+
+/// Drives every STEP output low at once, without needing the driver (panics).
+pub fn step_outputs_low() {
+    // SAFETY: a single atomic BSRR write.
+    let gpioc = unsafe { &*pac::GPIOC::ptr() };
+    gpioc.bsrr().write(|w| w.br0().set_bit().br2().set_bit());
+}
