@@ -8,7 +8,7 @@
 //! |---|---|---|---|
 //! | 5 | supervisor | TIM3, every 1 ms | judges and kicks the watchdog; shares atomics only |
 //! | 4 | step | TIM5 (alarm), pended | pops a ready entry, writes the pins, arms the next alarm: about 50 instructions a step |
-//! | 4 | pulse end | SysTick | STEP lines low: a few instructions |
+//! | 4 | pulse end | SysTick | STEP lines low: a few instructions (under paced QEMU SysTick is the step alarm) |
 //! | 3 | prep | EXTI0, pended | fills the ready queue (255 entries) from the stepper |
 //! | 2 | receive | USART1 | buffers a byte or queues a real-time byte: under 100 instructions |
 //! | 1 | real-time | EXTI1, pended | hold, resume, reset, status request, in order |
@@ -176,10 +176,10 @@ mod app {
         cx.shared.step.lock(|s| s.service());
     }
 
-    /// The end of a STEP pulse.
+    /// The end of a STEP pulse (the board), the step alarm (paced QEMU).
     #[task(binds = SysTick, priority = 4)]
-    fn pulse_end(_: pulse_end::Context) {
-        step::pulse_end();
+    fn systick(_: systick::Context) {
+        step::systick();
     }
 
     /// The prep stage: fills the ready queue.

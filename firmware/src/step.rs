@@ -22,7 +22,7 @@
 //! | longest entry | a run's end with the step before it |
 
 use crate::board::spindle::Spindle;
-use crate::board::{pins, ticks, Alarm, Pulse, PACED};
+use crate::board::{pins, ticks, Alarm, Pulse, PACED, PULSE_TIMER};
 use core::sync::atomic::{AtomicBool, Ordering};
 use core_nostd::interleave::StepEvent;
 use core_nostd::prep::{Ready, ReadyQueue, ReadyRx};
@@ -91,11 +91,20 @@ pub fn wake() {
     cortex_m::peripheral::NVIC::pend(stm32f4::stm32f405::Interrupt::TIM5);
 }
 
-/// The STEP pulse's end, from SysTick: both STEP lines low.
+/// SysTick's interrupt: on the board the STEP pulse's end (both STEP
+/// lines low); under paced QEMU the step interrupt's alarm; in the
+/// `stall-test` build the supervisor's clock.
 #[inline(always)]
-pub fn pulse_end() {
-    Pulse::stop();
-    pins::write(pins::FALL);
+pub fn systick() {
+    #[cfg(feature = "stall-test")]
+    return rtic::pend(stm32f4::stm32f405::Interrupt::TIM3);
+    #[cfg(all(feature = "qemu", not(feature = "stall-test")))]
+    return crate::board::alarm_fired();
+    #[cfg(not(feature = "qemu"))]
+    {
+        Pulse::stop();
+        pins::write(pins::FALL);
+    }
 }
 
 /// A ready step's pin words, by its bits.
@@ -166,7 +175,12 @@ impl StepIsr {
             }
             let Some(r) = self.rx.peek() else {
                 self.next = None;
-                if !PACED {
+                if !PULSE_TIMER {
+                    // No timer ends it: the pulse ends here, its width
+                    // first.
+                    if PACED {
+                        while (ticks().wrapping_sub(self.pulse_end) as i32) < 0 {}
+                    }
                     pins::write(pins::FALL);
                 }
                 IDLE.store(true, Ordering::Release);
@@ -212,7 +226,8 @@ impl StepIsr {
                     if PACED {
                         while (ticks().wrapping_sub(self.pulse_end) as i32) < 0 {}
                     }
-                    pulse_end();
+                    Pulse::stop();
+                    pins::write(pins::FALL);
                 }
             }
         }
@@ -235,7 +250,9 @@ impl StepIsr {
         pins::write(n.rise);
         let rose = ticks();
         if PACED {
-            self.pulse.arm();
+            if PULSE_TIMER {
+                self.pulse.arm();
+            }
             self.pulse_end = rose.wrapping_add(self.width);
             let late = rose.wrapping_sub(n.due);
             if late != 0 {

@@ -127,8 +127,7 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
 
     let mut tim2 = StepTimer { tim: dp.TIM2 };
     tim2.count_ticks();
-    let alarm = Alarm::new(dp.TIM5);
-    let pulse = Pulse::new(syst, &tim2);
+    let (alarm, pulse) = step_timers(dp.TIM5, syst, &tim2);
     if was_reset_by_watchdog(&dp.RCC) {
         defmt::warn!("the watchdog reset the board");
     }
@@ -285,7 +284,15 @@ pub fn rx_pause() {
 /// The check runs with every interrupt masked (the one global critical
 /// section left, a few instructions long): an interrupt that comes then
 /// still wakes the core, and is taken as soon as the check is over.
+///
+/// In the `qemu-timed` build the core never sleeps: QEMU's virtual time
+/// then advances by the instructions run (`-icount`), and a timer fires
+/// on its tick instead of when the host wakes QEMU up (tens of
+/// microseconds to milliseconds late).
 pub fn sleep_unless(mut ready: impl FnMut() -> bool) {
+    if cfg!(feature = "qemu-timed") {
+        return;
+    }
     cortex_m::interrupt::free(|_| {
         if !ready() {
             cortex_m::asm::wfi();
@@ -334,106 +341,157 @@ impl StepTimer {
     }
 }
 
-/// TIM5 counts of one tick of TIM2: QEMU 7.2 schedules a timer's update
-/// right only without a prescaler (it multiplies the current time by
-/// it), so under QEMU TIM5 counts its 1 GHz undivided.
-const ALARM_PER_TICK: u32 = if cfg!(feature = "qemu") { 1000 } else { 1 };
-/// The longest alarm, ticks (4 s: within 32 bits of QEMU's nanoseconds);
-/// a longer wait is armed again when it fires.
+/// The longest alarm, ticks; a longer wait is armed again when it fires.
 const ALARM_MAX_TICKS: u32 = 4_000_000;
 
-/// TIM5 as the step interrupt's alarm: one-shot, in ticks of TIM2.
+/// The step interrupt's alarm: one-shot, in ticks of TIM2. On the board
+/// TIM5; under paced QEMU SysTick, which pends the step interrupt: QEMU
+/// 7.2's STM32 timers do not schedule a one-shot update right.
 pub struct Alarm {
+    #[cfg(not(feature = "qemu"))]
     tim: pac::TIM5,
+    #[cfg(feature = "qemu")]
+    syst: cortex_m::peripheral::SYST,
+    /// Alarm counts per tick of TIM2.
+    per_tick: u32,
+}
+
+/// The STEP pulse's end: SysTick on the board; none under QEMU, where
+/// the step interrupt ends the pulse when it comes to the next step.
+pub struct Pulse {
+    #[cfg(not(feature = "qemu"))]
+    syst: cortex_m::peripheral::SYST,
+    #[cfg(not(feature = "qemu"))]
+    per_tick: u32,
+}
+
+/// Whether a timer ends each STEP pulse (the board).
+pub const PULSE_TIMER: bool = !cfg!(feature = "qemu");
+
+/// Core cycles per tick of TIM2: known on the board, measured under QEMU
+/// (1000 ticks).
+fn cycles_per_tick(syst: &mut cortex_m::peripheral::SYST, clock: &StepTimer) -> u32 {
+    use cortex_m::peripheral::syst::SystClkSource;
+    syst.set_clock_source(SystClkSource::Core);
+    syst.disable_interrupt();
+    if !cfg!(feature = "qemu") {
+        return SYSCLK_HZ / TickRate::TIMER.hz();
+    }
+    syst.set_reload(0x00FF_FFFF);
+    syst.clear_current();
+    syst.enable_counter();
+    let t0 = clock.count();
+    let v0 = cortex_m::peripheral::SYST::get_current();
+    while clock.count().wrapping_sub(t0) < 1000 {}
+    let v1 = cortex_m::peripheral::SYST::get_current();
+    syst.disable_counter();
+    ((v0.wrapping_sub(v1) & 0x00FF_FFFF) / 1000).max(1)
+}
+
+/// SysTick's control bits: ENABLE, TICKINT, the core clock; or only the
+/// clock (stopped).
+const SYST_ON: u32 = 0b111;
+const SYST_OFF: u32 = 0b100;
+
+/// Makes the two step timers: TIM5 and SysTick on the board, SysTick as
+/// the alarm under QEMU.
+fn step_timers(
+    tim5: pac::TIM5,
+    mut syst: cortex_m::peripheral::SYST,
+    clock: &StepTimer,
+) -> (Alarm, Pulse) {
+    let per_tick = cycles_per_tick(&mut syst, clock);
+    #[cfg(not(feature = "qemu"))]
+    {
+        let psc = TIM2_CLK_HZ / TickRate::TIMER.hz() - 1;
+        // SAFETY (all the writes below): TIM5's own registers, raw values
+        // of fields the reference manual documents.
+        tim5.cr1().write(|w| unsafe { w.bits(Alarm::CR1) });
+        tim5.psc().write(|w| unsafe { w.bits(psc) });
+        // Load the prescaler without an interrupt (URS).
+        tim5.egr().write(|w| w.ug().set_bit());
+        tim5.sr().write(|w| unsafe { w.bits(0) });
+        tim5.dier().write(|w| w.uie().set_bit());
+        (
+            Alarm { tim: tim5, per_tick: 1 },
+            Pulse { syst, per_tick },
+        )
+    }
+    #[cfg(feature = "qemu")]
+    {
+        // TIM5 stays unused.
+        let _ = tim5;
+        (Alarm { syst, per_tick }, Pulse {})
+    }
 }
 
 impl Alarm {
+    #[cfg(not(feature = "qemu"))]
     const CR1: u32 = 0b1100; // URS, OPM
-    const CEN: u32 = 1;
-
-    fn new(tim: pac::TIM5) -> Alarm {
-        let psc = if cfg!(feature = "qemu") {
-            0
-        } else {
-            TIM2_CLK_HZ / TickRate::TIMER.hz() - 1
-        };
-        // SAFETY (all the writes below): TIM5's own registers, raw values
-        // of fields the reference manual documents.
-        tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
-        tim.psc().write(|w| unsafe { w.bits(psc) });
-        // Load the prescaler without an interrupt (URS).
-        tim.egr().write(|w| w.ug().set_bit());
-        tim.sr().write(|w| unsafe { w.bits(0) });
-        tim.dier().write(|w| w.uie().set_bit());
-        Alarm { tim }
-    }
 
     /// Fires in `ticks` (1 at least).
     #[inline(always)]
     pub fn arm(&mut self, ticks: u32) {
-        let t = ticks.clamp(1, ALARM_MAX_TICKS) * ALARM_PER_TICK;
+        let t = ticks.clamp(1, ALARM_MAX_TICKS) * self.per_tick;
         // SAFETY: TIM5's own registers: the counter, the period, and CR1
-        // with the bits of `new`.
-        self.tim.cnt().write(|w| unsafe { w.bits(0) });
-        self.tim.arr().write(|w| unsafe { w.bits(t) });
-        self.tim
-            .cr1()
-            .write(|w| unsafe { w.bits(Self::CR1 | Self::CEN) });
+        // with the bits of `step_timers` and CEN.
+        #[cfg(not(feature = "qemu"))]
+        {
+            self.tim.cnt().write(|w| unsafe { w.bits(0) });
+            self.tim.arr().write(|w| unsafe { w.bits(t) });
+            self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1 | 1) });
+        }
+        // SAFETY: SysTick's own registers (24 bits of reload). Its clock
+        // against TIM2 is measured, not known: it fires a sixteenth early,
+        // and the step interrupt waits for the rest.
+        #[cfg(feature = "qemu")]
+        unsafe {
+            self.syst.rvr.write((t - t / 16).clamp(1, 0x00FF_FFFF));
+            self.syst.cvr.write(0);
+            self.syst.csr.write(SYST_ON);
+        }
     }
 
     /// Its interrupt is being answered.
     #[inline(always)]
     pub fn clear(&mut self) {
         // SAFETY: writing 0 clears the update flag.
+        #[cfg(not(feature = "qemu"))]
         self.tim.sr().write(|w| unsafe { w.bits(0) });
     }
 
     /// Stops it.
     pub fn stop(&mut self) {
         // SAFETY: as in `arm`, without CEN; the flag cleared.
-        self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
-        self.tim.sr().write(|w| unsafe { w.bits(0) });
+        #[cfg(not(feature = "qemu"))]
+        {
+            self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
+            self.tim.sr().write(|w| unsafe { w.bits(0) });
+        }
+        // SAFETY: SysTick's control register.
+        #[cfg(feature = "qemu")]
+        unsafe {
+            self.syst.csr.write(SYST_OFF)
+        };
     }
 }
 
-/// SysTick as the timer that ends a STEP pulse: one-shot, in core cycles.
-pub struct Pulse {
-    syst: cortex_m::peripheral::SYST,
-    /// Core cycles per tick of TIM2.
-    per_tick: u32,
+/// SysTick's interrupt under paced QEMU: the alarm fired; SysTick stops
+/// and the step interrupt runs.
+#[cfg(feature = "qemu")]
+pub fn alarm_fired() {
+    // SAFETY: SysTick's control register, which only the alarm writes.
+    unsafe { (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF) };
+    pac::NVIC::pend(Interrupt::TIM5);
 }
 
 impl Pulse {
-    /// ENABLE, TICKINT, the core clock.
-    const ON: u32 = 0b111;
-    const OFF: u32 = 0b100;
-
-    fn new(mut syst: cortex_m::peripheral::SYST, clock: &StepTimer) -> Pulse {
-        use cortex_m::peripheral::syst::SystClkSource;
-        syst.set_clock_source(SystClkSource::Core);
-        syst.disable_interrupt();
-        // On the board the core clock is known; QEMU's is measured against
-        // TIM2 (1000 ticks).
-        let per_tick = if cfg!(feature = "qemu") {
-            syst.set_reload(0x00FF_FFFF);
-            syst.clear_current();
-            syst.enable_counter();
-            let t0 = clock.count();
-            let v0 = cortex_m::peripheral::SYST::get_current();
-            while clock.count().wrapping_sub(t0) < 1000 {}
-            let v1 = cortex_m::peripheral::SYST::get_current();
-            syst.disable_counter();
-            ((v0.wrapping_sub(v1) & 0x00FF_FFFF) / 1000).max(1)
-        } else {
-            SYSCLK_HZ / TickRate::TIMER.hz()
-        };
-        Pulse { syst, per_tick }
-    }
-
     /// The pulse lasts `ticks` ticks from [`Pulse::arm`].
     pub fn set_width(&mut self, ticks: u32) {
+        #[cfg(not(feature = "qemu"))]
         self.syst
             .set_reload((ticks.max(1) * self.per_tick).min(0x00FF_FFFF));
+        let _ = ticks;
     }
 
     /// Starts the pulse's time; an end of the pulse before that is still
@@ -443,20 +501,23 @@ impl Pulse {
         // SAFETY: SysTick's own registers: a write clears the current
         // value; CSR with the bits above. ICSR's PENDSTCLR only clears
         // SysTick's pending state.
+        #[cfg(not(feature = "qemu"))]
         unsafe {
             (*cortex_m::peripheral::SCB::PTR).icsr.write(1 << 25);
             self.syst.cvr.write(0);
-            self.syst.csr.write(Self::ON);
+            self.syst.csr.write(SYST_ON);
         }
     }
 
-    /// Stops it (from its own interrupt, or when a step ends the pulse
-    /// itself).
+    /// Stops it (from its own interrupt, or a reset).
     #[inline(always)]
     pub fn stop() {
         // SAFETY: SysTick's control register, which only the step
         // interrupt and this one (at its priority) write.
-        unsafe { (*cortex_m::peripheral::SYST::PTR).csr.write(Self::OFF) }
+        #[cfg(not(feature = "qemu"))]
+        unsafe {
+            (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF)
+        }
     }
 }
 
