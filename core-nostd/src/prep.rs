@@ -67,7 +67,19 @@ impl Ready {
     const RUN_START: u32 = 1 << 8;
     const BLOCK: u32 = 2 << 8;
     const RUN_END: u32 = 3 << 8;
-    const TURNS: u32 = 1 << 4;
+    /// In an entry's second word ([`ReadyRx::take_words`]): not a step
+    /// when any of these bits is set.
+    pub const KIND: u32 = 0xFF00;
+    /// In a step's second word: its DIR changes.
+    pub const TURNS: u32 = 1 << 4;
+    /// In a step's second word: its STEP and DIR bits.
+    pub const BITS: u32 = 0x0F;
+
+    /// An entry from its two words ([`ReadyRx::take_words`]).
+    #[inline(always)]
+    pub const fn from_parts(w0: u32, w1: u32) -> Ready {
+        Self::from_words(w0, w1)
+    }
 
     /// As two words: the tick or the speed, and the kind with the bits.
     #[inline(always)]
@@ -239,6 +251,26 @@ impl ReadyRx<'_> {
         if self.q.tail.load(Ordering::Relaxed) != head {
             self.q.head.store(head.wrapping_add(1), Ordering::Release);
         }
+    }
+
+    /// Takes the first entry as its two words (a step: its tick, and its
+    /// bits with [`Ready::TURNS`]; a mark has a bit of [`Ready::KIND`]
+    /// set), with the count of entries taken after it: the step
+    /// interrupt's way, which decodes only what it needs.
+    #[inline(always)]
+    pub fn take_words(&mut self) -> Option<(u32, u32, u32)> {
+        let head = self.q.head.load(Ordering::Relaxed);
+        if self.q.tail.load(Ordering::Acquire) == head {
+            return None;
+        }
+        let slot = self.q.slot(head);
+        let (w0, w1) = (
+            slot[0].load(Ordering::Relaxed),
+            slot[1].load(Ordering::Relaxed),
+        );
+        let head = head.wrapping_add(1);
+        self.q.head.store(head, Ordering::Release);
+        Some((w0, w1, head))
     }
 
     /// Takes the first entry.

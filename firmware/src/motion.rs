@@ -135,9 +135,11 @@ pub fn act(rt: Realtime, prep: &mut impl Mutex<T = PrepStage>, step: &mut impl M
 /// Reset: outputs low at once, then the queue dropped and the stepper's
 /// registers and record put back to what was issued; what was running.
 fn reset(prep: &mut impl Mutex<T = PrepStage>, step: &mut impl Mutex<T = StepIsr>) -> Aborted {
-    step.lock(|s| s.stop());
+    // The prep first: it puts nothing in the queue while the step
+    // interrupt stops and drops what it holds.
     prep.lock(|p| {
         let found = step.lock(|s| {
+            s.stop();
             let (passed, dropped) = s.drop_queued();
             let found = p.prep.abort(passed, dropped);
             s.restart();

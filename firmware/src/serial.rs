@@ -67,9 +67,14 @@ impl Receiver {
             PAUSED.store(true, Ordering::Release);
             return;
         }
-        let Some(byte) = board::rx_byte() else {
-            return;
-        };
+        if let Some(byte) = board::rx_byte() {
+            self.take(byte);
+        }
+    }
+
+    /// What the receive interrupt does with a byte it read.
+    #[inline(always)]
+    pub fn take(&mut self, byte: u8) {
         let (rt, quiet, forward) = if GRBL.load(Ordering::Relaxed) {
             match GrblRealtime::from_byte(byte) {
                 Some(GrblRealtime::Common(rt)) => (Some(rt), true, false),

@@ -24,21 +24,8 @@
 use crate::board::spindle::Spindle;
 use crate::board::{pins, ticks, Alarm, Pulse, PACED, PULSE_TIMER};
 use core::sync::atomic::{AtomicBool, Ordering};
-use core_nostd::interleave::StepEvent;
 use core_nostd::prep::{Ready, ReadyQueue, ReadyRx};
 use core_nostd::stepdir::DriveTiming;
-
-/// The step armed for, taken from the queue.
-#[derive(Clone, Copy, Debug)]
-struct Next {
-    /// TIM2's count at its tick.
-    due: u32,
-    /// STEP lines low and its DIR lines, then its STEP lines high.
-    fall_dir: u32,
-    rise: u32,
-    /// The step, for a reset that drops it.
-    event: StepEvent,
-}
 
 /// What the step interrupt owns.
 pub struct StepIsr {
@@ -48,18 +35,27 @@ pub struct StepIsr {
     spindle: Spindle,
     /// TIM2's count at the run's tick 0.
     origin: u32,
-    /// The step armed for (taken from the queue, not issued yet).
-    next: Option<Next>,
+    /// A step is armed for (taken from the queue, not issued yet): TIM2's
+    /// count at its tick, the STEP lines low with its DIR lines, its STEP
+    /// lines high, and its entry's bits.
+    armed: bool,
+    due: u32,
+    fall_dir: u32,
+    rise: u32,
+    /// The alarm was armed short of the step (its longest wait).
+    far: bool,
+    /// Ticks ahead of a step whose DIR changes: the set-up time and one.
+    lead_turn: u32,
     /// When the STEP pulse in progress may end (TIM2 count).
     pulse_end: u32,
-    /// Pulse width and DIR set-up, ticks.
+    /// TIM2's count when the last step rose, or when a mark was passed:
+    /// the time the next alarm is armed from.
+    now: u32,
+    /// Pulse width, ticks.
     width: u32,
-    setup: u32,
     /// Steps issued after their tick since power-on, and the most late.
     late: u32,
     worst: u32,
-    /// A reset stopped it: it takes nothing until the reset is handled.
-    stopped: bool,
 }
 
 /// Entries the step interrupt takes between two pends of the prep.
@@ -107,19 +103,15 @@ pub fn systick() {
     }
 }
 
-/// A ready step's pin words, by its bits.
-const RISE: [u32; 16] = words(false);
-const FALL_DIR: [u32; 16] = words(true);
+/// A ready step's pin words by its bits: STEP lines low with its DIR
+/// lines, then its STEP lines high.
+const WORDS: [[u32; 2]; 16] = words();
 
-const fn words(fall_dir: bool) -> [u32; 16] {
-    let mut t = [0; 16];
+const fn words() -> [[u32; 2]; 16] {
+    let mut t = [[0; 2]; 16];
     let mut b = 0;
     while b < 16 {
-        t[b] = if fall_dir {
-            pins::fall_dir(b as u8)
-        } else {
-            pins::rise(b as u8)
-        };
+        t[b] = [pins::fall_dir(b as u8), pins::rise(b as u8)];
         b += 1;
     }
     t
@@ -136,13 +128,17 @@ impl StepIsr {
             pulse,
             spindle,
             origin: 0,
-            next: None,
+            armed: false,
+            due: 0,
+            fall_dir: 0,
+            rise: 0,
+            far: false,
+            lead_turn: 1,
             pulse_end: ticks(),
+            now: 0,
             width: 0,
-            setup: 0,
             late: 0,
             worst: 0,
-            stopped: false,
         };
         s.set_drive(&DriveTiming::DEFAULT);
         s
@@ -152,126 +148,157 @@ impl StepIsr {
     pub fn set_drive(&mut self, drive: &DriveTiming) {
         // The count ticks at 1 µs: one more makes the width whole.
         self.width = drive.pulse_us() + 1;
-        self.setup = drive.setup_us();
+        self.lead_turn = drive.setup_us() + 1;
         self.pulse.set_width(self.width);
     }
 
-    /// Answers the alarm, or a pend: issues what is due, passes the marks
-    /// on the way, and arms the alarm for the next step, or goes idle.
-    #[inline(always)]
+    /// Answers the alarm, or a pend: issues the step armed for when it is
+    /// due, passes the marks that follow, and arms the alarm for the next
+    /// step, or goes idle. One function, which the measurements call as
+    /// the interrupt does.
+    #[inline(never)]
     pub fn service(&mut self) {
         self.alarm.clear();
-        if self.stopped {
-            return;
+        self.now = ticks();
+        if self.armed {
+            let due = self.due;
+            if PACED && self.far {
+                // A wait longer than the alarm's longest: again.
+                self.far = false;
+                self.arm_at(due.wrapping_sub(1), ticks());
+                return;
+            }
+            self.issue(due);
         }
         loop {
-            if let Some(n) = self.next {
-                if PACED && (n.due.wrapping_sub(ticks()) as i32) > 1 {
-                    // Early (an alarm longer than the longest): again.
-                    self.arm(n.due.wrapping_sub(1));
-                    return;
-                }
-                self.issue(n);
-            }
-            let Some(r) = self.rx.peek() else {
-                self.next = None;
-                if !PULSE_TIMER {
-                    // No timer ends it: the pulse ends here, its width
-                    // first.
-                    if PACED {
-                        while (ticks().wrapping_sub(self.pulse_end) as i32) < 0 {}
-                    }
-                    pins::write(pins::FALL);
-                }
-                IDLE.store(true, Ordering::Release);
-                pend_prep();
+            let Some((w0, w1, taken)) = self.rx.take_words() else {
+                self.idle();
                 return;
             };
-            self.rx.pop();
             // The prep refills every 64 entries taken.
-            if self.rx.taken() % REFILL == 0 {
+            if taken % REFILL == 0 {
                 pend_prep();
             }
-            #[cfg(feature = "stall-test")]
-            stall::maybe();
-            match r {
-                Ready::Step { tick, event, turns } => {
-                    let due = self.origin.wrapping_add(tick);
-                    let bits = event.bits() as usize & 15;
-                    let n = Next {
-                        due,
-                        fall_dir: FALL_DIR[bits],
-                        rise: RISE[bits],
-                        event,
-                    };
-                    self.next = Some(n);
-                    if PACED {
-                        // One tick ahead, and the set-up time when DIR
-                        // changes, but not before the pulse has ended.
-                        let lead = if turns { self.setup + 1 } else { 1 };
-                        let mut at = due.wrapping_sub(lead);
-                        if (at.wrapping_sub(self.pulse_end) as i32) < 0 {
-                            at = self.pulse_end;
-                        }
-                        if (at.wrapping_sub(ticks()) as i32) > 0 {
-                            self.arm(at);
-                            return;
-                        }
-                    }
-                }
-                Ready::RunStart => self.origin = ticks(),
-                Ready::Block { rpm } => self.spindle.follow(rpm),
-                Ready::RunEnd => {
-                    // The last pulse ends (its width first).
-                    if PACED {
-                        while (ticks().wrapping_sub(self.pulse_end) as i32) < 0 {}
-                    }
-                    Pulse::stop();
-                    pins::write(pins::FALL);
-                }
+            if w1 & Ready::KIND != 0 {
+                self.mark(w0, w1);
+                self.now = ticks();
+                continue;
+            }
+            // A step: armed for, one tick ahead (and the set-up time when
+            // its DIR changes), not before the pulse before has ended.
+            let due = self.origin.wrapping_add(w0);
+            let [fall_dir, rise] = WORDS[(w1 & Ready::BITS) as usize];
+            (self.due, self.fall_dir, self.rise, self.armed) = (due, fall_dir, rise, true);
+            if !PACED {
+                self.issue(due);
+                continue;
+            }
+            let lead = if w1 & Ready::TURNS != 0 {
+                self.lead_turn
+            } else {
+                1
+            };
+            let mut at = due.wrapping_sub(lead);
+            if (at.wrapping_sub(self.pulse_end) as i32) < 0 {
+                at = self.pulse_end;
+            }
+            if self.arm_at(at, self.now) {
+                return;
             }
         }
     }
 
-    /// Arms the alarm for TIM2's count `at`.
+    /// Arms the alarm for TIM2's count `at`, unless it has come by `now`
+    /// (read a little before: the alarm then fires a little after `at`,
+    /// still ahead of the step); whether it armed.
     #[inline(always)]
-    fn arm(&mut self, at: u32) {
-        self.alarm.arm(at.wrapping_sub(ticks()));
+    fn arm_at(&mut self, at: u32, now: u32) -> bool {
+        let wait = at.wrapping_sub(now) as i32;
+        if wait <= 0 {
+            return false;
+        }
+        if wait as u32 > Alarm::LONGEST {
+            self.far = true;
+        }
+        self.alarm.arm(wait as u32);
+        true
     }
 
-    /// Issues the step armed for: the pulse before ends with this step's
-    /// DIR set, the STEP lines rise on the tick, the pulse's end starts.
-    #[inline(always)]
-    fn issue(&mut self, n: Next) {
-        pins::write(n.fall_dir);
-        if PACED {
-            while (ticks().wrapping_sub(n.due) as i32) < 0 {}
-        }
-        pins::write(n.rise);
-        let rose = ticks();
-        if PACED {
-            if PULSE_TIMER {
-                self.pulse.arm();
+    /// Nothing left in the queue: the pulse ends if no timer ends it, the
+    /// prep is asked for more.
+    #[inline(never)]
+    fn idle(&mut self) {
+        if !PULSE_TIMER {
+            // Its width first.
+            if PACED {
+                while (ticks().wrapping_sub(self.pulse_end) as i32) < 0 {}
             }
-            self.pulse_end = rose.wrapping_add(self.width);
-            let late = rose.wrapping_sub(n.due);
-            if late != 0 {
-                self.late = self.late.wrapping_add(1);
-                if late > self.worst {
-                    self.worst = late;
-                }
-            }
-        } else {
             pins::write(pins::FALL);
         }
-        self.next = None;
+        IDLE.store(true, Ordering::Release);
+        pend_prep();
     }
 
-    /// Reset: outputs low at once, the alarm and the pulse stopped; it
-    /// takes nothing until [`StepIsr::drop_queued`] and
-    /// [`StepIsr::restart`].
+    /// A mark: a run's start (its tick 0 now), a block's start (the
+    /// spindle's speed), a run's end (the last pulse ends).
+    #[inline(never)]
+    fn mark(&mut self, w0: u32, w1: u32) {
+        #[cfg(feature = "stall-test")]
+        stall::maybe();
+        match Ready::from_parts(w0, w1) {
+            Ready::RunStart => self.origin = ticks(),
+            Ready::Block { rpm } => self.spindle.follow(rpm),
+            Ready::RunEnd => {
+                if PACED {
+                    while (ticks().wrapping_sub(self.pulse_end) as i32) < 0 {}
+                }
+                Pulse::stop();
+                pins::write(pins::FALL);
+            }
+            Ready::Step { .. } => {}
+        }
+    }
+
+    /// Issues the step armed for, due at `due`: the pulse before ends with
+    /// this step's DIR set, the STEP lines rise on the tick, the pulse's
+    /// end starts.
+    #[inline(always)]
+    fn issue(&mut self, due: u32) {
+        pins::write(self.fall_dir);
+        if PACED {
+            while (ticks().wrapping_sub(due) as i32) < 0 {}
+        }
+        pins::write(self.rise);
+        let rose = ticks();
+        self.now = rose;
+        self.armed = false;
+        if !PACED {
+            pins::write(pins::FALL);
+            return;
+        }
+        if PULSE_TIMER {
+            self.pulse.arm();
+        }
+        self.pulse_end = rose.wrapping_add(self.width);
+        let late = rose.wrapping_sub(due);
+        if late != 0 {
+            self.late_by(late);
+        }
+    }
+
+    /// A step went `late` ticks after its tick.
+    #[inline(never)]
+    fn late_by(&mut self, late: u32) {
+        self.late = self.late.wrapping_add(1);
+        self.worst = self.worst.max(late);
+    }
+
+    /// Reset: outputs low at once, the alarm and the pulse stopped (the
+    /// caller holds the prep, which puts nothing in meanwhile); then
+    /// [`StepIsr::drop_queued`] and [`StepIsr::restart`].
     pub fn stop(&mut self) {
-        self.stopped = true;
+        self.armed = false;
+        self.far = false;
         self.alarm.stop();
         Pulse::stop();
         pins::write(pins::FALL);
@@ -283,11 +310,11 @@ impl StepIsr {
     /// as the iterator goes.
     pub fn drop_queued(&mut self) -> (u32, impl Iterator<Item = Ready> + '_) {
         let passed = self.passed();
-        let armed = self.next.take().map(|n| Ready::Step {
-            tick: n.due.wrapping_sub(self.origin),
-            event: n.event,
-            turns: false,
-        });
+        // Counted as a dropped step (its bits do not matter there).
+        let armed = self
+            .armed
+            .then(|| Ready::from_parts(self.due.wrapping_sub(self.origin), 0));
+        self.armed = false;
         let rx = &mut self.rx;
         (
             passed,
@@ -297,22 +324,27 @@ impl StepIsr {
         )
     }
 
-    /// Takes entries again (a reset has been handled).
+    /// Takes entries again (a reset has been handled): it waits for the
+    /// prep's next.
     pub fn restart(&mut self) {
-        self.stopped = false;
         IDLE.store(true, Ordering::Release);
     }
 
     /// Entries passed: those taken from the queue, less the step armed
     /// for (not issued yet).
     pub fn passed(&self) -> u32 {
-        self.rx.taken().wrapping_sub(u32::from(self.next.is_some()))
+        self.rx.taken().wrapping_sub(u32::from(self.armed))
     }
 
     /// Whether it issues or waits to issue anything: entries queued, a
     /// step armed for.
     pub fn busy(&self) -> bool {
-        self.next.is_some() || !self.rx.is_empty()
+        self.armed || !self.rx.is_empty()
+    }
+
+    /// TIM2's count at the step armed for, if one is.
+    pub fn due(&self) -> Option<u32> {
+        self.armed.then_some(self.due)
     }
 
     /// Steps issued after their tick since power-on, and the most late

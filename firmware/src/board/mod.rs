@@ -341,8 +341,13 @@ impl StepTimer {
     }
 }
 
-/// The longest alarm, ticks; a longer wait is armed again when it fires.
-const ALARM_MAX_TICKS: u32 = 4_000_000;
+/// The longest alarm, ticks (under QEMU within SysTick's 24 bits at up
+/// to 1000 cycles a tick); a longer wait is armed again when it fires.
+const ALARM_MAX_TICKS: u32 = if cfg!(feature = "qemu") {
+    16_000
+} else {
+    1 << 30
+};
 
 /// The step interrupt's alarm: one-shot, in ticks of TIM2. On the board
 /// TIM5; under paced QEMU SysTick, which pends the step interrupt: QEMU
@@ -363,6 +368,26 @@ pub struct Pulse {
     syst: cortex_m::peripheral::SYST,
     #[cfg(not(feature = "qemu"))]
     per_tick: u32,
+}
+
+/// What the board's pulse timer adds to a step, in instructions (under
+/// QEMU, where SysTick is the alarm, measured on the same writes to it
+/// with its interrupt masked): the step interrupt starts it, its own
+/// interrupt stops it and writes the STEP lines low.
+pub fn pulse_timer_cost(clock: &StepTimer) -> u32 {
+    let t0 = clock.count();
+    // SAFETY: SysTick's and SCB's registers, as `Pulse::arm`, then as the
+    // pulse's end does; the bench runs with interrupts masked.
+    unsafe {
+        (*cortex_m::peripheral::SCB::PTR).icsr.write(1 << 25);
+        (*cortex_m::peripheral::SYST::PTR).cvr.write(0);
+        (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF);
+        (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF);
+    }
+    pins::write(pins::FALL);
+    let t1 = clock.count();
+    let t2 = clock.count();
+    t1.wrapping_sub(t0).saturating_sub(t2.wrapping_sub(t1))
 }
 
 /// Whether a timer ends each STEP pulse (the board).
@@ -413,7 +438,10 @@ fn step_timers(
         tim5.sr().write(|w| unsafe { w.bits(0) });
         tim5.dier().write(|w| w.uie().set_bit());
         (
-            Alarm { tim: tim5, per_tick: 1 },
+            Alarm {
+                tim: tim5,
+                per_tick: 1,
+            },
             Pulse { syst, per_tick },
         )
     }
@@ -421,6 +449,7 @@ fn step_timers(
     {
         // TIM5 stays unused.
         let _ = tim5;
+        let per_tick = (per_tick - per_tick / 16).max(1);
         (Alarm { syst, per_tick }, Pulse {})
     }
 }
@@ -429,24 +458,27 @@ impl Alarm {
     #[cfg(not(feature = "qemu"))]
     const CR1: u32 = 0b1100; // URS, OPM
 
+    /// The longest wait it takes, ticks: a longer one fires early, at this.
+    pub const LONGEST: u32 = ALARM_MAX_TICKS;
+
     /// Fires in `ticks` (1 at least).
     #[inline(always)]
     pub fn arm(&mut self, ticks: u32) {
-        let t = ticks.clamp(1, ALARM_MAX_TICKS) * self.per_tick;
-        // SAFETY: TIM5's own registers: the counter, the period, and CR1
-        // with the bits of `step_timers` and CEN.
+        let t = ticks.min(ALARM_MAX_TICKS) * self.per_tick;
+        // SAFETY: TIM5's own registers: the period, and CR1 with the bits
+        // of `step_timers` and CEN. One-pulse mode leaves the counter at 0
+        // when it fires (`stop` clears it too).
         #[cfg(not(feature = "qemu"))]
         {
-            self.tim.cnt().write(|w| unsafe { w.bits(0) });
             self.tim.arr().write(|w| unsafe { w.bits(t) });
             self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1 | 1) });
         }
         // SAFETY: SysTick's own registers (24 bits of reload). Its clock
-        // against TIM2 is measured, not known: it fires a sixteenth early,
-        // and the step interrupt waits for the rest.
+        // against TIM2 is measured, not known: `per_tick` is a sixteenth
+        // short, it fires early, and the step interrupt waits for the rest.
         #[cfg(feature = "qemu")]
         unsafe {
-            self.syst.rvr.write((t - t / 16).clamp(1, 0x00FF_FFFF));
+            self.syst.rvr.write(t.min(0x00FF_FFFF));
             self.syst.cvr.write(0);
             self.syst.csr.write(SYST_ON);
         }
@@ -462,10 +494,12 @@ impl Alarm {
 
     /// Stops it.
     pub fn stop(&mut self) {
-        // SAFETY: as in `arm`, without CEN; the flag cleared.
+        // SAFETY: as in `arm`, without CEN; the counter back to 0, the
+        // flag cleared.
         #[cfg(not(feature = "qemu"))]
         {
             self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
+            self.tim.cnt().write(|w| unsafe { w.bits(0) });
             self.tim.sr().write(|w| unsafe { w.bits(0) });
         }
         // SAFETY: SysTick's control register.
