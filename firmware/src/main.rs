@@ -64,6 +64,7 @@ mod app {
         // memory, where `size` counts it; handed out once.
         let device: &'static mut Device = cx.local.device.write(Device::new());
         let storage = storage::Storage::load(board.flash, device);
+        let per_tick = board.alarm.per_tick();
         let Some((tx, rx)) = step::READY.split() else {
             firmware::halt()
         };
@@ -92,7 +93,7 @@ mod app {
                     realtime: rt_in,
                 },
                 realtime: rt_out,
-                supervisor: supervisor::start(board.watchdog),
+                supervisor: supervisor::start(board.watchdog, per_tick),
             },
         )
     }

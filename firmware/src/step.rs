@@ -243,8 +243,6 @@ impl StepIsr {
     /// spindle's speed), a run's end (the last pulse ends).
     #[inline(never)]
     fn mark(&mut self, w0: u32, w1: u32) {
-        #[cfg(feature = "stall-test")]
-        stall::maybe();
         match Ready::from_parts(w0, w1) {
             Ready::RunStart => self.origin = ticks(),
             Ready::Block { rpm } => self.spindle.follow(rpm),
@@ -264,6 +262,8 @@ impl StepIsr {
     /// end starts.
     #[inline(always)]
     fn issue(&mut self, due: u32) {
+        #[cfg(feature = "stall-test")]
+        stall::maybe();
         pins::write(self.fall_dir);
         if PACED {
             while (ticks().wrapping_sub(due) as i32) < 0 {}
@@ -359,10 +359,10 @@ impl StepIsr {
     }
 }
 
-/// The supervisor's test: the step interrupt stalls at its 100th entry
-/// (a busy loop, as a hung driver or a bug would leave it) and the
-/// supervisor, above it, must stop the outputs; it reports when over
-/// semihosting and ends QEMU.
+/// The supervisor's test: the step interrupt stalls at its 100th step
+/// (a busy loop with the STEP lines high, as a hung driver or a bug would
+/// leave it) and the supervisor, above it, must stop the outputs; it
+/// reports when over semihosting and ends QEMU.
 #[cfg(feature = "stall-test")]
 pub mod stall {
     use core::sync::atomic::{AtomicU32, Ordering};
@@ -370,10 +370,10 @@ pub mod stall {
     static ENTRIES: AtomicU32 = AtomicU32::new(0);
     static STALLED_AT: AtomicU32 = AtomicU32::new(0);
 
-    /// Counts an entry; at the 100th, a step high, stalls for good.
+    /// Counts a step; at the 100th, the STEP lines high, stalls for good.
     pub fn maybe() {
         if ENTRIES.fetch_add(1, Ordering::Relaxed) == 100 {
-            crate::board::pins::write(super::RISE[0b11]);
+            crate::board::pins::write(crate::board::pins::rise(0b11));
             STALLED_AT.store(crate::board::ticks(), Ordering::Release);
             loop {
                 core::hint::spin_loop();

@@ -46,7 +46,12 @@ pub struct Supervisor {
 
 /// Starts the watchdog and readies the supervisor's timer (its interrupt
 /// is the scheduler's to enable). From here on a stall resets the board.
-pub fn start(watchdog: Watchdog) -> Supervisor {
+/// `per_tick`: the alarm's counts per tick (the `stall-test` build's
+/// clock for the supervisor).
+pub fn start(watchdog: Watchdog, per_tick: u32) -> Supervisor {
+    let _ = per_tick;
+    #[cfg(feature = "stall-test")]
+    stall_clock(per_tick);
     let Watchdog { iwdg, tim3, dbgmcu } = watchdog;
     if SUPERVISED {
         // A core halted by a debugger halts the watchdog too.
@@ -77,6 +82,25 @@ pub fn start(watchdog: Watchdog) -> Supervisor {
         tim3,
         iwdg,
         watch: None,
+    }
+}
+
+/// The `stall-test` build: QEMU's TIM3 does not keep its period, so
+/// SysTick, unused by an unpaced build, pends the supervisor every 1 ms,
+/// above the step interrupt.
+#[cfg(feature = "stall-test")]
+fn stall_clock(per_tick: u32) {
+    use cortex_m::peripheral::scb::SystemHandler;
+    // SAFETY: an unpaced build never arms its alarm, SysTick: this is its
+    // only user. Its priority goes above the supervisor's (RTIC's 5:
+    // 0xB0), set after the scheduler has set the bound ones.
+    unsafe {
+        let mut p = cortex_m::Peripherals::steal();
+        p.SCB.set_priority(SystemHandler::SysTick, 0xA0);
+        p.SYST.set_reload((per_tick * 1000).min(0x00FF_FFFF));
+        p.SYST.clear_current();
+        p.SYST.enable_interrupt();
+        p.SYST.enable_counter();
     }
 }
 

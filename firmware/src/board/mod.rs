@@ -461,6 +461,11 @@ impl Alarm {
     /// The longest wait it takes, ticks: a longer one fires early, at this.
     pub const LONGEST: u32 = ALARM_MAX_TICKS;
 
+    /// Its counts per tick of TIM2.
+    pub fn per_tick(&self) -> u32 {
+        self.per_tick
+    }
+
     /// Fires in `ticks` (1 at least).
     #[inline(always)]
     pub fn arm(&mut self, ticks: u32) {
