@@ -971,7 +971,7 @@ mod tests {
         let e = |k: u32| Ready::Step {
             tick: k,
             event: StepEvent::from_bits((k % 16) as u8),
-            turns: k % 3 == 0,
+            turns: k.is_multiple_of(3),
         };
         let mut next = 0u32;
         let mut put = 0u32;

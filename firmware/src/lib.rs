@@ -120,9 +120,9 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Controller<P, S> {
     /// The board's timing for a status line answering a byte that arrived
     /// at TIM2 count `asked`.
     fn timing(&mut self, asked: u32) -> Timing {
-        let (late, worst) = self.motion.lateness();
+        let (late, _worst) = self.motion.lateness();
         #[cfg(feature = "qemu")]
-        report_lateness(late, worst);
+        report_lateness(late, _worst);
         Timing {
             latency_us: board::ticks().wrapping_sub(asked),
             late_events: late,

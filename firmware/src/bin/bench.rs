@@ -180,13 +180,9 @@ fn timed(tim: &StepTimer) -> Option<[core_nostd::plan::Started; 3]> {
     // accelerating from rest and 8 mm braking to rest around 400 mm of
     // cruise (3000 mm/min needs 8.3 mm at 150 mm/s²).
     let mut p = Planner::<WINDOW>::new(WINDOW);
-    let Some(b) = block(0, -5_000) else {
-        return None;
-    };
+    let b = block(0, -5_000)?;
     let _ = p.push(b, &rates);
-    let Some(t) = p.start(&rates) else {
-        return None;
-    };
+    let t = p.start(&rates)?;
     let (c, n) = run(&t);
     Line::print(format_args!(
         "timed step events, 5 mm triangle from rest to rest: {n} events, {}.{:02} instructions per event",
@@ -195,7 +191,7 @@ fn timed(tim: &StepTimer) -> Option<[core_nostd::plan::Started; 3]> {
     ));
     let mut p = Planner::<WINDOW>::new(WINDOW);
     for (a, b) in [(0, -8_000), (-8_000, -408_000), (-408_000, -416_000)] {
-        let Some(b) = block(a, b) else { return None };
+        let b = block(a, b)?;
         let _ = p.push(b, &rates);
     }
     let (Some(sa), Some(sb), Some(sc)) = (
@@ -448,6 +444,18 @@ fn main() -> ! {
     Line::print(format_args!(
         "calibration: delay(100000) = {delay} ticks, empty = {empty}"
     ));
+    // What one peripheral register access costs in QEMU's count (it ends
+    // a translation block, which is counted again): 1000 reads of TIM2.
+    let reads = measure(tim, || {
+        for _ in 0..1000 {
+            core::hint::black_box(tim.count());
+        }
+    });
+    Line::print(format_args!(
+        "calibration: a peripheral register read counts {}.{} instructions under -icount (1000 reads: {reads})",
+        reads / 1000,
+        (reads % 1000) / 100
+    ));
 
     let p = |x, z| ImpulsePoint {
         x: Impulses(x),
@@ -572,8 +580,9 @@ fn run_isr(
                 None => break,
             }
         }
-        // The prep's work, as its task does it, when its queue is empty.
-        if rx.is_empty() {
+        // The prep's work, as its task does it, a few entries at a time
+        // (the step interrupt would preempt it on the board).
+        if rx.len() < 240 {
             let mut n = 0;
             let c = measure(tim, || n = prep.fill(tx));
             prep_cost += u64::from(c);
@@ -619,7 +628,12 @@ fn run_isr(
         }
         if let Some(p) = phases.get_mut(phase) {
             p.total += u64::from(c);
-            p.worst = p.worst.max(c);
+            // An entry that finds more than one step due was called late
+            // by the bench itself (standing in for the prep, which the
+            // step interrupt would preempt): not an entry of the board's.
+            if issued <= 1 {
+                p.worst = p.worst.max(c);
+            }
             p.steps += issued;
         }
         steps += issued;
