@@ -219,13 +219,17 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Shared<P, S> {
     }
 
     /// Whether every block started in an open run has been prepared and
-    /// the planner should start the next one now.
+    /// taken by the step interrupt: the planner should start the next one
+    /// now.
     ///
     /// Unpaced under QEMU the step interrupt issues everything at once:
     /// nothing is ever late, and blocks start by the window alone, as on
     /// the virtual clock.
     pub fn hungry(&mut self) -> bool {
-        PACED && self.prep.lock(|p| p.prep.hungry())
+        // The prep runs up to 254 events ahead: the planner is needed only
+        // once the step interrupt has taken them all (it may hold the last
+        // one for its tick), as when it pulled its events itself.
+        PACED && step::READY.is_empty() && self.prep.lock(|p| p.prep.hungry())
     }
 
     /// What the axes are doing: the prep's view, and whether the step
