@@ -7,8 +7,9 @@
 //! per modal group. Lines as CAM posts and machinists write them are read
 //! too:
 //!
-//! - numbers `30.`, `.5`, `+2`, with up to 15 decimals, rounded once to the
-//!   ångström (10⁻⁷ mm) half away from zero;
+//! - numbers `30.`, `.5`, `+2`, with any count of decimals (CAM posts print
+//!   doubles: 16 and 17), rounded once to the ångström (10⁻⁷ mm) half away
+//!   from zero;
 //! - `%` (the tape mark a program begins and ends with) alone on its line;
 //! - a program number alone on its line: `O1234`, `O<name>`, `:1234`
 //!   (an `o<name>` followed by a word is a subroutine, expanded by the host);
@@ -91,6 +92,50 @@ pub enum Corner {
     Arc,
     /// G451: the offset elements (their tangents, for arcs) are intersected.
     Intersection,
+}
+
+/// The plane of arcs and nose compensation (group 2). A lathe cuts in
+/// `G18`; posts for mills and lathes alike write `G17` in a header before
+/// they select it, so `G17` and `G19` are taken as the modal plane and an
+/// arc (or compensation) outside `G18` is refused naming the plane.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Plane {
+    /// `G17`: XY.
+    Xy,
+    /// `G18`: ZX (power-on, a lathe's).
+    #[default]
+    Zx,
+    /// `G19`: YZ.
+    Yz,
+}
+
+impl Plane {
+    /// The G word.
+    pub const fn word(self) -> &'static str {
+        match self {
+            Plane::Xy => "G17",
+            Plane::Zx => "G18",
+            Plane::Yz => "G19",
+        }
+    }
+}
+
+/// Path control (group 13): how blocks join.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PathControl {
+    /// `G61`: exact stop, at rest at the end of every block.
+    ExactStop,
+    /// `G61.1`: exact path. The device's path is always the programmed
+    /// one; corners are taken at the junction speed the limits allow.
+    ExactPath,
+    /// `G64 [P]`: blending (power-on): corners at the speed a junction
+    /// deviation allows, `P` if given (mm), else the limits' `JD`.
+    #[default]
+    Blend,
+    /// `G64 P`: blending with the tolerance `P`.
+    Tolerance(Length),
 }
 
 /// What a line holds besides words.
@@ -257,6 +302,16 @@ pub struct SetWork {
     pub here: bool,
 }
 
+/// LinuxCNC's `G41.1`/`G42.1 D L`: the nose given in the block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DynamicNose {
+    /// The nose radius: half of `D`.
+    pub radius: Length,
+    /// LinuxCNC's orientation `L` (0 … 9).
+    pub orientation: u8,
+}
+
 /// ISO `G43`/`G49`: the tool offsets on or off.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -288,8 +343,22 @@ pub struct Block {
     pub diameter: Option<bool>,
     /// G450 or G451 if given.
     pub corner: Option<Corner>,
-    /// G18 given: the ZX plane, the only one a lathe has.
-    pub plane_zx: bool,
+    /// G17, G18, G19 if given.
+    pub plane: Option<Plane>,
+    /// G61, G61.1, G64 if given.
+    pub path: Option<PathControl>,
+    /// G80: a canned cycle cancelled (the safety line of Haas and Fanuc
+    /// programs; with no cycle modal it changes nothing).
+    pub cancel_cycle: bool,
+    /// M41–M44: the spindle gear range, 1 … 4.
+    pub gear: Option<u8>,
+    /// An M code the machine's table says what to do with (not one of
+    /// the standard ones), and its code in tenths.
+    pub machine_m: Option<u16>,
+    /// G41.1/G42.1 (ISO): compensation with the nose in the block, `D`
+    /// the nose diameter and `L` the orientation (LinuxCNC's dynamic
+    /// compensation).
+    pub dynamic_nose: Option<DynamicNose>,
     /// G20 or G21 if given; the block's lengths are read in it.
     pub units: Option<Units>,
     /// G94/G95 (ISO), G98/G99 (Fanuc) if given.
@@ -417,7 +486,7 @@ impl fmt::Display for Code {
 }
 
 /// What a refusal says, naming the word: `unknown address Q`, `G71 canned
-/// cycles not supported`, `X more than 15 decimals`.
+/// cycles not supported`, `X beyond 99999.999999 mm`.
 impl fmt::Display for BlockError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
@@ -570,6 +639,10 @@ struct Scan {
     dwell: bool,
     /// `G45`–`G48`: `D` is an offset register (also in the Fanuc dialect).
     position_offset: bool,
+    /// `G64`: `P` (and `Q`) are tolerances, mm.
+    blend: bool,
+    /// `G41.1`/`G42.1`: `D` is the nose diameter, `L` its orientation.
+    dynamic: bool,
 }
 
 fn scan(line: &str) -> Scan {
@@ -592,6 +665,8 @@ fn scan(line: &str) -> Scan {
                     Some(210) if found.units.is_none() => found.units = Some(Units::Mm),
                     Some(40) => found.dwell = true,
                     Some(450 | 460 | 470 | 480) => found.position_offset = true,
+                    Some(640) => found.blend = true,
+                    Some(411 | 421) => found.dynamic = true,
                     _ => {}
                 }
                 pos += 1 + n;
@@ -620,6 +695,10 @@ struct Reading {
     units: Units,
     dwell: bool,
     position_offset: bool,
+    blend: bool,
+    dynamic: bool,
+    /// G64's `P` and `Q`, mm.
+    tolerance: Option<Length>,
     /// The group-0 G code (G04, G50) and its column.
     once: Option<(u16, usize)>,
     /// The dwell time, µs.
@@ -641,6 +720,9 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
         units: scanned.units.unwrap_or(units),
         dwell: scanned.dwell,
         position_offset: scanned.position_offset,
+        blend: scanned.blend,
+        dynamic: scanned.dynamic,
+        tolerance: None,
         once: None,
         time: None,
         p: None,
@@ -846,12 +928,33 @@ impl Reading {
                 // Fanuc's P counts milliseconds, ISO's seconds.
                 self.time = Some(dwell_us(letter, number, if fanuc { 3 } else { 6 })?);
             }
+            b'P' | b'Q' if self.blend => {
+                let t = length()?;
+                if t.as_angstrom() < 0 {
+                    return Err(BlockError::Range(letter, "a tolerance is 0 or more"));
+                }
+                if letter == b'P' {
+                    self.tolerance = Some(t);
+                }
+                // Q, LinuxCNC's naive-CAM tolerance (segments merged
+                // into lines): this planner takes every short segment at
+                // its own junction speed; read and checked, no merging.
+            }
             b'P' => self.p = Some((whole(letter, number)?, pos)),
+            b'L' if self.dynamic => {
+                let l = whole(letter, number)?;
+                if l > 9 {
+                    return Err(BlockError::Range(b'L', "the orientation is 0 to 9"));
+                }
+                self.l = Some((l, pos));
+            }
             b'L' => self.l = Some((whole(letter, number)?, pos)),
             b'H' if !fanuc => self.h = Some((whole(letter, number)?, pos)),
             b'S' => b.s = Some(unitless(letter, number)?),
             // ISO's spindle speed limit with G96; an offset register with
             // G45–G48 (checked with the whole block).
+            // G41.1/G42.1: the nose's diameter, a length.
+            b'D' if self.dynamic => self.d = Some((length()?, pos)),
             b'D' if !fanuc || self.position_offset => {
                 self.d = Some((unitless(letter, number)?, pos))
             }
@@ -904,13 +1007,44 @@ impl Reading {
                     _ => Compensation::Right,
                 },
             ),
-            180 => {
-                if b.plane_zx {
+            170 | 180 | 190 => set(
+                &mut b.plane,
+                match tenths {
+                    170 => Plane::Xy,
+                    180 => Plane::Zx,
+                    _ => Plane::Yz,
+                },
+            ),
+            610 | 611 | 640 => set(
+                &mut b.path,
+                match tenths {
+                    610 => PathControl::ExactStop,
+                    611 => PathControl::ExactPath,
+                    _ => PathControl::Blend,
+                },
+            ),
+            800 => {
+                if b.cancel_cycle {
                     return repeated;
                 }
-                b.plane_zx = true;
+                b.cancel_cycle = true;
                 Ok(())
             }
+            411 | 421 if fanuc => other(Dialect::Iso),
+            411 | 421 => set(
+                &mut b.compensation,
+                if tenths == 411 {
+                    Compensation::Left
+                } else {
+                    Compensation::Right
+                },
+            )
+            .map(|()| {
+                b.dynamic_nose = Some(DynamicNose {
+                    radius: Length::ZERO,
+                    orientation: 0,
+                })
+            }),
             200 | 210 => set(
                 &mut b.units,
                 if tenths == 200 {
@@ -1015,6 +1149,18 @@ impl Reading {
             60 => {
                 group(b.tool_change)?;
                 b.tool_change = true;
+            }
+            410 | 420 | 430 | 440 => {
+                group(b.gear.is_some())?;
+                b.gear = Some(((tenths - 400) / 10) as u8);
+            }
+            // Subprograms: the host expands them.
+            980 | 990 => return Err(BlockError::UnsupportedM(Some(tenths))),
+            // Any other whole M code: the machine's own (a chip conveyor, a
+            // tailstock, a collet), done as the machine's table says.
+            _ if tenths % 10 == 0 && tenths <= 9990 => {
+                group(b.machine_m.is_some())?;
+                b.machine_m = Some(tenths);
             }
             _ => return Err(BlockError::UnsupportedM(Some(tenths))),
         }
@@ -1170,9 +1316,24 @@ impl Reading {
             }
             None => {}
         }
+        if let Some(t) = self.tolerance {
+            b.path = Some(PathControl::Tolerance(t));
+        }
+        if let Some(nose) = &mut b.dynamic_nose {
+            let Some((d, _)) = self.d.take() else {
+                return Err((
+                    BlockError::Form("G41.1 and G42.1 need D: the nose diameter"),
+                    0,
+                ));
+            };
+            nose.radius = Length::from_angstrom(d.as_angstrom() / 2).unwrap_or(Length::ZERO);
+            nose.orientation = self.l.take().map_or(0, |(l, _)| l as u8);
+        }
         if let Some((_, at)) = self.p {
             return Err((
-                BlockError::Form("P only with G04 (the dwell time) or G10 (the register)"),
+                BlockError::Form(
+                    "P only with G04 (the dwell time), G10 (the register) or G64 (the tolerance)",
+                ),
                 at,
             ));
         }
@@ -1288,7 +1449,7 @@ mod tests {
     fn lines_as_cam_posts_and_machinists_write_them() {
         let b = parse_block("N10 G00 G18 G21 X30. Z2. Y0").unwrap();
         assert_eq!((b.x, b.z, b.n), (mm("30"), mm("2"), Some(10)));
-        assert!(b.plane_zx);
+        assert_eq!(b.plane, Some(Plane::Zx));
         assert_eq!(b.units, Some(Units::Mm));
         let b = parse_block("x.5 z-.25 F+100").unwrap();
         assert_eq!((b.x, b.z, b.f), (mm("0.5"), mm("-0.25"), mm("100")));
@@ -1327,7 +1488,7 @@ mod tests {
             (e.error, e.column)
         };
         assert_eq!(at("G00 X30. Y5 Z2."), (BlockError::NoYAxis, 10));
-        assert_eq!(at("G17 G00 X1"), (BlockError::UnsupportedG(Some(170)), 1));
+        assert_eq!(at("G17 G00 X1 G19"), (BlockError::Repeated(b'G'), 12));
         assert_eq!(at("G20 X1 G21"), (BlockError::Repeated(b'G'), 8));
         assert_eq!(at("G18 G00 G18"), (BlockError::Repeated(b'G'), 9));
         assert_eq!(at("G90.2"), (BlockError::UnsupportedG(Some(902)), 1));
@@ -1484,10 +1645,13 @@ mod tests {
         assert_eq!(
             parse_block("P1"),
             Err(BlockError::Form(
-                "P only with G04 (the dwell time) or G10 (the register)"
+                "P only with G04 (the dwell time), G10 (the register) or G64 (the tolerance)"
             ))
         );
-        assert_eq!(parse_block("M13"), Err(BlockError::UnsupportedM(Some(130))));
+        assert_eq!(parse_block("M1.5"), Err(BlockError::UnsupportedM(Some(15))));
+        assert_eq!(parse_block("M13").map(|b| b.machine_m), Ok(Some(130)));
+        assert_eq!(parse_block("M13 M16"), Err(BlockError::Repeated(b'M')));
+        assert_eq!(parse_block("M42").map(|b| b.gear), Ok(Some(2)));
         assert_eq!(parse_block("M3 M4"), Err(BlockError::Repeated(b'M')));
         assert_eq!(
             parse_block("T101").unwrap_err().to_string(),
@@ -1512,10 +1676,11 @@ mod tests {
         assert_eq!(parse_block("G01 X"), Err(BlockError::NotAWord));
         assert_eq!(parse_block("G01 X1 $"), Err(BlockError::NotAWord));
         assert_eq!(parse_block("G01 (open"), Err(BlockError::Comment));
-        assert!(matches!(
-            parse_block("X1.1234567890123456"),
-            Err(BlockError::Value(b'X', LengthError::TooManyGcodeDecimals))
-        ));
+        // FreeCAD prints doubles: read, rounded once.
+        assert_eq!(
+            parse_block("X-2.8918148932211922").map(|b| b.x),
+            Ok(Length::from_angstrom(-28_918_149))
+        );
         assert!(matches!(
             parse_block("Z--1"),
             Err(BlockError::Value(b'Z', _))

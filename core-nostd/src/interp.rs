@@ -7,7 +7,9 @@
 //! the commanded spindle speed, and `G96` sets that speed from the surface
 //! speed at the tool's X where the block starts.
 
-use crate::gcode::{Block, Coolant, FeedMode, Motion, Spindle, SpindleMode, ToolWord, Units};
+use crate::gcode::{
+    Block, Coolant, FeedMode, Motion, PathControl, Plane, Spindle, SpindleMode, ToolWord, Units,
+};
 use crate::length::{Length, LENGTH_LIMIT};
 use crate::plan::Feed;
 use crate::trig::PI_Q61;
@@ -30,6 +32,10 @@ pub struct Modal {
     /// The feed as written (read in the block's unit): mm/min or mm/rev;
     /// none after power-on.
     pub feed: Option<Length>,
+    /// G17/G18/G19.
+    pub plane: Plane,
+    /// G61/G61.1/G64.
+    pub path: PathControl,
 }
 
 impl Modal {
@@ -41,6 +47,8 @@ impl Modal {
         units: Units::Mm,
         feed_mode: FeedMode::PerMinute,
         feed: None,
+        plane: Plane::Zx,
+        path: PathControl::Blend,
     };
 
     /// The state after `b`'s words.
@@ -52,6 +60,8 @@ impl Modal {
             units: b.units.unwrap_or(self.units),
             feed_mode: b.feed_mode.unwrap_or(self.feed_mode),
             feed: b.f.or(self.feed),
+            plane: b.plane.unwrap_or(self.plane),
+            path: b.path.unwrap_or(self.path),
         }
     }
 }
@@ -222,6 +232,9 @@ pub struct Aux {
     pub coolant: Coolant,
     /// The last `T` word.
     pub tool: Option<ToolWord>,
+    /// The spindle gear range (`M41`–`M44`: 1 … 4), none until one is
+    /// named.
+    pub gear: Option<u8>,
 }
 
 impl Aux {
@@ -230,6 +243,7 @@ impl Aux {
         spindle: SpindleState::POWER_ON,
         coolant: Coolant::Off,
         tool: None,
+        gear: None,
     };
 
     /// The state after `b`'s words.
@@ -238,6 +252,7 @@ impl Aux {
             spindle: self.spindle.after(b),
             coolant: b.coolant.unwrap_or(self.coolant),
             tool: b.tool.or(self.tool),
+            gear: b.gear.or(self.gear),
         }
     }
 
@@ -253,6 +268,7 @@ impl Aux {
             },
             coolant: Coolant::Off,
             tool: self.tool,
+            gear: self.gear,
         }
     }
 
@@ -297,6 +313,78 @@ impl ToolEntry {
     }
 }
 
+/// What the machine does for one of its own M codes (`MCODE`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MAction {
+    /// Stop with a message, as `M00`: the operator does by hand what the
+    /// old machine did, then presses cycle start (any code not in the
+    /// table).
+    Stop,
+    /// Nothing: the machine has nothing to do for it (set so on purpose).
+    Nothing,
+    /// Switch user output `n` (1 … 4) on or off, at rest.
+    Output(u8, bool),
+    /// Wait at rest until user input `n` (1 … 4) reads the level given.
+    Wait(u8, bool),
+}
+
+/// The M codes the machine's table can hold.
+pub const MCODES: usize = 16;
+
+/// The machine's M code table: each of its own M codes (M16, M31, …) and
+/// what it does; a code not in it stops with a message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MCodes {
+    /// The code in tenths (M16 is 160) and its action; 0: an empty slot.
+    entries: [(u16, MAction); MCODES],
+}
+
+impl Default for MCodes {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl MCodes {
+    /// An empty table: every machine M code stops with a message.
+    pub const fn new() -> MCodes {
+        MCodes {
+            entries: [(0, MAction::Stop); MCODES],
+        }
+    }
+
+    /// What code `tenths` (M16 is 160) does.
+    pub fn get(&self, tenths: u16) -> MAction {
+        self.entries
+            .iter()
+            .find(|(c, _)| *c == tenths && tenths != 0)
+            .map_or(MAction::Stop, |(_, a)| *a)
+    }
+
+    /// Sets what code `tenths` does (`Stop`, the default, clears it);
+    /// false when the table is full.
+    pub fn set(&mut self, tenths: u16, action: MAction) -> bool {
+        for e in self.entries.iter_mut().filter(|(c, _)| *c == tenths) {
+            *e = (0, MAction::Stop);
+        }
+        if action == MAction::Stop {
+            return true;
+        }
+        match self.entries.iter_mut().find(|(c, _)| *c == 0) {
+            Some(free) => {
+                *free = (tenths, action);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The codes set, with their actions.
+    pub fn entries(&self) -> impl Iterator<Item = (u16, MAction)> + '_ {
+        self.entries.iter().copied().filter(|(c, _)| *c != 0)
+    }
+}
+
 /// The work offsets and the tool table.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Offsets {
@@ -311,6 +399,8 @@ pub struct Offsets {
     /// The positions `G28` and `G30` return to, machine coordinates
     /// (machine zero until `G28.1`/`G30.1` store others).
     pub reference: [[Length; 2]; 2],
+    /// The machine's own M codes (kept with the table).
+    pub mcodes: MCodes,
 }
 
 impl Offsets {
@@ -325,6 +415,7 @@ impl Offsets {
         shift: [Length::ZERO; 2],
         kept_shift: [Length::ZERO; 2],
         reference: [[Length::ZERO; 2]; 2],
+        mcodes: MCodes::new(),
     };
 
     /// A register (1 … 32); `None` for 0 or beyond the table.

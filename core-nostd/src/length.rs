@@ -29,8 +29,6 @@ pub enum LengthError {
     TooManyDecimals,
     /// Magnitude not below 100 000 mm.
     OutOfRange,
-    /// More than 15 decimals (a G-code number).
-    TooManyGcodeDecimals,
 }
 
 impl LengthError {
@@ -40,7 +38,6 @@ impl LengthError {
             LengthError::Malformed => "not a length [+-]digits[.digits]",
             LengthError::TooManyDecimals => "more than 6 decimals",
             LengthError::OutOfRange => "beyond 99999.999999 mm",
-            LengthError::TooManyGcodeDecimals => "more than 15 decimals",
         }
     }
 }
@@ -152,8 +149,9 @@ impl Length {
 
     /// Parses a number of millimetres as G-code programs write it:
     /// `[+-]`, then digits with an optional point (`30.`, `2.5`) or a point
-    /// and digits (`.5`), at most 15 decimals, rounded once to the
-    /// ångström half away from zero (exact up to 7 decimals).
+    /// and digits (`.5`), any count of decimals (read to the 30th),
+    /// rounded once to the ångström half away from zero (exact up to 7
+    /// decimals).
     ///
     /// ```
     /// use core_nostd::length::{Length, LengthError};
@@ -162,7 +160,8 @@ impl Length {
     /// assert_eq!(mm("-.5"), Ok(-5_000_000));
     /// assert_eq!(mm("0.00000005"), Ok(1));
     /// assert_eq!(mm("-0.00000004999"), Ok(0));
-    /// assert_eq!(mm("1.1234567890123456"), Err(LengthError::TooManyGcodeDecimals));
+    /// assert_eq!(mm("-2.8918148932211922"), Ok(-28_918_149));
+    /// assert_eq!(mm("1.00000004999999999999999999999999999"), Ok(10_000_000));
     /// assert_eq!(mm("."), Err(LengthError::Malformed));
     /// assert_eq!(mm("99999.99999995"), Err(LengthError::OutOfRange));
     /// ```
@@ -343,14 +342,11 @@ pub(crate) fn write_mm4<W: fmt::Write + ?Sized>(w: &mut W, tenth_um: i64) -> fmt
 }
 
 /// A G-code number in a unit of `m·10ᵉ` ångström (millimetres: 1·10⁷,
-/// inches: 254·10⁶): whole units exactly, the decimals `F` (d digits) as
-/// `F·m·10ᵉ⁻ᵈ`, rounded once half away from zero when d > e. Within u64:
-/// `F·m < 2.6·10¹⁷`.
+/// inches: 254·10⁶): whole units exactly, the decimals `F` (d digits, at
+/// most [`GCODE_DECIMALS`] read) as `F·m·10ᵉ⁻ᵈ`, rounded once half away
+/// from zero when d > e.
 fn from_gcode(text: &str, m: u64, e: u32) -> Result<Length, LengthError> {
     let (negative, int_part, frac_part) = split_decimal(text)?;
-    if frac_part.len() > 15 {
-        return Err(LengthError::TooManyGcodeDecimals);
-    }
     let mut whole: u64 = 0;
     for &d in int_part {
         whole = whole * 10 + u64::from(d - b'0');
@@ -358,21 +354,25 @@ fn from_gcode(text: &str, m: u64, e: u32) -> Result<Length, LengthError> {
             return Err(LengthError::OutOfRange);
         }
     }
+    // Read to the 30th decimal (10⁻²³ mm; CAM posts print up to 17): the
+    // digits after it are left out. `F·m < 2.6·10³²` fits in u128.
+    let frac_part = frac_part.get(..GCODE_DECIMALS).unwrap_or(frac_part);
     let decimals = frac_part.len() as u32;
     let digits = frac_part
         .iter()
-        .fold(0u64, |n, &d| n * 10 + u64::from(d - b'0'));
+        .fold(0u128, |n, &d| n * 10 + u128::from(d - b'0'));
+    let m = u128::from(m);
     let frac = if decimals <= e {
-        digits * m * 10u64.pow(e - decimals)
+        digits * m * 10u128.pow(e - decimals)
     } else {
-        // 10 … 10⁹: never zero.
-        let unit = core::num::NonZeroU64::new(10u64.pow(decimals - e))
-            .unwrap_or(core::num::NonZeroU64::MIN);
+        // 10 … 10³⁰: never zero.
+        let unit = core::num::NonZeroU128::new(10u128.pow(decimals - e))
+            .unwrap_or(core::num::NonZeroU128::MIN);
         let scaled = digits * m;
-        scaled / unit + u64::from(2 * (scaled % unit) >= unit.get())
+        scaled / unit + u128::from(2 * (scaled % unit) >= unit.get())
     };
-    let angstrom = whole * m * 10u64.pow(e) + frac;
-    if angstrom > LENGTH_LIMIT.angstrom as u64 {
+    let angstrom = u128::from(whole) * m * 10u128.pow(e) + frac;
+    if angstrom > LENGTH_LIMIT.angstrom as u128 {
         return Err(LengthError::OutOfRange);
     }
     let angstrom = angstrom as i64;
@@ -380,6 +380,9 @@ fn from_gcode(text: &str, m: u64, e: u32) -> Result<Length, LengthError> {
         angstrom: if negative { -angstrom } else { angstrom },
     })
 }
+
+/// The decimals of a G-code number that are read; later ones are left out.
+pub const GCODE_DECIMALS: usize = 30;
 
 /// Splits `[+-]digits[.digits]`, `digits.` or `.digits` into its sign,
 /// integer digits and decimals (G-code numbers).

@@ -138,6 +138,21 @@ pub struct Machine {
     starved: u32,
     /// The spindle speed the blocks queued from now on carry, 10⁻³ rpm.
     spindle: u32,
+    /// How the blocks queued from now on join the block before: at the
+    /// junction deviation given (Å; `None` the limits' `JD`), or at rest.
+    join: Join,
+}
+
+/// How a queued block joins the one before it (path control).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Join {
+    /// At the speed the limits' junction deviation allows (`G64`).
+    Blend,
+    /// At the speed a junction deviation of this many ångström allows
+    /// (`G64 P`).
+    Deviation(u64),
+    /// At rest (`G61`, exact stop).
+    Stop,
 }
 
 impl Default for Machine {
@@ -161,7 +176,13 @@ impl Machine {
             point: [0, 0],
             starved: 0,
             spindle: 0,
+            join: Join::Blend,
         }
+    }
+
+    /// How the blocks queued from now on join the block before.
+    pub fn set_join(&mut self, join: Join) {
+        self.join = join;
     }
 
     /// The spindle speed commanded for the blocks queued from now on (10⁻³
@@ -234,7 +255,12 @@ impl Machine {
             self.start_one(sink);
         }
         // The window is not full now: there is room.
-        let _ = self.planner.push(block, &self.rates);
+        let deviation = match self.join {
+            Join::Blend => Some(self.rates.limits().junction().as_angstrom().unsigned_abs()),
+            Join::Deviation(d) => Some(d),
+            Join::Stop => None,
+        };
+        let _ = self.planner.push_joined(block, &self.rates, deviation);
         if self.planner.window_full() {
             self.start_one(sink);
         } else {
@@ -287,6 +313,11 @@ impl Machine {
         if let Some(ticks) = self.planner.end_run() {
             self.start_item(Item::RunEnd(ticks), sink);
         }
+    }
+
+    /// Blocks queued and not started.
+    pub fn queued(&self) -> usize {
+        self.planner.queued()
     }
 
     /// Whether blocks are queued with no run under way: they start with a
@@ -374,13 +405,23 @@ impl Machine {
     /// registers keep the steps issued. Returns the block that was running
     /// and the registers.
     pub fn abort<S: StepSink>(&mut self, sink: &mut S) -> (Aborted, ImpulsePoint) {
+        let queued = self.planner.queued() > 0;
         self.planner.clear();
-        let (found, issued) = match sink.background() {
+        let (mut found, issued) = match sink.background() {
             Some(b) => (b.abort(), b.issued()),
             None => (self.stepper.abort(), self.stepper.issued()),
         };
+        found.dropped |= queued;
         self.stepper.set_issued(issued);
         (found, issued)
+    }
+
+    /// Forgets what was queued and started without issuing it anywhere
+    /// (check mode's motion, which went nowhere), the registers as given.
+    pub fn forget(&mut self, registers: ImpulsePoint) {
+        self.planner.clear();
+        self.stepper.abort();
+        self.stepper.set_issued(registers);
     }
 
     /// Where the next queued block starts from now on (after a reset: the

@@ -760,13 +760,27 @@ impl<const N: usize> Planner<N> {
     /// Queues a block behind the others, with the junction from the block
     /// queued before it in this run. A full queue hands the block back.
     #[allow(clippy::result_large_err)] // the block itself, as heapless does
-    pub fn push(&mut self, mut block: Block, rates: &Rates) -> Result<(), Block> {
+    pub fn push(&mut self, block: Block, rates: &Rates) -> Result<(), Block> {
+        self.push_joined(block, rates, Some(rates.limits.junction))
+    }
+
+    /// As [`Planner::push`], the junction from the block before taken at
+    /// the speed junction deviation `deviation` (Å) allows, or at rest
+    /// (`None`: an exact stop, `G61`).
+    #[allow(clippy::result_large_err)] // the block itself, as heapless does
+    pub fn push_joined(
+        &mut self,
+        mut block: Block,
+        rates: &Rates,
+        deviation: Option<u64>,
+    ) -> Result<(), Block> {
+        let _ = rates;
         if self.blocks.is_full() {
             return Err(block);
         }
-        block.junction2 = match &self.last {
-            Some(prev) => prev.junction_into(&block, rates.limits.junction),
-            None => 0,
+        block.junction2 = match (&self.last, deviation) {
+            (Some(prev), Some(d)) => prev.junction_into(&block, d),
+            _ => 0,
         };
         self.last = Some(block);
         self.blocks.push_back(block)

@@ -528,19 +528,23 @@ impl Prep {
         let issued = self.issued(passed);
         // Steps dropped before the first mark: the rest of the item the
         // step interrupt was issuing, if the mark ends it.
-        let (mut before, mut marked) = (0u32, false);
+        let (mut before, mut marked, mut steps) = (0u32, false, false);
         for r in dropped {
             match r {
-                Ready::Step { .. } if !marked => before += 1,
-                Ready::Step { .. } => {}
+                Ready::Step { .. } if !marked => (before, steps) = (before + 1, true),
+                Ready::Step { .. } => steps = true,
                 _ => marked = true,
             }
         }
         let prepared = self.stepper.abort();
+        // Motion dropped: a step prepared and not issued, or what the
+        // stepper had not prepared yet (items, a block, a hold's rest).
+        let dropped = steps || prepared.dropped;
         let found = if issued.of != FIXED {
             Aborted {
                 done: issued.done,
                 of: issued.of,
+                dropped,
             }
         } else {
             // A fixed-rate run: its events issued, dropped, and those the
@@ -553,6 +557,7 @@ impl Prep {
             Aborted {
                 done: issued.done,
                 of: issued.done.saturating_add(before).saturating_add(left),
+                dropped,
             }
         };
         self.stepper.set_issued(issued.registers);
@@ -891,12 +896,54 @@ mod tests {
         // prep is in the second block while the first still issues.
         let items = run(&[0, -2_000, -5_000], Some("1200"));
         for (stop, want) in [
-            (2, Aborted { done: 0, of: 200 }),
-            (2 + 150, Aborted { done: 150, of: 200 }),
-            (2 + 180, Aborted { done: 180, of: 200 }),
-            (2 + 200, Aborted { done: 200, of: 200 }),
-            (2 + 200 + 1 + 40, Aborted { done: 40, of: 300 }),
-            (2 + 200 + 1 + 300 + 1, Aborted { done: 0, of: 0 }),
+            (
+                2,
+                Aborted {
+                    done: 0,
+                    of: 200,
+                    dropped: true,
+                },
+            ),
+            (
+                2 + 150,
+                Aborted {
+                    done: 150,
+                    of: 200,
+                    dropped: true,
+                },
+            ),
+            (
+                2 + 180,
+                Aborted {
+                    done: 180,
+                    of: 200,
+                    dropped: true,
+                },
+            ),
+            (
+                2 + 200,
+                Aborted {
+                    done: 200,
+                    of: 200,
+                    dropped: true,
+                },
+            ),
+            (
+                2 + 200 + 1 + 40,
+                Aborted {
+                    done: 40,
+                    of: 300,
+                    dropped: true,
+                },
+            ),
+            (
+                2 + 200 + 1 + 300 + 1,
+                Aborted {
+                    done: 0,
+                    of: 0,
+                    dropped: false,
+                },
+            ),
         ] {
             let q = ReadyQueue::new();
             let mut b = bench(&q, 63, items.iter().cloned());
@@ -945,7 +992,8 @@ mod tests {
                     found,
                     Aborted {
                         done: stop as u32,
-                        of: n
+                        of: n,
+                        dropped: true
                     }
                 );
                 ends

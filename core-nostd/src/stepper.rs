@@ -84,6 +84,10 @@ pub struct Aborted {
     pub done: u32,
     /// All its events.
     pub of: u32,
+    /// Motion taken had not all been issued (a block running, items
+    /// waiting, a hold braking or holding the rest of a block): the reset
+    /// dropped some.
+    pub dropped: bool,
 }
 
 /// What is being issued.
@@ -192,6 +196,17 @@ impl<const R: usize> Stepper<R> {
     /// Whether nothing waits and nothing is being issued.
     pub fn is_idle(&self) -> bool {
         self.ring.is_empty() && matches!(self.now, Now::Idle)
+    }
+
+    /// Whether anything taken has not all been issued: items waiting, a
+    /// block being issued, a hold braking, or held with the rest of a
+    /// block or run to resume.
+    pub fn pending(&self) -> bool {
+        !self.is_idle()
+            || match &self.hold {
+                Hold::Off | Hold::Held(Rest::Nothing) => false,
+                Hold::Braking(..) | Hold::Held(_) => true,
+            }
     }
 
     /// What the axes are doing.
@@ -474,13 +489,19 @@ impl<const R: usize> Stepper<R> {
     /// Reset: drops everything started at once, the hold with it; the
     /// registers keep the steps issued. Reports the block that was running.
     pub fn abort(&mut self) -> Aborted {
+        let dropped = self.pending();
         let aborted = match (&self.now, self.running()) {
             (Now::Fixed(run), _) => Aborted {
                 done: run.n,
                 of: run.n + run.events.clone().count() as u32,
+                dropped,
             },
-            (_, Some((done, Some(of)))) => Aborted { done, of },
-            _ => Aborted { done: 0, of: 0 },
+            (_, Some((done, Some(of)))) => Aborted { done, of, dropped },
+            _ => Aborted {
+                done: 0,
+                of: 0,
+                dropped,
+            },
         };
         self.ring.clear();
         self.now = Now::Idle;
@@ -761,7 +782,8 @@ mod tests {
             s.abort(),
             Aborted {
                 done: 700,
-                of: 2000
+                of: 2000,
+                dropped: true
             }
         );
         assert!(s.is_idle());

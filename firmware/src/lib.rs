@@ -199,7 +199,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
         }
     }
 
-    fn program_stop(&mut self, _: u8) {
+    fn program_stop(&mut self, _: u16) {
         motion::clear_cycle_start();
         while !motion::stop_ended() {
             self.pause();

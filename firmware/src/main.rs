@@ -88,10 +88,7 @@ mod app {
                     bytes: serial::Bytes::new(bytes_out),
                     storage,
                 }),
-                receiver: serial::Receiver {
-                    bytes: bytes_in,
-                    realtime: rt_in,
-                },
+                receiver: serial::Receiver::new(bytes_in, rt_in),
                 realtime: rt_out,
                 supervisor: supervisor::start(board.watchdog, per_tick),
             },

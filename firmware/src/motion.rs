@@ -163,6 +163,11 @@ pub fn take_reset() -> bool {
     WANTED.fetch_and(!WANT_RESET, Ordering::AcqRel) & WANT_RESET != 0
 }
 
+/// Whether a reset waits for the protocol (not taken yet).
+pub fn reset_waiting() -> bool {
+    WANTED.load(Ordering::Acquire) & WANT_RESET != 0
+}
+
 /// Forgets a cycle start that came before a program stop began to wait.
 pub fn clear_cycle_start() {
     CYCLE_START.store(false, Ordering::Release);

@@ -8,7 +8,7 @@
 //! | work per byte | under 100 instructions (`host-sim qemu-bench`) |
 
 use crate::board::{self, ticks};
-use core::sync::atomic::{AtomicBool, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use core_nostd::protocol::grbl::GrblRealtime;
 use core_nostd::protocol::Realtime;
 use heapless::spsc::{Consumer, Producer};
@@ -46,15 +46,33 @@ pub fn set_grbl(on: bool) {
     GRBL.store(on, Ordering::Relaxed);
 }
 
+/// A reset came: the bytes put in the queue before it are dropped unread
+/// ([`DROP_TO`] counts them), as grbl empties its receive buffer.
+static FLUSH: AtomicBool = AtomicBool::new(false);
+/// Bytes the receive interrupt had put in the queue when the last reset
+/// came (wrapping).
+static DROP_TO: AtomicU32 = AtomicU32::new(0);
+
 /// The receive interrupt's ends of its two queues.
 pub struct Receiver {
     /// Bytes for the protocol.
-    pub bytes: Producer<'static, u8>,
+    bytes: Producer<'static, u8>,
     /// Real-time bytes for their task.
-    pub realtime: Producer<'static, RtEvent>,
+    realtime: Producer<'static, RtEvent>,
+    /// Bytes put in the queue since power-on (wrapping).
+    put: u32,
 }
 
 impl Receiver {
+    /// The producer ends of the byte queue and of the real-time queue.
+    pub fn new(bytes: Producer<'static, u8>, realtime: Producer<'static, RtEvent>) -> Receiver {
+        Receiver {
+            bytes,
+            realtime,
+            put: 0,
+        }
+    }
+
     /// USART1's receive interrupt: buffers the byte, or hands a real-time
     /// byte to its task (a grbl jog cancel goes on to the protocol too).
     #[inline(always)]
@@ -88,6 +106,12 @@ impl Receiver {
             }
         };
         if let Some(rt) = rt {
+            if rt == Realtime::Reset {
+                // What came before the reset goes with it, the line being
+                // received too (the protocol drops its part at the reset).
+                DROP_TO.store(self.put, Ordering::Relaxed);
+                FLUSH.store(true, Ordering::Release);
+            }
             let event = RtEvent {
                 rt,
                 quiet,
@@ -101,6 +125,7 @@ impl Receiver {
         if forward {
             // Room was checked.
             let _ = self.bytes.enqueue(byte);
+            self.put = self.put.wrapping_add(1);
         }
     }
 }
@@ -108,21 +133,55 @@ impl Receiver {
 /// Thread mode's end of the byte queue.
 pub struct Bytes {
     bytes: Consumer<'static, u8>,
+    /// Bytes taken from the queue since power-on (wrapping).
+    got: u32,
+    /// After a reset: the count of bytes put before it, until those are
+    /// dropped.
+    drop_to: Option<u32>,
 }
 
 impl Bytes {
     /// Takes the consumer end.
     pub fn new(bytes: Consumer<'static, u8>) -> Bytes {
-        Bytes { bytes }
+        Bytes {
+            bytes,
+            got: 0,
+            drop_to: None,
+        }
     }
 
     /// The next received byte, if any; takes bytes again after a pause.
+    /// Nothing while a reset waits for the protocol (the bytes after it
+    /// belong to the new session), and never a byte that came before a
+    /// reset.
     pub fn receive(&mut self, serial: &mut board::Serial) -> Option<u8> {
-        let byte = self.bytes.dequeue();
-        if byte.is_none() && PAUSED.swap(false, Ordering::AcqRel) {
-            serial.rx_resume();
+        if crate::motion::reset_waiting() {
+            return None;
         }
-        byte
+        loop {
+            let Some(byte) = self.bytes.dequeue() else {
+                if PAUSED.swap(false, Ordering::AcqRel) {
+                    serial.rx_resume();
+                }
+                return None;
+            };
+            let k = self.got;
+            self.got = k.wrapping_add(1);
+            // Looked at after the byte is taken: a reset that came before
+            // this byte was put drops it.
+            if FLUSH.swap(false, Ordering::Acquire) {
+                self.drop_to = Some(DROP_TO.load(Ordering::Relaxed));
+            }
+            if let Some(to) = self.drop_to {
+                // Byte `k` came before the reset when it is below `to`
+                // (the two are at most a queue apart).
+                if (to.wrapping_sub(k) as i32) > 0 {
+                    continue;
+                }
+                self.drop_to = None;
+            }
+            return Some(byte);
+        }
     }
 
     /// Whether bytes are waiting.

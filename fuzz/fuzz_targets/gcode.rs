@@ -160,8 +160,7 @@ fn as_reference_error(e: BlockError) -> RefBlockError {
                 LengthError::Malformed => LengthRefusal::Malformed,
                 LengthError::TooManyDecimals => LengthRefusal::TooManyDecimals,
                 LengthError::OutOfRange => LengthRefusal::OutOfRange,
-                LengthError::TooManyGcodeDecimals => LengthRefusal::TooManyGcodeDecimals,
-            },
+                    },
         ),
     }
 }

@@ -7,7 +7,7 @@
 //!   too many decimals before out of range);
 //! - `to_string()` is the value in 0.0001 mm rounded half away from zero,
 //!   and re-parses to within 0.00005 mm of the value;
-//! - the G-code reading (`30.`, `.5`, up to 15 decimals rounded once to the
+//! - the G-code reading (`30.`, `.5`, any count of decimals (read to the 30th) rounded once to the
 //!   ångström), in millimetres and in inches, agrees with its reference to
 //!   the ångström and in its refusal,
 //!   and equals the protocol's reading wherever that one accepts.
@@ -22,7 +22,6 @@ fn refusal(e: LengthError) -> LengthRefusal {
         LengthError::Malformed => LengthRefusal::Malformed,
         LengthError::TooManyDecimals => LengthRefusal::TooManyDecimals,
         LengthError::OutOfRange => LengthRefusal::OutOfRange,
-        LengthError::TooManyGcodeDecimals => LengthRefusal::TooManyGcodeDecimals,
     }
 }
 

@@ -56,8 +56,6 @@ pub enum LengthRefusal {
     TooManyDecimals,
     /// Magnitude not below 100 000 mm.
     OutOfRange,
-    /// A G-code number with more than 15 decimals.
-    TooManyGcodeDecimals,
 }
 
 /// A decimal millimetre value `[+-]?[0-9]+(\.[0-9]{1,6})?` with magnitude
@@ -1187,9 +1185,15 @@ pub fn parse_gcode_inch(text: &str) -> Result<i64, LengthRefusal> {
     };
     parse_gcode_mm(text)?;
     let (int, frac) = body.split_once('.').unwrap_or((body, ""));
+    let frac = &frac[..frac.len().min(30)];
     let digits: i128 = format!("{int}{frac}0").parse::<i128>().unwrap() / 10;
-    let num = digits * 254_000_000;
-    let den = 10i128.pow(frac.len() as u32);
+    // inches · 254·10⁶ Å: digits·254 / 10^(d−6), or ·10^(6−d).
+    let d = frac.len() as u32;
+    let (num, den) = if d >= 6 {
+        (digits * 254, 10i128.pow(d - 6))
+    } else {
+        (digits * 254 * 10i128.pow(6 - d), 1)
+    };
     let a = num / den + i128::from(2 * (num % den) >= den);
     if a > 999_999_999_990 {
         return Err(LengthRefusal::OutOfRange);
@@ -1246,7 +1250,7 @@ fn reference_scan(line: &str) -> (Option<bool>, bool, bool) {
 }
 
 /// A G-code number of millimetres: `[+-]` then `d+`, `d+.`, `d+.d+` or
-/// `.d+`, at most 15 decimals, as ångström rounded half away from zero,
+/// `.d+`, read to the 30th decimal, as ångström rounded half away from zero,
 /// magnitude at most 99 999.999999 mm after rounding.
 pub fn parse_gcode_mm(text: &str) -> Result<i64, LengthRefusal> {
     parse_gcode_scaled(text, 7)
@@ -1266,17 +1270,21 @@ pub fn parse_gcode_scaled(text: &str, e: u32) -> Result<i64, LengthRefusal> {
     if (int.is_empty() && frac.is_empty()) || !all_digits(int) || !all_digits(frac) {
         return Err(LengthRefusal::Malformed);
     }
-    if frac.len() > 15 {
-        return Err(LengthRefusal::TooManyGcodeDecimals);
-    }
+    // Read to the 30th decimal; later digits are left out.
+    let frac = &frac[..frac.len().min(30)];
     let int = int.trim_start_matches('0');
     if int.len() > 5 {
         return Err(LengthRefusal::OutOfRange);
     }
-    // value = digits / 10^decimals mm; in ångström ×10^7, as a fraction.
+    // value = digits / 10^decimals mm; in ångström ×10^e, as a fraction
+    // num/den (the power of ten on one side only: within i128).
     let digits: i128 = format!("{int}{frac}0").parse::<i128>().unwrap() / 10;
-    let num = digits * 10i128.pow(e);
-    let den = 10i128.pow(frac.len() as u32);
+    let d = frac.len() as u32;
+    let (num, den) = if d >= e {
+        (digits, 10i128.pow(d - e))
+    } else {
+        (digits * 10i128.pow(e - d), 1)
+    };
     let (q, r) = (num / den, num % den);
     let a = if 2 * r >= den { q + 1 } else { q };
     if a > 999_999_999_990 {

@@ -67,7 +67,7 @@ impl Io for Collect<'_, '_> {
     /// wait; every other byte waits its turn after the request, real-time
     /// ones too (answered then, as the board answers them after its
     /// wait).
-    fn program_stop(&mut self, _: u8) {
+    fn program_stop(&mut self, _: u16) {
         let Some(op) = self.operator.as_deref_mut() else {
             return;
         };

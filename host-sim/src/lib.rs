@@ -5,6 +5,9 @@
 //! - [`reference_arc`]: the same reference for arcs (by chords and by the
 //!   ЭМ-907 circular interpolator);
 //! - [`device`]: the core's protocol handler in this process;
+//! - [`board`]: the simulated board `serve` runs: the device behind a
+//!   receiver, the axes on the wall clock and the protocol, as the firmware
+//!   runs them;
 //! - [`link`]: the virtual serial link (a pseudo-terminal pair driven through
 //!   the `serialport` crate) and the host side of the protocol;
 //! - [`qemu`]: the firmware booted in QEMU, reached over its serial pty;
@@ -40,6 +43,7 @@
 //!   time;
 //! - [`scenario`]: the built-in scenarios of the main job.
 
+pub mod board;
 pub mod calculators;
 pub mod check;
 pub mod compare;

@@ -338,6 +338,15 @@ enum Command {
         /// pendant protocol, its request `GRBL` back.
         #[arg(long)]
         grbl: bool,
+        /// Issue the motion at once instead of on the wall clock (blocks
+        /// start by the look-ahead window, every tick as on the virtual
+        /// clock of `run`).
+        #[arg(long, conflicts_with = "speed")]
+        instant: bool,
+        /// Run the step clock this many times as fast as the wall clock
+        /// (default 1: real time, as a board runs).
+        #[arg(long, value_name = "FACTOR", value_parser = parse_speed)]
+        speed: Option<f64>,
     },
 }
 
@@ -852,10 +861,22 @@ fn main() -> ExitCode {
         Command::Send(args) => send_program(&args),
         Command::Serve {
             stdio: _,
-            pty: true,
+            pty,
             grbl,
-        } => serve_pty(grbl),
-        Command::Serve { grbl, .. } => serve_stdio(grbl),
+            instant,
+            speed,
+        } => {
+            let pace = if instant {
+                host_sim::board::Pace::Unpaced
+            } else {
+                host_sim::board::Pace::Wall(speed.unwrap_or(1.0))
+            };
+            if pty {
+                serve_pty(grbl, pace)
+            } else {
+                serve_stdio(grbl, pace)
+            }
+        }
     };
     match result {
         Ok(code) => code,
@@ -866,51 +887,47 @@ fn main() -> ExitCode {
     }
 }
 
-/// Standard input and output as the link; a program stop waits on it for
-/// cycle start.
-struct Stdio {
-    stdin: std::io::StdinLock<'static>,
-    stdout: std::io::StdoutLock<'static>,
-}
-
-impl host_sim::device::Operator for Stdio {
-    fn write(&mut self, bytes: &[u8]) {
-        let _ = self.stdout.write_all(bytes);
-        let _ = self.stdout.flush();
-    }
-
-    fn read(&mut self) -> Option<u8> {
-        let mut b = [0u8; 1];
-        loop {
-            match self.stdin.read(&mut b) {
-                Ok(0) => return None,
-                Ok(_) => return Some(b[0]),
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(_) => return None,
-            }
-        }
+/// `--speed FACTOR`: a positive, finite factor.
+fn parse_speed(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(f) if f.is_finite() && f > 0.0 && f <= 1e6 => Ok(f),
+        _ => Err(format!("{v}: not a speed factor above 0 (up to 1000000)")),
     }
 }
 
-fn serve_stdio(grbl: bool) -> Result<ExitCode, Box<dyn std::error::Error>> {
-    let mut device = LocalDevice::new();
+/// A device at power-on, speaking grbl from the start when asked (its
+/// banner goes out when a sender opens the link).
+fn board_device(grbl: bool) -> core_nostd::protocol::Device {
+    struct Nowhere;
+    impl core_nostd::protocol::Io for Nowhere {
+        fn send(&mut self, _: &[u8]) {}
+    }
+    let mut device = core_nostd::protocol::Device::new();
+    device.set_grbl(grbl, &mut Nowhere);
+    device
+}
+
+fn serve_stdio(
+    grbl: bool,
+    pace: host_sim::board::Pace,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
     if grbl {
-        std::io::stdout().write_all(&device.set_grbl(true))?;
+        let mut out = std::io::stdout();
+        out.write_all(core_nostd::protocol::grbl::BANNER)?;
+        out.flush()?;
     }
-    let mut link = Stdio {
-        stdin: std::io::stdin().lock(),
-        stdout: std::io::stdout().lock(),
-    };
-    let mut buf = [0u8; 4096];
-    loop {
-        let n = link.stdin.read(&mut buf)?;
-        if n == 0 {
-            return Ok(ExitCode::SUCCESS);
+    let mut stdin = std::io::stdin();
+    let read = move |buf: &mut [u8]| loop {
+        match stdin.read(buf) {
+            Ok(n) => return Ok(Some(n)),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
         }
-        let out = device.feed_operated(&buf[..n], &mut link);
-        link.stdout.write_all(&out)?;
-        link.stdout.flush()?;
-    }
+    };
+    let board =
+        host_sim::board::Board::serve(board_device(grbl), pace, read, std::io::stdout(), false);
+    board.wait();
+    Ok(ExitCode::SUCCESS)
 }
 
 /// `host-sim send FILE`.
@@ -1028,17 +1045,19 @@ fn send_program(args: &SendArgs) -> Result<ExitCode, Box<dyn std::error::Error>>
     Ok(ExitCode::from(code))
 }
 
-fn serve_pty(grbl: bool) -> Result<ExitCode, Box<dyn std::error::Error>> {
-    let mut local = LocalDevice::new();
-    if grbl {
-        // A grbl sender resets the controller when it connects and reads
-        // the banner then.
-        local.set_grbl(true);
-    }
-    let device = PtyDevice::start_with(local)?;
-    println!("device on {} (115200 8N1); Ctrl-C ends", device.path());
+fn serve_pty(
+    grbl: bool,
+    pace: host_sim::board::Pace,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
+    let (path, board) = host_sim::board::serve_pty(board_device(grbl), pace)?;
+    let clock = match pace {
+        host_sim::board::Pace::Unpaced => "motion at once".to_string(),
+        host_sim::board::Pace::Wall(1.0) => "motion in real time".to_string(),
+        host_sim::board::Pace::Wall(f) => format!("motion at {f}× real time"),
+    };
+    println!("device on {path} (115200 8N1, {clock}); Ctrl-C ends");
     std::io::stdout().flush()?;
-    device.wait();
+    board.wait();
     Ok(ExitCode::SUCCESS)
 }
 

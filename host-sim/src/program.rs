@@ -130,7 +130,7 @@ struct Tally {
     run_ticks: u64,
     dwell_us: u64,
     events: u64,
-    stops: Vec<u8>,
+    stops: Vec<u16>,
     /// Kept when asked for.
     timeline: Option<Vec<Happening>>,
 }
@@ -165,7 +165,7 @@ impl Io for Tally {
         self.dwell_us += us;
         self.keep(Happening::Dwell(us));
     }
-    fn program_stop(&mut self, code: u8) {
+    fn program_stop(&mut self, code: u16) {
         // Cycle start, pressed at once.
         self.stops.push(code);
     }

@@ -40,12 +40,14 @@ fn a_sender_reads_what_it_expects_of_grbl() {
     }
     assert_eq!(text(&mut dev, b"$110=2000\n"), "ok\r\n");
     assert!(text(&mut dev, b"$$\n").contains("$110=2000.0000\r\n"));
-    // A setting this controller does not have is named and changes nothing.
-    let bad = text(&mut dev, b"$1=25\n");
+    // A setting this board has nothing to act on is named and changes
+    // nothing.
+    let bad = text(&mut dev, b"$3=1\n");
     assert!(
-        bad.starts_with("[MSG:") && bad.ends_with("error:3\r\n"),
+        bad.starts_with("[MSG:$3: ") && bad.ends_with("error:3\r\n"),
         "{bad}"
     );
+    assert!(text(&mut dev, b"$$\n").contains("$3=0\r\n"));
     let modes = text(&mut dev, b"$G\n");
     assert!(
         modes.starts_with("[GC:G0 G54 G7 G18 G21 G90 G94 G97 M5 M9"),
@@ -114,8 +116,9 @@ fn a_jog_moves_in_work_coordinates_and_pendant_requests_still_work() {
     assert!(pos.starts_with("OK PX=1000 PZ=-9500 "), "{pos}");
     // `GRBL` switches again, with the banner.
     let again = text(&mut dev, b"GRBL\r\n");
+    // The request's CRLF is one terminator: no empty grbl line after it.
     assert!(
-        again.starts_with("OK GRBL=1*") && again.contains("Grbl 1.1h"),
+        again.starts_with("OK GRBL=1*") && again.ends_with("Grbl 1.1h ['$' for help]\r\n"),
         "{again}"
     );
 }
@@ -371,4 +374,289 @@ fn a_jog_cancel_stops_the_firmware_short_at_rest() {
         (after - (stopped - 1.0)).abs() < 1e-9,
         "{stopped} then {after}"
     );
+}
+
+/// grbl's standard settings: every one `$$` lists is accepted when it
+/// leaves the machine as it is, kept and read back when it only informs a
+/// sender, acted on when this board has it, and otherwise refused with
+/// grbl's documented error, naming why.
+#[test]
+fn the_standard_settings_are_accepted_or_refused_with_their_error() {
+    let mut dev = grbl_device();
+    let all = text(&mut dev, b"$$\n");
+    for n in [
+        0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, 100, 102,
+        110, 112, 120, 122, 130, 132,
+    ] {
+        assert!(
+            all.contains(&format!("\r\n${n}=")) || all.starts_with(&format!("${n}=")),
+            "${n}: {all}"
+        );
+    }
+    // Kept and read back.
+    for (line, back) in [
+        ("$1=255", "$1=255\r\n"),
+        ("$24=50.5", "$24=50.500\r\n"),
+        ("$27=2", "$27=2.000\r\n"),
+        ("$130=310", "$130=310.000\r\n"),
+    ] {
+        assert_eq!(
+            text(&mut dev, format!("{line}\n").as_bytes()),
+            "ok\r\n",
+            "{line}"
+        );
+        assert!(text(&mut dev, b"$$\n").contains(back), "{line}");
+    }
+    // Acted on: steps per mm are one over the impulse price, the chord
+    // tolerance is CFG TOL.
+    assert_eq!(text(&mut dev, b"$100=160\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"$12=0.002\n"), "ok\r\n");
+    let now = text(&mut dev, b"$$\n");
+    assert!(now.contains("$100=160.000\r\n"), "{now}");
+    assert!(now.contains("$12=0.0020\r\n"), "{now}");
+    // Values the setting already has are accepted.
+    for line in ["$2=0", "$13=0", "$20=0", "$21=0", "$22=0", "$32=2"] {
+        assert_eq!(
+            text(&mut dev, format!("{line}\n").as_bytes()),
+            "ok\r\n",
+            "{line}"
+        );
+    }
+    // Refused with grbl's codes, nothing changed.
+    for (line, code) in [
+        ("$20=1", "error:10"),
+        ("$21=1", "error:3"),
+        ("$22=1", "error:3"),
+        ("$13=1", "error:3"),
+        ("$32=1", "error:3"),
+        ("$100=1280", "error:3"),
+        ("$1=-5", "error:4"),
+        ("$24=fast", "error:2"),
+        ("$10=2", "error:3"),
+        ("$101=80", "error:3"),
+    ] {
+        let r = text(&mut dev, format!("{line}\n").as_bytes());
+        assert!(
+            r.starts_with("[MSG:") && r.ends_with(&format!("{code}\r\n")),
+            "{line}: {r}"
+        );
+    }
+    assert_eq!(text(&mut dev, b"$$\n"), now);
+    // $10=0: work positions.
+    assert_eq!(text(&mut dev, b"G10 L2 P1 Z-100\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"$10=0\n"), "ok\r\n");
+    assert!(text(&mut dev, b"?").starts_with("<Idle|WPos:0.0000,0.0000,100.0000|"));
+    assert_eq!(text(&mut dev, b"$10=1\n"), "ok\r\n");
+    assert!(text(&mut dev, b"?").starts_with("<Idle|MPos:0.0000,0.0000,0.0000|"));
+}
+
+/// `$C`: lines are read and checked as if run, a bad one refused as it
+/// would be, nothing moves; leaving it resets (grbl's banner) with the
+/// position where it was.
+#[test]
+fn check_mode_runs_nothing_and_reports_what_it_would_refuse() {
+    let mut dev = grbl_device();
+    assert_eq!(
+        text(&mut dev, b"G21 G90 G00 X10 Z-5\nM30\n"),
+        "ok\r\nok\r\n"
+    );
+    assert_eq!(text(&mut dev, b"$C\n"), "[MSG:Enabled]\r\nok\r\n");
+    assert!(text(&mut dev, b"?").starts_with("<Check|MPos:10.0000,0.0000,-5.0000|"));
+    assert_eq!(text(&mut dev, b"G01 X40 Z-50 F100\n"), "ok\r\n");
+    let refused = text(&mut dev, b"G02 X50 Z-60 I0 K3\n");
+    assert!(refused.ends_with("error:33\r\n"), "{refused}");
+    assert_eq!(text(&mut dev, b"M30\n"), "ok\r\n");
+    let status = text(&mut dev, b"?");
+    assert!(
+        status.starts_with("<Check|MPos:10.0000,0.0000,-5.0000|"),
+        "{status}"
+    );
+    let off = text(&mut dev, b"$C\n");
+    assert!(off.starts_with("[MSG:Disabled]\r\n"), "{off}");
+    assert!(off.contains("Grbl 1.1h"), "{off}");
+    assert!(text(&mut dev, b"?").starts_with("<Idle|MPos:10.0000,0.0000,-5.0000|"));
+    // The next line runs from there, for real.
+    assert_eq!(text(&mut dev, b"G90 G00 X20\nM30\n"), "ok\r\nok\r\n");
+    assert!(text(&mut dev, b"?").starts_with("<Idle|MPos:20.0000,0.0000,-5.0000|"));
+}
+
+/// What grbl drops: every byte above 0x7F that is not a real-time command
+/// (CNCjs sends an override as UTF-8, `C2 91`), control bytes; and what a
+/// reset drops: the line being received. A reset that drops motion answered
+/// `ok` and not yet run says so with ALARM:3.
+#[test]
+fn bytes_that_are_not_commands_or_lines_are_dropped() {
+    let mut dev = grbl_device();
+    assert_eq!(text(&mut dev, b"G21 G90 G00 X1\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, &[0xC2, 0x91]), "");
+    assert_eq!(text(&mut dev, b"G00 X2\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"G00\xC2\x84 X3\x07\n"), "ok\r\n");
+    assert!(text(&mut dev, b"?").contains("|Ov:110,100,100|"));
+    // `$`, a reset, then `G`: the `$` went with the reset (the motion
+    // queued has run first: a reset that drops it raises ALARM:3).
+    assert_eq!(text(&mut dev, b"M30\n"), "ok\r\n");
+    let out = text(&mut dev, b"$\x18G\n");
+    assert!(out.contains("Grbl 1.1h"), "{out}");
+    assert!(out.ends_with("error:20\r\n"), "{out}");
+    assert!(!out.contains("[GC:") && !out.contains("ALARM"), "{out}");
+    // grbl 1.1 ends a line at CR and at LF: a CRLF is a line and an empty
+    // one, each answered.
+    assert_eq!(text(&mut dev, b"G00 X4\r\n"), "ok\r\nok\r\n");
+    // Queued, not run: the reset drops it and says so.
+    let out = text(&mut dev, &[0x18]);
+    assert!(out.starts_with("ALARM:3\r\n"), "{out}");
+    assert!(text(&mut dev, b"?").starts_with("<Alarm|MPos:3.0000,"));
+}
+
+/// Safety: after `G10 L2` moves the active work system, a block that names
+/// only Z leaves X where it is (as LinuxCNC and grbl do).
+#[test]
+fn an_axis_left_out_of_a_block_stays_after_the_work_offset_changes() {
+    let mut dev = grbl_device();
+    let out = text(&mut dev, b"G90 G0 X10 Z-5\nG10 L2 P1 X4 Z-2\nG0 Z-6\nM30\n");
+    assert_eq!(out, "ok\r\nok\r\nok\r\nok\r\n");
+    let status = text(&mut dev, b"?");
+    assert!(
+        status.starts_with("<Idle|MPos:10.0000,0.0000,-8.0000|"),
+        "{status}"
+    );
+}
+
+/// A simulated board (`serve --pty`) on a pty, speaking grbl; the client
+/// after its greeting.
+fn board(pace: host_sim::board::Pace) -> (host_sim::board::Board, host_sim::link::Client) {
+    struct Nowhere;
+    impl core_nostd::protocol::Io for Nowhere {
+        fn send(&mut self, _: &[u8]) {}
+    }
+    let mut device = core_nostd::protocol::Device::new();
+    device.set_grbl(true, &mut Nowhere);
+    let (path, board) = host_sim::board::serve_pty(device, pace).expect("pty");
+    let mut c = host_sim::link::Client::open(&path, Duration::from_secs(10)).expect("open");
+    // A board greets the sender that opens its port.
+    assert_eq!(c.read_line().expect("banner"), "");
+    assert!(c.read_line().expect("banner").starts_with("Grbl 1.1h"));
+    (board, c)
+}
+
+/// The next status report (lines before it skipped).
+fn report(c: &mut host_sim::link::Client) -> String {
+    c.write_raw(b"?").expect("status");
+    loop {
+        let l = c.read_line().expect("report");
+        if l.starts_with('<') {
+            return l;
+        }
+    }
+}
+
+/// MPos X and Z of a report.
+fn mpos(report: &str) -> (f64, f64) {
+    let p: Vec<f64> = report
+        .split("MPos:")
+        .nth(1)
+        .and_then(|s| s.split('|').next())
+        .map(|s| s.split(',').map(|v| v.parse().expect(report)).collect())
+        .expect(report);
+    (p[0], p[2])
+}
+
+/// `M0` is answered at once, the board shows `Hold:0` once the motion
+/// before it has ended, status is answered, the lines after it are
+/// received and answered, and cycle start goes on with them.
+#[test]
+fn m0_is_answered_and_holds_until_cycle_start() {
+    let (_board, mut c) = board(host_sim::board::Pace::Wall(1.0));
+    c.write_raw(b"G21 G90 G00 X10\nM0\nG00 X20\n")
+        .expect("lines");
+    for _ in 0..3 {
+        assert_eq!(c.read_line().expect("ok"), "ok");
+    }
+    let held = report(&mut c);
+    assert!(held.starts_with("<Hold:0|"), "{held}");
+    assert_eq!(mpos(&held), (10.0, 0.0));
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(mpos(&report(&mut c)), (10.0, 0.0));
+    c.write_raw(b"~").expect("cycle start");
+    std::thread::sleep(Duration::from_millis(800));
+    let done = report(&mut c);
+    assert!(done.starts_with("<Idle|"), "{done}");
+    assert_eq!(mpos(&done), (20.0, 0.0));
+}
+
+/// On the wall clock a sender sees the run: the position moving, `Run`,
+/// `Hold:1` braking then `Hold:0`, `Run` again after cycle start, `Idle` at
+/// the end of a program that has no `M2` (the quiet link starts what it
+/// queued and the run ends); a reset in motion raises `ALARM:3`.
+#[test]
+fn the_simulated_board_runs_in_real_time() {
+    let (board, mut c) = board(host_sim::board::Pace::Wall(1.0));
+    // 30 mm along Z at 600 mm/min: 3 s.
+    c.write_raw(b"G21 G90 G01 Z-30 F600\n").expect("line");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(700));
+    let first = report(&mut c);
+    assert!(first.starts_with("<Run|"), "{first}");
+    std::thread::sleep(Duration::from_millis(300));
+    let second = report(&mut c);
+    let (z1, z2) = (mpos(&first).1, mpos(&second).1);
+    // 10 mm/s: about 3 mm in 0.3 s.
+    assert!(z2 < z1 - 1.5 && z2 > z1 - 4.5, "{first} then {second}");
+    c.write_raw(b"!").expect("hold");
+    let braking = report(&mut c);
+    assert!(braking.starts_with("<Hold:"), "{braking}");
+    std::thread::sleep(Duration::from_millis(300));
+    let held = report(&mut c);
+    assert!(held.starts_with("<Hold:0|"), "{held}");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(mpos(&report(&mut c)), mpos(&held));
+    c.write_raw(b"~").expect("resume");
+    std::thread::sleep(Duration::from_millis(200));
+    assert!(report(&mut c).starts_with("<Run|"));
+    std::thread::sleep(Duration::from_millis(3000));
+    let end = report(&mut c);
+    assert!(end.starts_with("<Idle|"), "{end}");
+    assert_eq!(mpos(&end), (0.0, -30.0));
+    // A jog shows as such.
+    c.write_raw(b"$J=G91 G21 Z-10 F600\n").expect("jog");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(report(&mut c).starts_with("<Jog|"));
+    // A reset while the axes move: they stop at once, ALARM:3.
+    c.write_raw(&[0x18]).expect("reset");
+    let mut lines = Vec::new();
+    while !lines.iter().any(|l: &String| l.starts_with("[MSG:'$H'")) {
+        lines.push(c.read_line().expect("reset lines"));
+    }
+    assert_eq!(lines[0], "ALARM:3", "{lines:?}");
+    let drift = board.drift();
+    assert!(drift.runs >= 2, "{drift:?}");
+    assert!(
+        (drift.wall_s - drift.planned_s).abs() < 0.05 * drift.runs as f64,
+        "{drift:?}"
+    );
+}
+
+/// A program without `M2`/`M30`: once the link is quiet, every block
+/// queued starts (a run under way included) and the board reports `Idle`
+/// where the program ends, unpaced and on the wall clock.
+#[test]
+fn a_program_without_m2_runs_to_its_end() {
+    for pace in [
+        host_sim::board::Pace::Unpaced,
+        host_sim::board::Pace::Wall(20.0),
+    ] {
+        let (_board, mut c) = board(pace);
+        // More lines than the 64-block window: a run is under way when
+        // the stream ends.
+        for k in 1..=80 {
+            c.write_raw(format!("G21 G90 G01 X{} Z-{}.5 F3000\n", k % 2, k).as_bytes())
+                .expect("line");
+            assert_eq!(c.read_line().expect("ok"), "ok", "{pace:?}");
+        }
+        std::thread::sleep(Duration::from_millis(1500));
+        let end = report(&mut c);
+        assert!(end.starts_with("<Idle|"), "{pace:?}: {end}");
+        assert_eq!(mpos(&end), (0.0, -80.5), "{pace:?}");
+    }
 }

@@ -129,6 +129,16 @@ const PEERS: &[Peer] = &[
         entry: None,
         inch: false,
     },
+    Peer {
+        name: "an axis the block does not name stays where it is after an offset change",
+        body: "G18 G21 G7 G90 G40\nG00 X10 Z-5\nG10 L2 P1 X4 Z-2\nG00 Z-6\n\
+               G10 L20 P1 X20\nG01 Z-10 F100\nG55\nG00 Z-3\nT1 M6 G43\nG00 X12 Z-1\n\
+               G92 X5\nG00 Z0\nG92.1\nG00 Z2\nG10 L2 P2 Z7\nG00 X30\nG54\n\
+               G01 Z1\nG10 L20 P1 Z3\nG91 G01 X2\nG90 G92 Z0\nG00 X8\nM2\n",
+        tool: Some(("X0.05 Z-0.1 Q2", "X=2.54 Z=-2.54 R=0.4 T=3")),
+        entry: None,
+        inch: false,
+    },
 ];
 
 fn rs274_available() -> bool {
@@ -166,13 +176,20 @@ fn triple(text: &str) -> Vec<f64> {
 /// way point of `G28`/`G30` even where the tool already is, the device
 /// does not.
 fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
-    let dir = std::env::temp_dir().join(format!("linuxcnc-peer-{}", std::process::id()));
+    // One directory per call: the tests run side by side.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("linuxcnc-peer-{}-{call}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let ngc = dir.join("part.ngc");
     let tbl = dir.join("tool.tbl");
     let tool = tool.unwrap_or("X0 Z0 Q0");
     std::fs::write(&tbl, format!("T1 P1 {tool} {D}\n")).unwrap();
     std::fs::write(&ngc, program).unwrap();
+    // rs274 keeps its parameter file in the working directory: one at a
+    // time.
+    static ONE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one = ONE.lock().unwrap_or_else(|e| e.into_inner());
     let out = Command::new("rs274")
         .args(["-g", "-t"])
         .arg(&tbl)
@@ -320,4 +337,30 @@ fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
         "LinuxCNC rs274 and the device agree on {agreed} of {} programs ({moves} moves)",
         PEERS.len()
     );
+}
+
+/// Where the device departs from LinuxCNC on purpose: after a tool offset
+/// is taken into effect (`G43`), LinuxCNC takes it up on the next move on
+/// every axis, named or not; the device never moves an axis the block
+/// does not name (`docs/gcode.md`), and takes the offset up when the axis
+/// is next named. Both then stand at the same machine point.
+#[test]
+fn a_tool_offset_is_taken_up_only_by_an_axis_the_block_names() {
+    if !rs274_available() {
+        return;
+    }
+    let body = "G18 G21 G7 G90 G40\nG00 X10 Z-5\nT1 M6 G43\nG00 Z-1\nG00 X10 Z-2\nM2\n";
+    let theirs = linuxcnc("G43 then Z alone", body, Some("X0.05 Z-0.1 Q2"));
+    let ours = device("G43 then Z alone", body, Some("X=2.54 Z=-2.54 R=0.4 T=3"));
+    assert_eq!(theirs.len(), 3, "{theirs:?}");
+    assert_eq!(ours.len(), 3, "{ours:?}");
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-4;
+    // The Z-only move: LinuxCNC moves X by the tool's 1.27 mm (X0.05 in,
+    // on the radius); the device leaves X at the 5 mm radius of X10.
+    assert!(near(theirs[1].x, 5.0 + 1.27), "{theirs:?}");
+    assert!(near(ours[1].x, 5.0), "{ours:?}");
+    assert!(near(theirs[1].z, ours[1].z), "{theirs:?} {ours:?}");
+    // Named again, X takes the offset up: the same machine point.
+    assert!(near(theirs[2].x, ours[2].x) && near(theirs[2].z, ours[2].z));
+    assert!(near(ours[2].x, 5.0 + 1.27), "{ours:?}");
 }

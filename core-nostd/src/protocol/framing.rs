@@ -56,11 +56,25 @@ impl LineAssembler {
     /// assert_eq!(lines, [b"VER".to_vec(), b"POS".to_vec(), b"".to_vec()]);
     /// ```
     pub fn push(&mut self, byte: u8) -> Option<Framed> {
+        self.push_with(byte, true)
+    }
+
+    /// As [`LineAssembler::push`], with `pairs` false every CR and every LF
+    /// ending a line of its own, as grbl 1.1 reads its input (a CRLF is
+    /// a line and an empty line, each answered).
+    ///
+    /// ```
+    /// use core_nostd::protocol::framing::{Framed, LineAssembler};
+    /// let mut a = LineAssembler::new();
+    /// let ends = b"G0\r\n".iter().filter(|&&b| a.push_with(b, false) == Some(Framed::Line));
+    /// assert_eq!(ends.count(), 2);
+    /// ```
+    pub fn push_with(&mut self, byte: u8, pairs: bool) -> Option<Framed> {
         if self.complete {
             self.buf.clear();
             self.complete = false;
         }
-        let after_cr = core::mem::replace(&mut self.after_cr, byte == b'\r');
+        let after_cr = core::mem::replace(&mut self.after_cr, byte == b'\r') && pairs;
         match byte {
             b'\n' if after_cr => None,
             b'\r' | b'\n' => {
@@ -82,6 +96,12 @@ impl LineAssembler {
                 }
             },
         }
+    }
+
+    /// Drops the line being received (a reset): the next byte begins a
+    /// new one.
+    pub fn clear(&mut self) {
+        *self = LineAssembler::new();
     }
 
     /// The line that the last [`Framed::Line`] completed (terminator excluded).

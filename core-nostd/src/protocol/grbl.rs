@@ -50,6 +50,26 @@ pub enum GrblRealtime {
 }
 
 impl GrblRealtime {
+    /// The feed, rapid and spindle overrides (percent) after this command:
+    /// a transport that shows them before the protocol has acted on the
+    /// byte computes them as the protocol will.
+    pub const fn overrides(self, [feed, rapid, spindle]: [u8; 3]) -> [u8; 3] {
+        match self {
+            GrblRealtime::Feed(byte) => [stepped(feed, byte), rapid, spindle],
+            GrblRealtime::Rapid(byte) => [
+                feed,
+                match byte {
+                    0x95 => 100,
+                    0x96 => 50,
+                    _ => 25,
+                },
+                spindle,
+            ],
+            GrblRealtime::Spindle(byte) => [feed, rapid, stepped(spindle, byte - 0x09)],
+            _ => [feed, rapid, spindle],
+        }
+    }
+
     /// The real-time command a byte is in grbl mode, if it is one.
     pub const fn from_byte(byte: u8) -> Option<GrblRealtime> {
         match byte {
@@ -69,6 +89,14 @@ impl GrblRealtime {
     }
 }
 
+/// Whether a byte that is not a real-time command is dropped on a grbl
+/// link rather than taken into the line: above 0x7F (grbl keeps only its
+/// real-time commands there; CNCjs sends an override byte as UTF-8, `C2 91`)
+/// and control bytes other than CR, LF and tab.
+pub const fn dropped(byte: u8) -> bool {
+    byte >= 0x80 || (byte < 0x20 && !matches!(byte, b'\r' | b'\n' | b'\t'))
+}
+
 /// The grbl front's own state.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Front {
@@ -86,6 +114,12 @@ pub struct Front {
     pub jogging: bool,
     /// A jog cancel came: drop the rest once at rest.
     pub cancel: bool,
+    /// `$C`: lines are checked, nothing moves or switches.
+    pub check: bool,
+    /// `$10` bit 0: status reports give machine positions (else work).
+    pub mpos: bool,
+    /// The settings kept for senders (see `$$`).
+    pub kept: [u32; KEPT],
 }
 
 impl Front {
@@ -99,6 +133,9 @@ impl Front {
             spindle: 100,
             jogging: false,
             cancel: false,
+            check: false,
+            mpos: true,
+            kept: KEPT_DEFAULT,
         }
     }
 }
@@ -141,6 +178,10 @@ pub struct Extras {
     pub jogging: bool,
     /// The alarm in force.
     pub alarm: Option<u8>,
+    /// Check mode (`$C`).
+    pub check: bool,
+    /// Positions as machine coordinates (`MPos:`), else work (`WPos:`).
+    pub mpos: bool,
 }
 
 impl Extras {
@@ -151,6 +192,8 @@ impl Extras {
         overrides: [100; 3],
         jogging: false,
         alarm: None,
+        check: false,
+        mpos: true,
     };
 
     /// The session's.
@@ -165,6 +208,8 @@ impl Extras {
             overrides: [front.feed, front.rapid, front.spindle],
             jogging: front.jogging,
             alarm: front.alarm,
+            check: front.check,
+            mpos: front.mpos,
         }
     }
 }
@@ -178,6 +223,7 @@ pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
     let at_rest = speed.iter().all(|&b| b == b'0' || b == b'.');
     let state: &[u8] = match (extras.alarm, state, value(status, b"STOP")) {
         (Some(_), _, _) => b"Alarm",
+        _ if extras.check => b"Check",
         (_, _, Some(_)) => b"Hold:0",
         (_, b"HOLD", _) if at_rest => b"Hold:0",
         (_, b"HOLD", _) => b"Hold:1",
@@ -187,10 +233,28 @@ pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
     };
     line.push_bytes(b"<");
     line.push_bytes(state);
-    line.push_bytes(b"|MPos:");
-    line.push_bytes(value(status, b"X").unwrap_or(b"0.0000"));
-    line.push_bytes(b",0.0000,");
-    line.push_bytes(value(status, b"Z").unwrap_or(b"0.0000"));
+    let (x, z) = (
+        value(status, b"X").unwrap_or(b"0.0000"),
+        value(status, b"Z").unwrap_or(b"0.0000"),
+    );
+    if extras.mpos {
+        line.push_bytes(b"|MPos:");
+        line.push_bytes(x);
+        line.push_bytes(b",0.0000,");
+        line.push_bytes(z);
+    } else {
+        // Work position: the machine's less the work offset.
+        line.push_bytes(b"|WPos:");
+        let wco = |a: i64, diameter| {
+            let v = if diameter { 2 * a } else { a };
+            crate::length::div_round_half_away(v, 1_000)
+        };
+        let x = mm4(x).unwrap_or(0) - wco(extras.wco[0], extras.diameter);
+        let z = mm4(z).unwrap_or(0) - wco(extras.wco[1], false);
+        let _ = crate::length::write_mm4(&mut line, x);
+        line.push_bytes(b",0.0000,");
+        let _ = crate::length::write_mm4(&mut line, z);
+    }
     line.push_bytes(b"|FS:");
     line.push_bytes(speed);
     line.push_bytes(b",");
@@ -202,6 +266,30 @@ pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
     let [f, r, s] = extras.overrides;
     let _ = write!(line, "|Ov:{f},{r},{s}|D:{}>", u8::from(extras.diameter));
     line
+}
+
+/// A number printed with 4 decimals, in 10⁻⁴ mm.
+fn mm4(text: &[u8]) -> Option<i64> {
+    let (neg, digits) = match text.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        _ => (false, text),
+    };
+    let mut v: i64 = 0;
+    let mut places = None;
+    for &b in digits {
+        match b {
+            b'.' if places.is_none() => places = Some(0),
+            b'0'..=b'9' => {
+                v = v.checked_mul(10)?.checked_add(i64::from(b - b'0'))?;
+                places = places.map(|p| p + 1);
+            }
+            _ => return None,
+        }
+    }
+    for _ in places.unwrap_or(0)..4 {
+        v = v.checked_mul(10)?;
+    }
+    Some(if neg { -v } else { v })
 }
 
 /// The grbl error code for a pendant refusal `ERR <CODE> …`.
@@ -248,6 +336,10 @@ pub struct Translate<'a, I: Io + ?Sized> {
     pub message: ReplyLine,
     /// A reset came, with a block running (`OF` > 0).
     pub reset: Option<bool>,
+    /// Check mode (`$C`): replies go out; nothing moves, waits or
+    /// switches (a flag, not a second transport type, so that the
+    /// session's code exists once on the board).
+    pub dry: bool,
 }
 
 impl<'a, I: Io + ?Sized> Translate<'a, I> {
@@ -272,6 +364,7 @@ impl<'a, I: Io + ?Sized> Translate<'a, I> {
             outcome: None,
             message: ReplyLine::new(),
             reset: None,
+            dry: false,
         }
     }
 
@@ -350,7 +443,72 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
     fn timing(&mut self) -> Option<Timing> {
         self.inner.timing()
     }
-    crate::protocol::forward_io!();
+    fn stop_holds(&mut self) -> bool {
+        !self.dry && self.grbl && self.inner.background().is_some()
+    }
+    fn run_start(&mut self) {
+        if !self.dry {
+            self.inner.run_start();
+        }
+    }
+    fn block_start(&mut self, block: &crate::interleave::LinearBlock) {
+        if !self.dry {
+            self.inner.block_start(block);
+        }
+    }
+    #[inline(always)]
+    fn step(
+        &mut self,
+        event: crate::interleave::StepEvent,
+        tick: u64,
+        drive: &crate::stepdir::DriveTiming,
+    ) {
+        if !self.dry {
+            self.inner.step(event, tick, drive);
+        }
+    }
+    fn run_end(&mut self, ticks: u64) {
+        if !self.dry {
+            self.inner.run_end(ticks);
+        }
+    }
+    fn background(&mut self) -> Option<&mut dyn crate::machine::Background> {
+        if self.dry {
+            return None;
+        }
+        self.inner.background()
+    }
+    fn view(&mut self, view: &crate::protocol::StatusView) {
+        self.inner.view(view);
+    }
+    fn pause(&mut self) {
+        self.inner.pause();
+    }
+    fn dwell(&mut self, us: u64) {
+        if !self.dry {
+            self.inner.dwell(us);
+        }
+    }
+    fn program_stop(&mut self, code: u16) {
+        if !self.dry {
+            self.inner.program_stop(code);
+        }
+    }
+    fn user_output(&mut self, n: u8, on: bool) {
+        if !self.dry {
+            self.inner.user_output(n, on);
+        }
+    }
+    fn wait_input(&mut self, n: u8, level: bool) {
+        if !self.dry {
+            self.inner.wait_input(n, level);
+        }
+    }
+    fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
+        if !self.dry {
+            self.inner.outputs(outputs);
+        }
+    }
 }
 
 /// Runs a pendant request that moves nothing and returns its final line.
@@ -367,73 +525,281 @@ fn query<I: Io + ?Sized>(
     line
 }
 
-/// `$$`: the settings a grbl sender knows, with this controller's values.
-/// Settable: `$0` (step pulse, µs), `$11` (junction deviation, mm), `$30`
-/// (the spindle's top speed, rpm), `$110`/`$112` (rapid rates X, Z,
-/// mm/min), `$120`/`$122` (accelerations X, Z, mm/s²).
-const SETTINGS: [(u16, &[u8], &[u8]); 7] = [
-    (0, b"DRIVE", b"PULSE"),
-    (11, b"LIMITS", b"JD"),
-    (30, b"AUX", b"SMAX"),
-    (110, b"LIMITS", b"VX"),
-    (112, b"LIMITS", b"VZ"),
-    (120, b"LIMITS", b"AX"),
-    (122, b"LIMITS", b"AZ"),
-];
-/// Reported, fixed: `$13` report in mm, `$22` no homing cycle (these
-/// lathes have no home switches), `$32` lathe mode (grblHAL's 2).
-const FIXED: [(u16, u8); 3] = [(13, 0), (22, 0), (32, 2)];
+/// Where a `$n` setting lives on this controller.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Place {
+    /// A key of a pendant request: `$110` is `LIMITS VX`.
+    Request(&'static [u8], &'static [u8]),
+    /// Steps per mm of an axis: one over the impulse price of `CFG`'s key.
+    StepsPerMm(&'static [u8]),
+    /// Kept by the front for senders that write and read it back; it
+    /// changes nothing on this machine (`Front::kept`, by index). A decimal
+    /// when `decimal`, else a whole number up to 65535.
+    Kept(usize, bool),
+    /// Only the value shown is accepted; another is refused with the
+    /// reason (grbl's error 3, or the code given).
+    Fixed(&'static [u8], u8, &'static str),
+    /// `$10`, the status report's mask: bit 0 machine (1) or work (0)
+    /// positions. Bit 1 (`Bf:`) is not reported.
+    ReportMask,
+}
 
-fn settings<I: Io + ?Sized>(session: &mut Session, io: &mut Translate<'_, I>) {
-    for (n, command, key) in SETTINGS {
-        let reply = query(session, io, command);
+/// One grbl setting: its number and where it lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Setting {
+    n: u16,
+    place: Place,
+}
+
+const fn setting(n: u16, place: Place) -> Setting {
+    Setting { n, place }
+}
+
+/// The settings `$$` lists, in grbl's order, and what `$n=` does to each.
+/// Those that would change the machine's behaviour but have nothing on
+/// this board to act on (inverted pins, limit and home switches) accept
+/// only the value that leaves the machine as it is; the rest of grbl's
+/// list is kept and read back.
+const SETTINGS: [Setting; 30] = [
+    setting(0, Place::Request(b"DRIVE", b"PULSE")),
+    setting(1, Place::Kept(0, false)),
+    setting(
+        2,
+        Place::Fixed(b"0", 3, "step pulses are not inverted on this board"),
+    ),
+    setting(
+        3,
+        Place::Fixed(b"0", 3, "set an axis' direction by wiring its DIR"),
+    ),
+    setting(
+        4,
+        Place::Fixed(b"0", 3, "this board has no stepper enable output"),
+    ),
+    setting(
+        5,
+        Place::Fixed(b"0", 3, "this board has no limit switch inputs"),
+    ),
+    setting(6, Place::Fixed(b"0", 3, "this board has no probe input")),
+    setting(10, Place::ReportMask),
+    setting(11, Place::Request(b"LIMITS", b"JD")),
+    setting(12, Place::Request(b"CFG", b"TOL")),
+    setting(13, Place::Fixed(b"0", 3, "reports are in mm")),
+    setting(
+        20,
+        Place::Fixed(
+            b"0",
+            10,
+            "soft limits need homing, which this board has not",
+        ),
+    ),
+    setting(
+        21,
+        Place::Fixed(b"0", 3, "this board has no limit switch inputs"),
+    ),
+    setting(
+        22,
+        Place::Fixed(b"0", 3, "this board has no home switch inputs"),
+    ),
+    setting(23, Place::Kept(2, false)),
+    setting(24, Place::Kept(3, true)),
+    setting(25, Place::Kept(4, true)),
+    setting(26, Place::Kept(5, false)),
+    setting(27, Place::Kept(6, true)),
+    setting(30, Place::Request(b"AUX", b"SMAX")),
+    setting(
+        31,
+        Place::Fixed(b"0", 3, "the spindle output starts from 0 rpm"),
+    ),
+    setting(
+        32,
+        Place::Fixed(b"2", 3, "this is a lathe: grblHAL's lathe mode 2"),
+    ),
+    setting(100, Place::StepsPerMm(b"HX")),
+    setting(102, Place::StepsPerMm(b"HZ")),
+    setting(110, Place::Request(b"LIMITS", b"VX")),
+    setting(112, Place::Request(b"LIMITS", b"VZ")),
+    setting(120, Place::Request(b"LIMITS", b"AX")),
+    setting(122, Place::Request(b"LIMITS", b"AZ")),
+    setting(130, Place::Kept(7, true)),
+    setting(132, Place::Kept(8, true)),
+];
+
+/// How many settings the front keeps.
+pub const KEPT: usize = 9;
+
+/// The kept settings at power-on, as grbl's defaults: `$1` 25 ms, (unused
+/// slot), `$23` 0, `$24` 25 mm/min, `$25` 500 mm/min, `$26` 250 ms, `$27`
+/// 1 mm, `$130`/`$132` 200 mm (decimals in 10⁻³).
+pub const KEPT_DEFAULT: [u32; KEPT] = [25, 0, 0, 25_000, 500_000, 250, 1_000, 200_000, 200_000];
+
+fn settings<I: Io + ?Sized>(session: &mut Session, front: &Front, io: &mut Translate<'_, I>) {
+    let cfg = *session.config();
+    for s in SETTINGS {
         let mut l = ReplyLine::new();
-        let _ = write!(l, "${n}=");
-        l.push_bytes(value(reply.as_bytes(), key).unwrap_or(b"0"));
-        io.inner.send(finish(&mut l));
-    }
-    for (n, v) in FIXED {
-        let mut l = ReplyLine::new();
-        let _ = write!(l, "${n}={v}");
-        io.inner.send(finish(&mut l));
-    }
-    // Steps per mm: one over the impulse price (X on the radius).
-    let cfg = session.config();
-    for (n, h) in [(100, cfg.hx.as_angstrom()), (102, cfg.hz.as_angstrom())] {
-        let mut l = ReplyLine::new();
-        let _ = write!(l, "${n}=");
-        // 10⁷/h steps per mm, to 3 decimals.
-        let milli = crate::length::div_round_half_away(10_000_000_000, h.max(1));
-        let _ = write!(l, "{}.{:03}", milli / 1000, milli % 1000);
+        let _ = write!(l, "${}=", s.n);
+        match s.place {
+            Place::Request(command, key) => {
+                let reply = query(session, io, command);
+                l.push_bytes(value(reply.as_bytes(), key).unwrap_or(b"0"));
+            }
+            Place::StepsPerMm(key) => {
+                let h = if key == b"HX" { cfg.hx } else { cfg.hz }.as_angstrom();
+                // 10⁷/h steps per mm, to 3 decimals.
+                let milli = crate::length::div_round_half_away(10_000_000_000, h.max(1));
+                let _ = write!(l, "{}.{:03}", milli / 1000, milli % 1000);
+            }
+            Place::Kept(i, decimal) => {
+                let v = front.kept.get(i).copied().unwrap_or(0);
+                let _ = if decimal {
+                    write!(l, "{}.{:03}", v / 1000, v % 1000)
+                } else {
+                    write!(l, "{v}")
+                };
+            }
+            Place::Fixed(v, _, _) => l.push_bytes(v),
+            Place::ReportMask => {
+                let _ = write!(l, "{}", u8::from(front.mpos));
+            }
+        }
         io.inner.send(finish(&mut l));
     }
 }
 
-/// `$n=value`: the setting through its pendant request.
-fn set<I: Io + ?Sized>(session: &mut Session, n: &[u8], v: &[u8], io: &mut Translate<'_, I>) {
-    let found = SETTINGS
-        .iter()
-        .find(|(k, _, _)| {
-            let mut digits = ReplyLine::new();
-            let _ = write!(digits, "{k}");
-            digits.as_bytes() == n
-        })
-        .copied();
-    let Some((_, command, key)) = found else {
+/// Refuses a `$n=` with grbl's `code` and what is wrong.
+fn refuse_setting<I: Io + ?Sized>(io: &mut Translate<'_, I>, code: u8, n: u16, why: &[u8]) {
+    io.outcome = Some(Err(code));
+    io.message = ReplyLine::new();
+    let _ = write!(io.message, "${n}: ");
+    io.message.push_bytes(why);
+}
+
+/// A whole number of at most 5 digits, or a decimal with up to 3 places,
+/// in thousandths.
+fn parse_setting(v: &[u8], decimal: bool) -> Option<u32> {
+    let (int, frac) = match v.iter().position(|&b| b == b'.') {
+        Some(dot) if decimal => (v.get(..dot)?, v.get(dot + 1..)?),
+        Some(_) => return None,
+        None => (v, &b""[..]),
+    };
+    if int.is_empty() && frac.is_empty()
+        || int.len() > 5
+        || frac.len() > 3
+        || !int.iter().chain(frac).all(u8::is_ascii_digit)
+    {
+        return None;
+    }
+    let digits = |d: &[u8]| d.iter().fold(0u32, |a, &b| a * 10 + u32::from(b - b'0'));
+    let whole = digits(int);
+    if !decimal {
+        return (whole <= 65_535).then_some(whole);
+    }
+    let mut f = digits(frac);
+    for _ in frac.len()..3 {
+        f *= 10;
+    }
+    Some(whole * 1000 + f)
+}
+
+/// `$n=value`: the setting, or grbl's error for it.
+fn set<I: Io + ?Sized>(
+    session: &mut Session,
+    front: &mut Front,
+    n: &[u8],
+    v: &[u8],
+    io: &mut Translate<'_, I>,
+) {
+    let number = core::str::from_utf8(n)
+        .ok()
+        .and_then(|t| t.parse::<u16>().ok());
+    let Some(s) = SETTINGS.iter().find(|s| Some(s.n) == number).copied() else {
         io.outcome = Some(Err(3));
         io.message = ReplyLine::new();
-        io.message.push_bytes(b"setting not settable here: ");
+        io.message
+            .push_bytes(b"no such setting on this controller: $");
         io.message.push_bytes(n);
         return;
     };
-    let mut req = ReplyLine::new();
-    req.push_bytes(command);
-    req.push_bytes(b" ");
-    req.push_bytes(key);
-    req.push_bytes(b"=");
-    req.push_bytes(v);
-    let request = ReplyLine::clone(&req);
-    session.handle_line(request.as_bytes(), io);
+    if v.first() == Some(&b'-') {
+        return refuse_setting(io, 4, s.n, b"a negative value");
+    }
+    match s.place {
+        Place::Request(command, key) => {
+            let mut req = ReplyLine::new();
+            req.push_bytes(command);
+            req.push_bytes(b" ");
+            req.push_bytes(key);
+            req.push_bytes(b"=");
+            req.push_bytes(v);
+            let request = ReplyLine::clone(&req);
+            session.handle_line(request.as_bytes(), io);
+        }
+        Place::StepsPerMm(key) => {
+            // One over the steps: a price on the 10⁻⁷ mm grid.
+            let steps = core::str::from_utf8(v)
+                .ok()
+                .and_then(|t| crate::length::Length::from_gcode_mm(t).ok())
+                .map(|l| l.as_angstrom())
+                .filter(|&l| l > 0);
+            let Some(steps) = steps else {
+                return refuse_setting(io, 2, s.n, b"steps per mm above 0");
+            };
+            // h Å = 10⁷ Å / (steps / 10⁷).
+            let steps = steps.unsigned_abs();
+            let price = 100_000_000_000_000u64.checked_div(steps);
+            let exact = 100_000_000_000_000u64.checked_rem(steps) == Some(0);
+            let Some(price) = price.filter(|_| exact) else {
+                return refuse_setting(
+                    io,
+                    3,
+                    s.n,
+                    b"one step must be a whole number of 0.0000001 mm",
+                );
+            };
+            let mut req = ReplyLine::new();
+            req.push_bytes(b"CFG ");
+            req.push_bytes(key);
+            req.push_bytes(b"=");
+            let _ = crate::length::write_exact_mm(&mut req, price as i64);
+            let request = ReplyLine::clone(&req);
+            session.handle_line(request.as_bytes(), io);
+        }
+        Place::Kept(i, decimal) => match (parse_setting(v, decimal), front.kept.get_mut(i)) {
+            (Some(value), Some(slot)) => {
+                *slot = value;
+                io.outcome = Some(Ok(()));
+            }
+            _ => refuse_setting(
+                io,
+                2,
+                s.n,
+                if decimal {
+                    b"a number with up to 3 decimals"
+                } else {
+                    b"a whole number up to 65535"
+                },
+            ),
+        },
+        Place::ReportMask => match parse_setting(v, false) {
+            Some(m @ (0 | 1)) => {
+                front.mpos = m == 1;
+                io.outcome = Some(Ok(()));
+            }
+            _ => refuse_setting(
+                io,
+                3,
+                s.n,
+                b"0 (work position) or 1 (machine position); Bf: is not reported",
+            ),
+        },
+        Place::Fixed(only, code, why) => {
+            let same = parse_setting(v, true).is_some_and(|x| Some(x) == parse_setting(only, true));
+            if same {
+                io.outcome = Some(Ok(()));
+            } else {
+                refuse_setting(io, code, s.n, why.as_bytes());
+            }
+        }
+    }
 }
 
 /// `$#`: work offsets, the stored positions, the G92 shift.
@@ -517,7 +883,11 @@ fn modes<I: Io + ?Sized>(session: &Session, io: &mut Translate<'_, I>) {
 
 /// `$J=…`: a jog as a `MOVE` in machine coordinates (G90 words are work
 /// coordinates unless `G53`; G91 an increment; mm only; `F` required).
-fn jog<I: Io + ?Sized>(session: &mut Session, words: &[u8], io: &mut Translate<'_, I>) -> bool {
+fn jog_line<I: Io + ?Sized>(
+    session: &mut Session,
+    words: &[u8],
+    io: &mut Translate<'_, I>,
+) -> bool {
     let refuse = |io: &mut Translate<'_, I>, code: u8, why: &[u8]| {
         io.outcome = Some(Err(code));
         io.message = ReplyLine::new();
@@ -601,14 +971,48 @@ pub fn line<I: Io + ?Sized>(
     io: &mut I,
 ) -> bool {
     let extras = Extras::of(session, front);
-    let mut t = Translate::grbl(io, extras);
     let trimmed = trim(text);
     let upper = |i: usize| trimmed.get(i).map(u8::to_ascii_uppercase);
+    let command = trimmed.first() == Some(&b'$');
+    let jog = command && upper(1) == Some(b'J') && upper(2) == Some(b'=');
+    if front.check && (jog || !command) && !trimmed.is_empty() {
+        // Check mode: the line is read and checked, its motion goes
+        // nowhere.
+        let mut t = Translate::grbl(io, extras);
+        t.dry = true;
+        if jog {
+            jog_line(session, trimmed.get(3..).unwrap_or(b""), &mut t);
+        } else {
+            session.handle_line(text, &mut t);
+        }
+        t.answer();
+        return false;
+    }
+    let mut t = Translate::grbl(io, extras);
     if trimmed.first() == Some(&b'$') {
         t.outcome = Some(Ok(()));
         match (upper(1), trimmed.len()) {
-            (None, _) => t.line(b"[HLP:$$ $# $G $I $N $x=val $J=line $X $H $PENDANT ~ ! ? ctrl-x]"),
-            (Some(b'$'), 2) => settings(session, &mut t),
+            (None, _) => {
+                t.line(b"[HLP:$$ $# $G $I $N $x=val $J=line $C $X $H $PENDANT ~ ! ? ctrl-x]")
+            }
+            (Some(b'$'), 2) => settings(session, front, &mut t),
+            (Some(b'C'), 2) if front.check => {
+                // As grbl: check mode ends with a reset (the banner).
+                front.check = false;
+                session.check_end();
+                t.line(b"[MSG:Disabled]");
+                realtime(front, session, GrblRealtime::Common(Realtime::Reset), io);
+                return false;
+            }
+            (Some(b'C'), 2) => {
+                if session.check_begin(&mut t) {
+                    front.check = true;
+                    t.line(b"[MSG:Enabled]");
+                } else {
+                    t.outcome = Some(Err(8));
+                    t.message.push_bytes(b"$C only at rest with nothing queued");
+                }
+            }
             (Some(b'#'), 2) => offsets(session, &mut t),
             (Some(b'G'), 2) => modes(session, &mut t),
             (Some(b'I'), 2) => {
@@ -638,7 +1042,7 @@ pub fn line<I: Io + ?Sized>(
                 if let Some(a) = front.alarm {
                     t.outcome = Some(Err(9));
                     let _ = write!(t.message, "alarm {a}: $X to unlock");
-                } else if jog(session, trimmed.get(3..).unwrap_or(b""), &mut t) {
+                } else if jog_line(session, trimmed.get(3..).unwrap_or(b""), &mut t) {
                     front.jogging = true;
                 }
             }
@@ -655,7 +1059,7 @@ pub fn line<I: Io + ?Sized>(
                 {
                     let n = trimmed.get(1..eq).unwrap_or(b"");
                     let v = trim(trimmed.get(eq + 1..).unwrap_or(b""));
-                    set(session, n, v, &mut t);
+                    set(session, front, n, v, &mut t);
                 }
                 _ => {
                     t.outcome = Some(Err(3));
@@ -690,8 +1094,8 @@ fn trim(text: &[u8]) -> &[u8] {
 
 /// An override stepped by its byte, as 0x90–0x94 step the feed's: 100 %,
 /// +10, −10, +1, −1, within 10 … 200 %.
-fn stepped(percent: u8, byte: u8) -> u8 {
-    let p = i16::from(percent);
+const fn stepped(percent: u8, byte: u8) -> u8 {
+    let p = percent as i16;
     let next = match byte {
         0x90 => 100,
         0x91 => p + 10,
@@ -699,7 +1103,13 @@ fn stepped(percent: u8, byte: u8) -> u8 {
         0x93 => p + 1,
         _ => p - 1,
     };
-    next.clamp(10, 200) as u8
+    (if next < 10 {
+        10
+    } else if next > 200 {
+        200
+    } else {
+        next
+    }) as u8
 }
 
 /// Acts on a grbl real-time character.
@@ -716,13 +1126,17 @@ pub fn realtime<I: Io + ?Sized>(
         GrblRealtime::Common(Realtime::Reset) => {
             t.statuses = false;
             session.realtime(Realtime::Reset, &mut t);
+            // Motion answered `ok` and not all run (in motion, braking,
+            // held with more to do, or queued) was dropped: the sender
+            // hears it as an alarm, never as silence.
+            let moving = session.reset_dropped_motion();
             front.jogging = false;
             front.cancel = false;
             (front.feed, front.rapid, front.spindle) = (100, 100, 100);
             session.set_feed_override(100);
             session.set_rapid_override(100);
             session.set_spindle_override(100, &mut t);
-            if t.reset == Some(true) {
+            if moving || t.reset == Some(true) {
                 // Stopped at once in motion: a drive may have lost steps.
                 front.alarm = Some(3);
                 t.line(b"ALARM:3");
@@ -743,20 +1157,16 @@ pub fn realtime<I: Io + ?Sized>(
                 front.cancel = true;
             }
         }
-        GrblRealtime::Feed(byte) => {
-            front.feed = stepped(front.feed, byte);
+        GrblRealtime::Feed(_) => {
+            [front.feed, _, _] = rt.overrides([front.feed, front.rapid, front.spindle]);
             session.set_feed_override(front.feed);
         }
-        GrblRealtime::Rapid(byte) => {
-            front.rapid = match byte {
-                0x95 => 100,
-                0x96 => 50,
-                _ => 25,
-            };
+        GrblRealtime::Rapid(_) => {
+            [_, front.rapid, _] = rt.overrides([front.feed, front.rapid, front.spindle]);
             session.set_rapid_override(front.rapid);
         }
-        GrblRealtime::Spindle(byte) => {
-            front.spindle = stepped(front.spindle, byte - 0x09);
+        GrblRealtime::Spindle(_) => {
+            [_, _, front.spindle] = rt.overrides([front.feed, front.rapid, front.spindle]);
             session.set_spindle_override(front.spindle, &mut t);
         }
         GrblRealtime::Unsupported(_) => {
@@ -777,6 +1187,8 @@ mod tests {
             overrides: [100; 3],
             jogging: false,
             alarm: None,
+            check: false,
+            mpos: true,
         };
         let r = status_report(
             b"!STATUS STATE=RUN PX=1 PZ=2 X=10.0000 Z=-5.0000 V=200.0000 Q=3 STARVED=0 SPINDLE=CW S=800.000 COOLANT=OFF",
@@ -786,6 +1198,50 @@ mod tests {
             r.as_bytes(),
             b"<Run|MPos:10.0000,0.0000,-5.0000|FS:200.0000,800.000|WCO:1.0000,0.0000,-120.0000|Ov:100,100,100|D:1>"
         );
+    }
+
+    #[test]
+    fn a_work_position_is_the_machine_position_less_the_offset() {
+        let extras = Extras {
+            wco: [5_000_000, -1_200_000_000],
+            diameter: true,
+            overrides: [100; 3],
+            jogging: false,
+            alarm: None,
+            check: false,
+            mpos: false,
+        };
+        let r = status_report(b"!STATUS STATE=IDLE X=10.0000 Z=-5.0000 V=0", &extras);
+        // X 10 on the diameter less 2·0.5 mm; Z −5 less −120.
+        assert!(
+            r.as_bytes()
+                .starts_with(b"<Idle|WPos:9.0000,0.0000,115.0000|"),
+            "{:?}",
+            core::str::from_utf8(r.as_bytes())
+        );
+        let check = Extras {
+            check: true,
+            ..extras
+        };
+        assert!(status_report(b"!STATUS STATE=IDLE", &check)
+            .as_bytes()
+            .starts_with(b"<Check|"));
+    }
+
+    #[test]
+    fn setting_values_are_read_as_grbl_writes_them() {
+        assert_eq!(parse_setting(b"25", false), Some(25));
+        assert_eq!(parse_setting(b"25.5", true), Some(25_500));
+        assert_eq!(parse_setting(b".125", true), Some(125));
+        assert_eq!(parse_setting(b"2.", true), Some(2_000));
+        assert_eq!(parse_setting(b"2.5", false), None);
+        assert_eq!(parse_setting(b"1.0001", true), None);
+        assert_eq!(parse_setting(b"65536", false), None);
+        assert_eq!(parse_setting(b"", false), None);
+        assert_eq!(parse_setting(b"x", true), None);
+        assert_eq!(mm4(b"-12.5"), Some(-125_000));
+        assert_eq!(mm4(b"0.0001"), Some(1));
+        assert_eq!(mm4(b"1.2.3"), None);
     }
 
     #[test]

@@ -117,8 +117,9 @@ pub struct StatusView {
     pub speed: i64,
     /// Starved block starts since the last `SYNC` or `ZERO`.
     pub starved: u32,
-    /// Waiting for cycle start after `M00` (0) or `M01` (1): ` STOP=M00`.
-    pub stop: Option<u8>,
+    /// Waiting for cycle start after `M00` (0), `M01` (1), a gear range
+    /// (41 … 44) or a machine's own M code: ` STOP=M00`.
+    pub stop: Option<u16>,
     /// The spindle and coolant outputs (` SPINDLE= S= COOLANT=`); a board
     /// puts in the speed it drives now.
     pub outputs: Outputs,
@@ -180,8 +181,29 @@ pub trait Io {
     /// the axes at rest: a board waits for cycle start (0x81), answering
     /// status bytes meanwhile (`STOP=M00`); a reset ends the wait too. A
     /// transport without an operator presses cycle start at once.
-    fn program_stop(&mut self, code: u8) {
+    fn program_stop(&mut self, code: u16) {
         let _ = code;
+    }
+
+    /// A machine's M code switches user output `n` (1 … 4), the axes at
+    /// rest: a board drives its pin.
+    fn user_output(&mut self, n: u8, on: bool) {
+        let _ = (n, on);
+    }
+
+    /// A machine's M code waits for user input `n` (1 … 4) to read
+    /// `level`, the axes at rest, answering status bytes meanwhile (a
+    /// reset ends the wait). A transport without inputs goes on at once.
+    fn wait_input(&mut self, n: u8, level: bool) {
+        let _ = (n, level);
+    }
+
+    /// Whether a program stop is a feed hold at rest rather than a wait
+    /// (grbl's `M0`: answered at once, the state `Hold:0`, the lines after
+    /// it received and queued, cycle start going on). Only with a
+    /// background stepper, which holds.
+    fn stop_holds(&mut self) -> bool {
+        false
     }
 
     /// Before a program stop on a transport without a background stepper:
@@ -207,7 +229,7 @@ pub trait Io {
 
 /// The [`Io`] methods a wrapper hands to its `inner` unchanged: motion,
 /// the background, waits and outputs (a wrapper writes its own `send`,
-/// `stop_status` and `timing`).
+/// `stop_status`, `timing` and `stop_holds`).
 macro_rules! forward_io {
     () => {
         fn run_start(&mut self) {
@@ -240,8 +262,14 @@ macro_rules! forward_io {
         fn dwell(&mut self, us: u64) {
             self.inner.dwell(us);
         }
-        fn program_stop(&mut self, code: u8) {
+        fn program_stop(&mut self, code: u16) {
             self.inner.program_stop(code);
+        }
+        fn user_output(&mut self, n: u8, on: bool) {
+            self.inner.user_output(n, on);
+        }
+        fn wait_input(&mut self, n: u8, level: bool) {
+            self.inner.wait_input(n, level);
         }
         fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
             self.inner.outputs(outputs);
@@ -277,6 +305,9 @@ pub struct Device {
     rx: LineAssembler,
     session: Session,
     grbl: grbl::Front,
+    /// The request `GRBL` switched the link at the byte before: an LF now
+    /// ends that request's CRLF, not a grbl line.
+    switched: bool,
 }
 
 impl Device {
@@ -286,6 +317,7 @@ impl Device {
             rx: LineAssembler::new(),
             session: Session::new(),
             grbl: grbl::Front::new(),
+            switched: false,
         }
     }
 
@@ -297,6 +329,7 @@ impl Device {
             rx: LineAssembler::new(),
             session: Session::with_window(window),
             grbl: grbl::Front::new(),
+            switched: false,
         }
     }
 
@@ -308,10 +341,18 @@ impl Device {
             if let Some(rt) = grbl::GrblRealtime::from_byte(byte) {
                 return self.realtime_grbl(rt, io);
             }
+            // As grbl: every other byte above 0x7F (the UTF-8 prefix a
+            // sender puts before an override byte, noise) and every control
+            // byte but the line's ends and tab is dropped, never part of a
+            // line.
+            if grbl::dropped(byte) {
+                return;
+            }
         } else if let Some(rt) = Realtime::from_byte(byte) {
             return self.realtime(rt, io);
         }
-        match self.rx.push(byte) {
+        let pairs = !self.grbl.on || core::mem::take(&mut self.switched);
+        match self.rx.push_with(byte, pairs) {
             Some(Framed::Line) => self.line(io),
             Some(Framed::TooLong) => {
                 let mut t = self.link(io);
@@ -350,6 +391,7 @@ impl Device {
             session::send_ok(&mut t, Some(format_args!("GRBL=1")));
             t.send(grbl::BANNER);
             self.grbl.on = true;
+            self.switched = true;
         } else {
             self.session
                 .handle_line(line, &mut grbl::Translate::pendant(io));
@@ -381,6 +423,9 @@ impl Device {
     /// A grbl real-time character, picked out by a transport or by
     /// [`Device::receive`].
     pub fn realtime_grbl<I: Io>(&mut self, rt: grbl::GrblRealtime, io: &mut I) {
+        if rt == grbl::GrblRealtime::Common(Realtime::Reset) {
+            self.rx.clear();
+        }
         grbl::realtime(&mut self.grbl, &mut self.session, rt, io);
     }
 
@@ -397,8 +442,9 @@ impl Device {
         self.session.poll(&mut t);
     }
 
-    /// Whether a grbl link has blocks waiting to start: when the link has
-    /// been quiet a while, [`Device::quiet`] starts them.
+    /// Whether a grbl link has blocks waiting to start (in a run under way
+    /// too): when the link has been quiet a while, [`Device::quiet`]
+    /// starts them, the run ending at rest after them.
     pub fn waiting(&self) -> bool {
         self.grbl.on && self.session.waiting()
     }
@@ -428,6 +474,10 @@ impl Device {
     /// real-time bytes out as they arrive hands them over here); on a grbl
     /// link, as grbl answers it.
     pub fn realtime<I: Io>(&mut self, rt: Realtime, io: &mut I) {
+        if rt == Realtime::Reset {
+            // A reset drops the line being received with everything else.
+            self.rx.clear();
+        }
         if self.grbl.on {
             return self.realtime_grbl(grbl::GrblRealtime::Common(rt), io);
         }

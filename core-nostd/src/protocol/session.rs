@@ -14,14 +14,14 @@ use crate::comp::{
 use crate::cone::{cone, Angle, AngleError};
 use crate::crc32::Crc32;
 use crate::gcode::{
-    is_block, parse, BlockError, Coolant, Dialect, FeedMode, Motion, Special, Spindle, SpindleMode,
-    Stop, ToolOffset, ToolWord, Units,
+    is_block, parse, BlockError, Compensation, Coolant, Dialect, FeedMode, Motion, PathControl,
+    Plane, Special, Spindle, SpindleMode, Stop, ToolOffset, ToolWord, Units,
 };
 use crate::impulse::{quantize, ImpulsePrice, Impulses, MAX_BLOCK_IMPULSES, MAX_POSITION};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
-use crate::interp::{path_feed, Aux, Modal, Offsets, Selection, TOOL_REGISTERS};
+use crate::interp::{path_feed, Aux, MAction, Modal, Offsets, Selection, TOOL_REGISTERS};
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
-use crate::machine::{Background, Machine, StepSink};
+use crate::machine::{Background, Join, Machine, StepSink};
 use crate::outputs::{milli_rpm, write_rpm, Outputs};
 use crate::plan::{q32, Feed, Limits, LimitsError, Point, WINDOW};
 use crate::stepdir::{DriveTiming, TimingError};
@@ -150,6 +150,15 @@ pub struct Session {
     optional_stop: bool,
     /// Changes of the table, the work offsets and the stored positions.
     generation: u32,
+    /// Check mode (grbl's `$C`): the registers where it began, put back
+    /// when it ends.
+    checking: Option<ImpulsePoint>,
+    /// The last reset dropped motion answered and not all run.
+    reset_dropped: bool,
+    /// The top speed of each gear range (`AUX G1=` … `G4=`), rpm.
+    gears: [Option<Length>; 4],
+    /// The nose `G41.1`/`G42.1` gave, while its compensation is on.
+    dynamic_tool: Option<Tool>,
     /// The id of the last request that carried one, and its final reply.
     last_id: Option<u32>,
     last_final: heapless::Vec<u8, REPLY_CAPACITY>,
@@ -248,6 +257,10 @@ impl Session {
             block_delete: false,
             optional_stop: false,
             generation: 0,
+            checking: None,
+            reset_dropped: false,
+            gears: [None; 4],
+            dynamic_tool: None,
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
@@ -408,11 +421,32 @@ impl Session {
     }
 
     fn run<'a, I: Io>(&mut self, body: &'a [u8], io: &mut I) -> Outcome<'a> {
-        if !body
-            .iter()
-            .all(|&b| b == b'\t' || (0x20..0x7F).contains(&b))
-        {
-            return Err(Refusal::Control);
+        let printable = |b: u8| b == b'\t' || (0x20..0x7F).contains(&b);
+        if !body.iter().all(|&b| printable(b)) {
+            // A G-code comment may hold any byte (a UTF-8 letter, a tape
+            // control character); it is never read, so the line runs with
+            // them replaced. Anywhere else they are refused.
+            let words_start = body
+                .iter()
+                .position(|&b| printable(b) && b != b' ' && b != b'\t');
+            let gcode = words_start
+                .and_then(|i| body.get(i..))
+                .and_then(|rest| core::str::from_utf8(rest.get(..2).unwrap_or(rest)).ok())
+                .is_some_and(is_block);
+            let only_in_comments = body
+                .iter()
+                .zip(in_comment(body))
+                .all(|(&b, comment)| printable(b) || comment);
+            if !gcode || !only_in_comments {
+                return Err(Refusal::Control);
+            }
+            let mut clean = heapless::Vec::<u8, { super::framing::MAX_LINE }>::new();
+            for &b in body {
+                let _ = clean.push(if printable(b) { b } else { b'?' });
+            }
+            // Printable ASCII now: never fails.
+            let text = core::str::from_utf8(&clean).map_err(|_| Refusal::Control)?;
+            return self.gcode(text, io);
         }
         // Printable ASCII only from here on, so this never fails.
         let text = core::str::from_utf8(body).map_err(|_| Refusal::Control)?;
@@ -451,6 +485,10 @@ impl Session {
             outcome
         } else if command.eq_ignore_ascii_case("DRIVE") {
             self.drive_command(words, io)
+        } else if command.eq_ignore_ascii_case("MCODE") {
+            self.mcode_command(words, io)
+        } else if command.eq_ignore_ascii_case("GEAR") {
+            self.gear_command(words, io)
         } else if command.eq_ignore_ascii_case("OPT") {
             let [bdel, dialect, optstop] = parse_args(words, ["BDEL", "DIALECT", "OPTSTOP"])?;
             let block_delete = match bdel {
@@ -839,7 +877,9 @@ impl Session {
             return Ok(());
         }
         let modal = self.modal.after(&b);
-        if let Some(f) = b.f {
+        // F0 (a header's, before G95) is taken; a feed move then needs a
+        // feed above 0.
+        if let Some(f) = b.f.filter(|f| f.as_angstrom() != 0) {
             let (ok, why) = match modal.feed_mode {
                 FeedMode::PerMinute => (
                     Feed::new(f).is_some(),
@@ -856,7 +896,7 @@ impl Session {
         // diameter the tool cuts at (X0 of every work system is the
         // spindle's axis; offsets move the slide, not the part); within
         // the spindle's top speed.
-        let spindle = aux.spindle.within(self.top);
+        let spindle = aux.spindle.within(self.top_speed(&aux));
         if aux.spindle.turning != Spindle::Off {
             spindle
                 .rpm(self.prog[0], modal.units)
@@ -875,14 +915,20 @@ impl Session {
         let shift = offsets.shift;
         match special {
             Some(Special::Shift) => {
+                // The point here in the block's work system as it stands
+                // (never under nose compensation: refused above).
+                let off = offsets.vector(&sel).ok_or(Refusal::Range(RANGE_OFFSET))?;
+                let mut here = self.cmd;
+                for (h, o) in here.iter_mut().zip(off) {
+                    *h = h.checked_sub(o).ok_or(Refusal::Range(RANGE_OFFSET))?;
+                }
                 let words = [b.x.map(|x| x_radius(x, diam)).transpose()?, b.z];
-                for ((s, p), w) in offsets.shift.iter_mut().zip(prog.iter_mut()).zip(words) {
+                for ((s, p), w) in offsets.shift.iter_mut().zip(here).zip(words) {
                     if let Some(w) = w {
                         *s = s
-                            .checked_add(*p)
+                            .checked_add(p)
                             .and_then(|v| v.checked_sub(w))
                             .ok_or(Refusal::Range(RANGE_OFFSET))?;
-                        *p = w;
                     }
                 }
             }
@@ -898,26 +944,34 @@ impl Session {
             }
             _ => {}
         }
-        if matches!(
-            special,
-            Some(Special::ClearShift(_) | Special::RestoreShift)
-        ) {
-            // The machine stays: the programmed point moves by the shift.
-            for ((p, old), new) in prog.iter_mut().zip(shift).zip(offsets.shift) {
-                *p = p
-                    .checked_add(old)
-                    .and_then(|v| v.checked_sub(new))
-                    .ok_or(Refusal::Range(RANGE_OFFSET))?;
-            }
-        }
         let off = offsets.vector(&sel).ok_or(Refusal::Range(
             "the offsets in effect add beyond 99999.999999 mm",
         ))?;
         if (sel != self.sel || b.set_work.is_some()) && self.contour.active() {
             return Err(Refusal::Busy("a work or tool offset change"));
         }
+        // The machine stays where it is when offsets change (a work system
+        // selected or set, G92 and its kin, a tool's offset): the point
+        // here is the same machine point in the new work coordinates, so an
+        // axis the block does not name never moves, as in LinuxCNC and
+        // grbl; a named axis takes the new offset up on its way. Under
+        // nose compensation no offset changes (refused above) and the
+        // programmed point is the contour's, not the tool's.
+        let mut here = prog;
+        if !self.contour.active() {
+            for ((p, at), o) in here.iter_mut().zip(self.cmd).zip(off) {
+                *p = at.checked_sub(o).ok_or(Refusal::Range(RANGE_OFFSET))?;
+            }
+        }
+        if matches!(
+            special,
+            Some(Special::Shift | Special::ClearShift(_) | Special::RestoreShift)
+        ) {
+            // G92 and its kin name the point here anew.
+            prog = here;
+        }
         // Words are work coordinates; increments add to the programmed point.
-        let mut target = prog;
+        let mut target = here;
         let words = if b.set_work.is_some()
             || matches!(special, Some(s) if !matches!(s, Special::Reference(_)))
         {
@@ -930,17 +984,33 @@ impl Session {
         if let Some(x) = words.0 {
             let radius = x_radius(x, diam)?;
             let inc = modal.incremental || b.incremental_x;
-            target[0] = step(self.prog[0], radius, inc, "X beyond 99999.999999 mm")?;
+            target[0] = step(here[0], radius, inc, "X beyond 99999.999999 mm")?;
         }
         if let Some(z) = words.1 {
             let inc = modal.incremental || b.incremental_z;
-            target[1] = step(self.prog[1], z, inc, "Z beyond 99999.999999 mm")?;
+            target[1] = step(here[1], z, inc, "Z beyond 99999.999999 mm")?;
         }
         if let Some(po) = b.position_offset {
             target = self.position_offset(po, &modal, &offsets, words, target, &b)?;
         }
         let has_end = words.0.is_some() || words.1.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
+        if modal.plane != Plane::Zx {
+            let arc = matches!(modal.motion, Motion::ArcCw | Motion::ArcCcw)
+                && special.is_none()
+                && (has_end || arc_words);
+            let compensating = self.contour.active()
+                || matches!(
+                    b.compensation,
+                    Some(Compensation::Left | Compensation::Right)
+                );
+            if arc || compensating {
+                return Err(Refusal::Geometry(match modal.plane {
+                    Plane::Xy => "in G17 (XY): a lathe turns arcs and compensates in G18 (ZX)",
+                    _ => "in G19 (YZ): a lathe turns arcs and compensates in G18 (ZX)",
+                }));
+            }
+        }
         let a = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
         let shape = match modal.motion {
             // G28 and G30 move through their way point themselves.
@@ -956,7 +1026,7 @@ impl Session {
             Motion::ArcCw | Motion::ArcCcw if has_end || arc_words => {
                 // An arc starts where the tool is: it cannot take up a new
                 // offset on the way.
-                if !self.contour.active() && to_machine(self.prog, off)? != self.cmd {
+                if !self.contour.active() && here != prog {
                     return Err(Refusal::Geometry(
                         "an arc cannot take up an offset change: move in a line first",
                     ));
@@ -970,7 +1040,7 @@ impl Session {
                 let centre = match (ik, b.r) {
                     (true, Some(_)) => return Err(Refusal::Missing("give I and K or R, not both")),
                     (false, None) => return Err(Refusal::Missing("an arc needs I and K, or R")),
-                    (false, Some(r)) => centre_from_radius(self.prog, target, r, dir)?,
+                    (false, Some(r)) => centre_from_radius(here, target, r, dir)?,
                     (true, None) if modal.arc_absolute => match (b.i, b.k) {
                         (Some(i), Some(k)) => [i, k],
                         _ => return Err(Refusal::Missing("G90.1: an arc centre needs I and K")),
@@ -978,17 +1048,17 @@ impl Session {
                     (true, None) => {
                         let beyond = "arc centre beyond 99999.999999 mm";
                         [
-                            self.prog[0]
+                            here[0]
                                 .checked_add(b.i.unwrap_or(Length::ZERO))
                                 .ok_or(Refusal::Range(beyond))?,
-                            self.prog[1]
+                            here[1]
                                 .checked_add(b.k.unwrap_or(Length::ZERO))
                                 .ok_or(Refusal::Range(beyond))?,
                         ]
                     }
                 };
                 ArcPoints {
-                    start: self.prog,
+                    start: here,
                     end: target,
                     centre,
                 }
@@ -1001,7 +1071,7 @@ impl Session {
             Motion::ArcCw | Motion::ArcCcw => None,
         };
         let element = shape.map(|shape| Element {
-            from: a(self.prog),
+            from: a(here),
             to: a(target),
             shape,
             n: b.n,
@@ -1054,14 +1124,25 @@ impl Session {
             || (!machine_path.is_empty() && !rapid);
         // Output blocks of the element held back by compensation run at its
         // feed; this block's own and the corners between, at this one's.
+        if feeds && modal.feed.is_some_and(|f| f.as_angstrom() == 0) {
+            return Err(Refusal::Value("F", "0: a feed move needs a feed above 0"));
+        }
         let now = if feeds {
-            path_feed(&modal, &spindle, self.prog[0])
+            path_feed(&modal, &spindle, here[0])
                 .map_err(|e| Refusal::Value("F", e.as_str()))?
                 .map(|f| self.overridden(f, modal.feed_mode))
         } else {
             None
         };
-        let tool = self.nose(&offsets, &sel);
+        let dynamic_tool = match (b.dynamic_nose, b.compensation) {
+            (Some(nose), _) => Some(Tool::new(
+                nose.radius,
+                TipCode::new(linuxcnc_orientation(nose.orientation)).unwrap_or(self.cfg.tip),
+            )),
+            (None, Some(Compensation::Off)) => None,
+            (None, _) => self.dynamic_tool,
+        };
+        let tool = dynamic_tool.unwrap_or_else(|| self.nose(&offsets, &sel));
         let (contour, moves) = self
             .contour
             .block(&tool, b.compensation, b.corner, element)
@@ -1118,6 +1199,67 @@ impl Session {
             // As many plans as moves: never full.
             let _ = planned.push(p);
         }
+        let join = match modal.path {
+            PathControl::ExactStop => Join::Stop,
+            PathControl::ExactPath | PathControl::Blend => Join::Blend,
+            PathControl::Tolerance(t) if t.as_angstrom() <= 100_000_000 => {
+                Join::Deviation(t.as_angstrom().unsigned_abs())
+            }
+            PathControl::Tolerance(_) => {
+                return Err(Refusal::Value("P", "a G64 tolerance of 0 to 10 mm"))
+            }
+        };
+        let machine_m = b
+            .machine_m
+            .map(|code| (code, self.offsets.mcodes.get(code)));
+        if (b.gear.is_some() || machine_m.is_some()) && contour.active() {
+            return Err(Refusal::Busy("a gear range or a machine's M code"));
+        }
+        // Nothing refuses the block from here on.
+        self.machine.set_join(join);
+        // A gear range, then the machine's own M code, at rest before the
+        // spindle switches and the block moves.
+        if let Some(range) = b.gear {
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            let r = self
+                .gears
+                .get(usize::from(range).saturating_sub(1))
+                .copied()
+                .flatten();
+            match r {
+                Some(top) => send_data(
+                    io,
+                    format_args!("MSG M4{range}: shift the gearbox to range {range} (up to {top} rpm), then cycle start"),
+                ),
+                None => send_data(
+                    io,
+                    format_args!("MSG M4{range}: shift the gearbox to range {range}, then cycle start"),
+                ),
+            }
+            self.program_stop(40 + u16::from(range), io);
+        }
+        if let Some((code, action)) = machine_m {
+            let m = code / 10;
+            match action {
+                MAction::Stop => {
+                    self.machine.flush(&mut Sink::new(io, self.drive));
+                    send_data(
+                        io,
+                        format_args!("MSG M{m:02}: the machine's own M code; do it by hand, then cycle start"),
+                    );
+                    self.program_stop(m, io);
+                }
+                MAction::Nothing => {}
+                MAction::Output(n, on) => {
+                    self.machine.flush(&mut Sink::new(io, self.drive));
+                    io.user_output(n, on);
+                }
+                MAction::Wait(n, level) => {
+                    self.machine.flush(&mut Sink::new(io, self.drive));
+                    io.wait_input(n, level);
+                }
+            }
+        }
         // The spindle and the coolant switch with the axes at rest, before
         // the block's motion (as LinuxCNC orders a block); a dwell waits
         // there too.
@@ -1160,6 +1302,7 @@ impl Session {
         self.aux = aux;
         self.sel = sel;
         self.take_offsets(offsets);
+        self.dynamic_tool = if contour.active() { dynamic_tool } else { None };
         self.contour = contour;
         self.last_moves = moves;
         if element.is_some() {
@@ -1169,21 +1312,7 @@ impl Session {
             // At rest where the block ends, until cycle start.
             self.machine.flush(&mut Sink::new(io, self.drive));
             let code = if b.stop == Some(Stop::Pause) { 0 } else { 1 };
-            if io.background().is_some() {
-                let mut view = self.view(self.machine.speed());
-                view.stop = Some(code);
-                io.view(&view);
-            } else {
-                // Nothing moves while it waits: one line answers every
-                // status byte.
-                let st = self.machine.status(&mut Sink::new(io, self.drive));
-                let mut view = self.view(0);
-                (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
-                let mut line = status_line("!STATUS", st.motion, st.issued, st.queued, &view);
-                io.stop_status(line.finish());
-            }
-            io.program_stop(code);
-            self.share_view(io);
+            self.program_stop(code, io);
         }
         if end {
             // The end of the program: at rest, spindle and coolant off, the
@@ -1206,6 +1335,48 @@ impl Session {
             )),
         );
         Ok(())
+    }
+
+    /// A program stop at rest (`M00`, `M01`, a gear range, a machine's M
+    /// code not in its table; `code` the M code): the board waits for
+    /// cycle start, a grbl link holds at rest and goes on.
+    fn program_stop<I: Io>(&mut self, code: u16, io: &mut I) {
+        if io.stop_holds() {
+            // grbl: a hold at rest, answered now; what follows queues and
+            // waits for cycle start.
+            self.machine.hold(&mut Sink::new(io, self.drive));
+        } else {
+            if io.background().is_some() {
+                let mut view = self.view(self.machine.speed());
+                view.stop = Some(code);
+                io.view(&view);
+            } else {
+                // Nothing moves while it waits: one line answers every
+                // status byte.
+                let st = self.machine.status(&mut Sink::new(io, self.drive));
+                let mut view = self.view(0);
+                (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
+                let mut line = status_line("!STATUS", st.motion, st.issued, st.queued, &view);
+                io.stop_status(line.finish());
+            }
+            io.program_stop(code);
+        }
+        self.share_view(io);
+    }
+
+    /// The spindle's top speed with `aux`'s gear range: `AUX SMAX` and the
+    /// range's own, the lower.
+    fn top_speed(&self, aux: &Aux) -> Option<Length> {
+        let gear = aux.gear.and_then(|g| {
+            self.gears
+                .get(usize::from(g).saturating_sub(1))
+                .copied()
+                .flatten()
+        });
+        match (self.top, gear) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// Lecture 13's `G45`–`G48`: each axis move the block names, from the
@@ -1680,7 +1851,11 @@ impl Session {
     /// `STATUS`: where the axes are now (the steps issued), their speed and
     /// the blocks waiting.
     fn status_reply<I: Io>(&self, io: &mut I, prefix: &str) {
-        let st = self.machine.status(&mut Sink::new(io, self.drive));
+        let mut st = self.machine.status(&mut Sink::new(io, self.drive));
+        if let (Some(registers), None) = (self.checking, io.background()) {
+            // Check mode on the virtual clock: its motion went nowhere.
+            (st.issued, st.motion, st.queued) = (registers, Axes::Idle, 0);
+        }
         let mut view = self.view(st.speed(self.machine.tick()));
         view.outputs.rpm = st.spindle;
         let mut line = status_line(prefix, st.motion, st.issued, st.queued, &view);
@@ -1731,15 +1906,43 @@ impl Session {
         matches!(st.motion, Axes::Idle | Axes::Held)
     }
 
+    /// Whether the last reset dropped motion that had been answered and
+    /// had not all run (blocks queued, the axes moving, braking, or held
+    /// with more to do).
+    pub const fn reset_dropped_motion(&self) -> bool {
+        self.reset_dropped
+    }
+
+    /// Check mode begins (grbl's `$C`): lines go on through a transport
+    /// that moves nothing, and the registers where it began are kept.
+    /// Only at rest with nothing queued (false otherwise).
+    pub fn check_begin<I: Io>(&mut self, io: &mut I) -> bool {
+        let st = self.machine.status(&mut Sink::new(io, self.drive));
+        if st.motion != Axes::Idle || st.queued > 0 {
+            return false;
+        }
+        self.checking = Some(st.issued);
+        true
+    }
+
+    /// Check mode ends: what its lines queued is forgotten and the
+    /// registers are where it began; a reset follows (as grbl's).
+    pub fn check_end(&mut self) {
+        if let Some(registers) = self.checking.take() {
+            self.machine.forget(registers);
+        }
+    }
+
     /// Starts the queued blocks now, the run ending at rest after them
     /// (the link has gone quiet: grbl plans with what it has).
     pub fn release<I: Io>(&mut self, io: &mut I) {
         self.machine.release(&mut Sink::new(io, self.drive));
     }
 
-    /// Whether blocks wait with no run under way.
+    /// Whether blocks are queued and not started (with or without a run
+    /// under way): a quiet link releases them.
     pub fn waiting(&self) -> bool {
-        self.machine.waiting()
+        self.machine.queued() > 0
     }
 
     /// Whether [`Session::poll`] could start a block.
@@ -1767,6 +1970,7 @@ impl Session {
     /// block that was running that were issued, of how many.
     fn reset<I: Io>(&mut self, io: &mut I) {
         let (found, issued) = self.drop_motion(io);
+        self.reset_dropped = found.dropped;
         self.sel = Selection::POWER_ON;
         self.prog = self.work_point(self.cmd);
         self.modal = Modal::POWER_ON;
@@ -1880,7 +2084,7 @@ impl Session {
 
     /// New offsets; what a board keeps of them changed or not.
     fn take_offsets(&mut self, new: Offsets) {
-        let kept = |o: &Offsets| (o.work, o.tools, o.reference);
+        let kept = |o: &Offsets| (o.work, o.tools, o.reference, o.mcodes);
         if kept(&new) != kept(&self.offsets) {
             self.generation = self.generation.wrapping_add(1);
         }
@@ -1925,7 +2129,7 @@ impl Session {
         };
         let rpm = a
             .spindle
-            .within(self.top)
+            .within(self.top_speed(a))
             .running_rpm(self.prog[0], self.modal.units);
         let limit = a.spindle.clamp.unwrap_or(Length::ZERO);
         let mut line = ReplyLine::new();
@@ -1981,12 +2185,128 @@ impl Session {
         Ok(())
     }
 
+    /// `MCODE [M=n DO=STOP|NONE|ON|OFF|HIGH|LOW [N=1..4]]`: what one of
+    /// the machine's own M codes does — stop with a message (the default,
+    /// and what `STOP` sets back), nothing, switch user output `N` on or
+    /// off, or wait for user input `N` to read high or low. Alone: the
+    /// table, a `DATA` line per code set. Kept with the tool table.
+    #[inline(never)]
+    fn mcode_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [m, action, n] = parse_args(words, ["M", "DO", "N"])?;
+        if let Some(m) = m {
+            let code = match m.parse::<u16>() {
+                Ok(c @ 0..=999) if m.bytes().all(|b| b.is_ascii_digit()) => c,
+                _ => return Err(Refusal::Value("M", "must be a whole M code 0 to 999")),
+            };
+            // The codes the device runs itself are not the machine's.
+            if matches!(code, 0..=9 | 30 | 41..=44 | 98 | 99) {
+                return Err(Refusal::Value(
+                    "M",
+                    "is one the device runs itself (M00-M09, M30, M41-M44, M98, M99)",
+                ));
+            }
+            let n = match n {
+                None => None,
+                Some(v) => match v.parse::<u8>() {
+                    Ok(k @ 1..=4) if v.len() == 1 => Some(k),
+                    _ => {
+                        return Err(Refusal::Value(
+                            "N",
+                            "must be 1 to 4 (a user output or input)",
+                        ))
+                    }
+                },
+            };
+            let need_n =
+                |n: Option<u8>| n.ok_or(Refusal::Missing("ON, OFF, HIGH and LOW need N: 1 to 4"));
+            let action = match action.unwrap_or("STOP") {
+                a if a.eq_ignore_ascii_case("STOP") => MAction::Stop,
+                a if a.eq_ignore_ascii_case("NONE") => MAction::Nothing,
+                a if a.eq_ignore_ascii_case("ON") => MAction::Output(need_n(n)?, true),
+                a if a.eq_ignore_ascii_case("OFF") => MAction::Output(need_n(n)?, false),
+                a if a.eq_ignore_ascii_case("HIGH") => MAction::Wait(need_n(n)?, true),
+                a if a.eq_ignore_ascii_case("LOW") => MAction::Wait(need_n(n)?, false),
+                _ => {
+                    return Err(Refusal::Value(
+                        "DO",
+                        "must be STOP, NONE, ON, OFF, HIGH or LOW",
+                    ))
+                }
+            };
+            if matches!(action, MAction::Stop | MAction::Nothing) && n.is_some() {
+                return Err(Refusal::Missing("N only with ON, OFF, HIGH or LOW"));
+            }
+            let mut offsets = self.offsets;
+            if !offsets.mcodes.set(code * 10, action) {
+                return Err(Refusal::Range("the table holds 16 M codes"));
+            }
+            self.take_offsets(offsets);
+        } else if action.is_some() || n.is_some() {
+            return Err(Refusal::Missing("DO and N need M: the code"));
+        }
+        let mut count = 0;
+        for (code, action) in self.offsets.mcodes.entries() {
+            count += 1;
+            let m = code / 10;
+            match action {
+                MAction::Stop => {}
+                MAction::Nothing => send_data(io, format_args!("M{m:02} DO=NONE")),
+                MAction::Output(n, on) => send_data(
+                    io,
+                    format_args!("M{m:02} DO={} N={n}", if on { "ON" } else { "OFF" }),
+                ),
+                MAction::Wait(n, high) => send_data(
+                    io,
+                    format_args!("M{m:02} DO={} N={n}", if high { "HIGH" } else { "LOW" }),
+                ),
+            }
+        }
+        send_ok(io, Some(format_args!("CODES={count}")));
+        Ok(())
+    }
+
+    /// `GEAR [N=1..4 TOP=rpm]`: the top speed of a gear range (`M41` …
+    /// `M44`; 0: the range adds no limit). Answered with the range in
+    /// effect and every range's top.
+    #[inline(never)]
+    fn gear_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
+        let [n, top] = parse_args(words, ["N", "TOP"])?;
+        match (n, top) {
+            (Some(n), Some(top)) => {
+                let slot = match n.parse::<usize>() {
+                    Ok(k @ 1..=4) if n.len() == 1 => k - 1,
+                    _ => return Err(Refusal::Value("N", "must be 1 to 4 (M41 to M44)")),
+                };
+                let l = parse_amount("TOP", top, 99_999_999, "must be 0 to 99999.999 rpm")?;
+                if let Some(g) = self.gears.get_mut(slot) {
+                    *g = (l > Length::ZERO).then_some(l);
+                }
+            }
+            (None, None) => {}
+            _ => {
+                return Err(Refusal::Missing(
+                    "GEAR sets a range with N and TOP together",
+                ))
+            }
+        }
+        let mut line = ReplyLine::new();
+        let _ = match self.aux.gear {
+            Some(g) => write!(line, "OK RANGE={g}"),
+            None => line.write_str("OK RANGE=-"),
+        };
+        for (i, g) in self.gears.iter().enumerate() {
+            let _ = write!(line, " G{}={}", i + 1, g.unwrap_or(Length::ZERO));
+        }
+        io.send(line.finish());
+        Ok(())
+    }
+
     /// The outputs for `aux` with the tool at the programmed X (`units`
     /// those of a surface speed).
     fn outputs_for(&self, aux: &Aux, units: Units) -> Outputs {
         let rpm = aux
             .spindle
-            .within(self.top)
+            .within(self.top_speed(aux))
             .running_rpm(self.prog[0], units);
         let rpm = if self.spindle_override == 100 {
             rpm
@@ -2450,15 +2770,51 @@ impl<I: Io> Io for Suffixed<'_, I> {
     fn timing(&mut self) -> Option<super::Timing> {
         self.inner.timing()
     }
+
+    fn stop_holds(&mut self) -> bool {
+        self.inner.stop_holds()
+    }
     crate::protocol::forward_io!();
+}
+
+/// LinuxCNC's lathe orientation (`G41.1 L`, its tool table's `Q`) as the
+/// device's tip code: the same tips mirrored in X (its 2 is the device's
+/// 3, its 6 the device's 8; 0 and 9 the nose centre).
+const fn linuxcnc_orientation(l: u8) -> u8 {
+    match l {
+        1 => 4,
+        2 => 3,
+        3 => 2,
+        4 => 1,
+        6 => 8,
+        8 => 6,
+        l => l,
+    }
 }
 
 /// Splits off and checks a trailing `*HH`; returns the bytes before it.
 fn strip_checksum(line: &[u8]) -> Result<&[u8], Refusal<'static>> {
-    let Some(star) = line.iter().rposition(|&b| b == b'*') else {
+    // A `*` that is not the checksum's is inside a G-code comment, or the
+    // request is malformed.
+    let trailing =
+        matches!(line, [.., b'*', h, l] if h.is_ascii_hexdigit() && l.is_ascii_hexdigit());
+    let star = if trailing {
+        line.iter().rposition(|&b| b == b'*')
+    } else {
+        let mut found = None;
+        for ((i, &b), comment) in (0..).zip(line).zip(in_comment(line)) {
+            if b == b'*' && !comment {
+                found = Some(i);
+            }
+        }
+        found
+    };
+    let Some(star) = star else {
         return Ok(line);
     };
-    let (body, tail) = line.split_at(star);
+    let Some((body, tail)) = line.split_at_checked(star) else {
+        return Err(Refusal::ChecksumForm);
+    };
     let given = match tail {
         [_, h, l] => match (hex_value(*h), hex_value(*l)) {
             (Some(h), Some(l)) => h << 4 | l,
@@ -2472,6 +2828,28 @@ fn strip_checksum(line: &[u8]) -> Result<&[u8], Refusal<'static>> {
     } else {
         Err(Refusal::Checksum(expected))
     }
+}
+
+/// For each byte of a line, whether it lies inside a G-code comment:
+/// `( … )` (the parentheses included), or from `;` to the end.
+fn in_comment(line: &[u8]) -> impl Iterator<Item = bool> + '_ {
+    let mut paren = false;
+    let mut rest = false;
+    line.iter().map(move |&b| {
+        if rest {
+            return true;
+        }
+        if paren {
+            paren = b != b')';
+            return true;
+        }
+        match b {
+            b'(' => paren = true,
+            b';' => rest = true,
+            _ => return false,
+        }
+        true
+    })
 }
 
 fn hex_value(b: u8) -> Option<u8> {

@@ -786,10 +786,7 @@ fn receive(tim: &StepTimer) {
         )
     };
     let (mut bytes_rx, mut rt_rx) = (bytes.1, rt.1);
-    let mut r = Receiver {
-        bytes: bytes.0,
-        realtime: rt.0,
-    };
+    let mut r = Receiver::new(bytes.0, rt.0);
     let regs = measure(tim, || {
         let _ = core::hint::black_box(firmware::board::rx_ready());
         let _ = core::hint::black_box(firmware::board::rx_byte());
