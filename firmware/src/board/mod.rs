@@ -404,8 +404,15 @@ pub fn pulse_timer_cost(clock: &StepTimer) -> u32 {
 /// Whether a timer ends each STEP pulse (the board).
 pub const PULSE_TIMER: bool = !cfg!(feature = "qemu");
 
-/// Core cycles per tick of TIM2: known on the board, measured under QEMU
-/// (1000 ticks).
+/// Core cycles per tick of TIM2: known on the board, measured under QEMU.
+///
+/// QEMU runs both clocks on the host's time, and the host may stop QEMU
+/// for milliseconds between any two instructions; its SysTick also reads
+/// 0 until QEMU has loaded it, some time after it was started, and while
+/// a wrap waits to be handled. So each reading of the two clocks is taken
+/// within one tick of TIM2 and with SysTick running, a window of 1000
+/// ticks lies between two readings, a window with a wrap in it is not
+/// used, and the ratio is the median of five windows.
 fn cycles_per_tick(syst: &mut cortex_m::peripheral::SYST, clock: &StepTimer) -> u32 {
     use cortex_m::peripheral::syst::SystClkSource;
     syst.set_clock_source(SystClkSource::Core);
@@ -416,12 +423,39 @@ fn cycles_per_tick(syst: &mut cortex_m::peripheral::SYST, clock: &StepTimer) -> 
     syst.set_reload(0x00FF_FFFF);
     syst.clear_current();
     syst.enable_counter();
-    let t0 = clock.count();
-    let v0 = cortex_m::peripheral::SYST::get_current();
-    while clock.count().wrapping_sub(t0) < 1000 {}
-    let v1 = cortex_m::peripheral::SYST::get_current();
+    // Both clocks read together: TIM2's count and SysTick's, or none.
+    let reading = || {
+        let a = clock.count();
+        let v = cortex_m::peripheral::SYST::get_current();
+        let b = clock.count();
+        (b.wrapping_sub(a) <= 1 && v != 0).then_some((a, v))
+    };
+    let mut ratios = [0u32; 5];
+    let mut n = 0;
+    let mut tries = 0;
+    while n < ratios.len() && tries < 200 {
+        tries += 1;
+        let Some((t0, v0)) = reading() else { continue };
+        while clock.count().wrapping_sub(t0) < 1000 {}
+        let Some((t1, v1)) = reading() else { continue };
+        let dt = t1.wrapping_sub(t0);
+        // SysTick counts down: a window with a wrap (or a stop) in it
+        // reads no lower at its end. 50 ms stays well inside one wrap at
+        // any clock QEMU gives the core.
+        if v1 >= v0 || dt > 50_000 {
+            continue;
+        }
+        if let (Some(r), Some(ratio)) = (ratios.get_mut(n), (v0 - v1).checked_div(dt)) {
+            *r = ratio;
+            n += 1;
+        }
+    }
     syst.disable_counter();
-    ((v0.wrapping_sub(v1) & 0x00FF_FFFF) / 1000).max(1)
+    let found = ratios.get_mut(..n).unwrap_or_default();
+    found.sort_unstable();
+    // QEMU 7.2 runs the netduinoplus2's core (SysTick's clock) at 168 MHz:
+    // its count per tick if nothing could be measured.
+    found.get(n / 2).copied().unwrap_or(168).max(1)
 }
 
 /// SysTick's control bits: ENABLE, TICKINT, the core clock; or only the
