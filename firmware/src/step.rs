@@ -163,10 +163,14 @@ impl StepIsr {
         if self.armed {
             let due = self.due;
             if PACED && self.far {
-                // A wait longer than the alarm's longest: again.
+                // A wait longer than the alarm's longest: armed again for
+                // the rest, unless the alarm came so late that the step's
+                // time has come (then it goes now: returning unarmed would
+                // leave nothing to wake the step interrupt).
                 self.far = false;
-                self.arm_at(due.wrapping_sub(1), ticks());
-                return;
+                if self.arm_at(due.wrapping_sub(self.lead_turn), self.now) {
+                    return;
+                }
             }
             self.issue(due);
         }
@@ -205,7 +209,23 @@ impl StepIsr {
             if self.arm_at(at, self.now) {
                 return;
             }
+            // Its alarm's time has passed already (the step interrupt came
+            // late): the step goes now, after its DIR set-up time.
+            if w1 & Ready::TURNS != 0 {
+                self.set_up_dir();
+            }
+            self.issue(due);
         }
+    }
+
+    /// A late step whose DIR changes: the DIR lines first, then the
+    /// drive's set-up time before the STEP lines rise.
+    #[cold]
+    #[inline(never)]
+    fn set_up_dir(&mut self) {
+        pins::write(self.fall_dir);
+        let ready = ticks().wrapping_add(self.lead_turn);
+        while (ticks().wrapping_sub(ready) as i32) < 0 {}
     }
 
     /// Arms the alarm for TIM2's count `at`, unless it has come by `now`
