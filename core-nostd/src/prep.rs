@@ -186,6 +186,28 @@ impl ReadyQueue {
     }
 }
 
+/// On a single-core microcontroller (bare-metal ARM: the Cortex-M4) the
+/// two ends are the prep and the step interrupt on one core, which sees its
+/// own memory accesses in program order: the compiler must keep the order,
+/// no barrier instruction is needed. Elsewhere (threads on a host) the
+/// atomics order them.
+#[cfg(all(target_arch = "arm", target_os = "none"))]
+const SINGLE_CORE_ACQUIRE: Ordering = Ordering::Relaxed;
+#[cfg(all(target_arch = "arm", target_os = "none"))]
+const SINGLE_CORE_RELEASE: Ordering = Ordering::Relaxed;
+#[cfg(not(all(target_arch = "arm", target_os = "none")))]
+const SINGLE_CORE_ACQUIRE: Ordering = Ordering::Acquire;
+#[cfg(not(all(target_arch = "arm", target_os = "none")))]
+const SINGLE_CORE_RELEASE: Ordering = Ordering::Release;
+
+/// A compiler fence where [`SINGLE_CORE_ACQUIRE`] is relaxed.
+#[inline(always)]
+fn single_core_fence(order: Ordering) {
+    if cfg!(all(target_arch = "arm", target_os = "none")) {
+        core::sync::atomic::compiler_fence(order);
+    }
+}
+
 /// The producer's end of a [`ReadyQueue`].
 pub struct ReadyTx<'a> {
     q: &'a ReadyQueue,
@@ -260,16 +282,18 @@ impl ReadyRx<'_> {
     #[inline(always)]
     pub fn take_words(&mut self) -> Option<(u32, u32, u32)> {
         let head = self.q.head.load(Ordering::Relaxed);
-        if self.q.tail.load(Ordering::Acquire) == head {
+        if self.q.tail.load(SINGLE_CORE_ACQUIRE) == head {
             return None;
         }
+        single_core_fence(Ordering::Acquire);
         let slot = self.q.slot(head);
         let (w0, w1) = (
             slot[0].load(Ordering::Relaxed),
             slot[1].load(Ordering::Relaxed),
         );
         let head = head.wrapping_add(1);
-        self.q.head.store(head, Ordering::Release);
+        single_core_fence(Ordering::Release);
+        self.q.head.store(head, SINGLE_CORE_RELEASE);
         Some((w0, w1, head))
     }
 

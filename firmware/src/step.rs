@@ -42,15 +42,10 @@ pub struct StepIsr {
     due: u32,
     fall_dir: u32,
     rise: u32,
-    /// The alarm was armed short of the step (its longest wait).
-    far: bool,
     /// Ticks ahead of a step whose DIR changes: the set-up time and one.
     lead_turn: u32,
     /// When the STEP pulse in progress may end (TIM2 count).
     pulse_end: u32,
-    /// TIM2's count when the last step rose, or when a mark was passed:
-    /// the time the next alarm is armed from.
-    now: u32,
     /// Pulse width, ticks.
     width: u32,
     /// Steps issued after their tick since power-on, and the most late.
@@ -60,6 +55,11 @@ pub struct StepIsr {
 
 /// Entries the step interrupt takes between two pends of the prep.
 const REFILL: u32 = 64;
+
+/// The longest the step interrupt waits for a step's tick, ticks: the
+/// DIR set-up time fits well within it; an alarm that comes earlier than
+/// this (QEMU's) is armed again instead.
+const SPIN_MAX: i32 = 64;
 
 /// The ready queue between the prep (producer) and the step interrupt.
 pub static READY: ReadyQueue = ReadyQueue::new();
@@ -132,10 +132,8 @@ impl StepIsr {
             due: 0,
             fall_dir: 0,
             rise: 0,
-            far: false,
             lead_turn: 1,
             pulse_end: ticks(),
-            now: 0,
             width: 0,
             late: 0,
             worst: 0,
@@ -159,21 +157,16 @@ impl StepIsr {
     #[inline(never)]
     pub fn service(&mut self) {
         self.alarm.clear();
-        self.now = ticks();
-        if self.armed {
-            let due = self.due;
-            if PACED && self.far {
-                // A wait longer than the alarm's longest: armed again for
-                // the rest, unless the alarm came so late that the step's
-                // time has come (then it goes now: returning unarmed would
-                // leave nothing to wake the step interrupt).
-                self.far = false;
-                if self.arm_at(due.wrapping_sub(self.lead_turn), self.now) {
-                    return;
-                }
+        // TIM2's count, read once a step: when the last step rose (or
+        // when a mark was passed).
+        let mut now = if self.armed {
+            match self.issue() {
+                Some(rose) => rose,
+                None => return,
             }
-            self.issue(due);
-        }
+        } else {
+            ticks()
+        };
         loop {
             let Some((w0, w1, taken)) = self.rx.take_words() else {
                 self.idle();
@@ -185,7 +178,7 @@ impl StepIsr {
             }
             if w1 & Ready::KIND != 0 {
                 self.mark(w0, w1);
-                self.now = ticks();
+                now = ticks();
                 continue;
             }
             // A step: armed for, one tick ahead (and the set-up time when
@@ -193,28 +186,29 @@ impl StepIsr {
             let due = self.origin.wrapping_add(w0);
             let [fall_dir, rise] = WORDS[(w1 & Ready::BITS) as usize];
             (self.due, self.fall_dir, self.rise, self.armed) = (due, fall_dir, rise, true);
-            if !PACED {
-                self.issue(due);
-                continue;
+            if PACED {
+                let lead = if w1 & Ready::TURNS != 0 {
+                    self.lead_turn
+                } else {
+                    1
+                };
+                let mut at = due.wrapping_sub(lead);
+                if (at.wrapping_sub(self.pulse_end) as i32) < 0 {
+                    at = self.pulse_end;
+                }
+                if self.arm_at(at, now) {
+                    return;
+                }
+                // Its alarm's time has passed already (the step interrupt
+                // came late): the step goes now, after its DIR set-up time.
+                if w1 & Ready::TURNS != 0 {
+                    self.set_up_dir();
+                }
             }
-            let lead = if w1 & Ready::TURNS != 0 {
-                self.lead_turn
-            } else {
-                1
+            now = match self.issue() {
+                Some(rose) => rose,
+                None => return,
             };
-            let mut at = due.wrapping_sub(lead);
-            if (at.wrapping_sub(self.pulse_end) as i32) < 0 {
-                at = self.pulse_end;
-            }
-            if self.arm_at(at, self.now) {
-                return;
-            }
-            // Its alarm's time has passed already (the step interrupt came
-            // late): the step goes now, after its DIR set-up time.
-            if w1 & Ready::TURNS != 0 {
-                self.set_up_dir();
-            }
-            self.issue(due);
         }
     }
 
@@ -230,15 +224,14 @@ impl StepIsr {
 
     /// Arms the alarm for TIM2's count `at`, unless it has come by `now`
     /// (read a little before: the alarm then fires a little after `at`,
-    /// still ahead of the step); whether it armed.
+    /// still ahead of the step); whether it armed. A wait beyond the
+    /// alarm's longest fires early, at its longest: [`StepIsr::issue`]
+    /// arms it again.
     #[inline(always)]
     fn arm_at(&mut self, at: u32, now: u32) -> bool {
         let wait = at.wrapping_sub(now) as i32;
         if wait <= 0 {
             return false;
-        }
-        if wait as u32 > Alarm::LONGEST {
-            self.far = true;
         }
         self.alarm.arm(wait as u32);
         true
@@ -277,24 +270,35 @@ impl StepIsr {
         }
     }
 
-    /// Issues the step armed for, due at `due`: the pulse before ends with
-    /// this step's DIR set, the STEP lines rise on the tick, the pulse's
-    /// end starts.
+    /// Issues the step armed for: the pulse before ends with this step's
+    /// DIR set, the STEP lines rise on its tick, the pulse's end starts.
+    /// Returns TIM2's count as they rose; or `None` when the alarm came
+    /// well ahead of the tick (QEMU's alarm fires early, a wait beyond the
+    /// alarm's longest fires at its longest) and is armed again.
     #[inline(always)]
-    fn issue(&mut self, due: u32) {
+    fn issue(&mut self) -> Option<u32> {
         #[cfg(feature = "stall-test")]
         stall::maybe();
+        let due = self.due;
         pins::write(self.fall_dir);
         if PACED {
-            while (ticks().wrapping_sub(due) as i32) < 0 {}
+            loop {
+                let wait = due.wrapping_sub(ticks()) as i32;
+                if wait <= 0 {
+                    break;
+                }
+                if wait > SPIN_MAX {
+                    self.rearm(due);
+                    return None;
+                }
+            }
         }
         pins::write(self.rise);
         let rose = ticks();
-        self.now = rose;
         self.armed = false;
         if !PACED {
             pins::write(pins::FALL);
-            return;
+            return Some(rose);
         }
         if PULSE_TIMER {
             self.pulse.arm();
@@ -303,6 +307,19 @@ impl StepIsr {
         let late = rose.wrapping_sub(due);
         if late != 0 {
             self.late_by(late);
+        }
+        Some(rose)
+    }
+
+    /// The alarm came well ahead of the step armed for, due at `due`:
+    /// armed again one tick ahead of it.
+    #[cold]
+    #[inline(never)]
+    fn rearm(&mut self, due: u32) {
+        let now = ticks();
+        if !self.arm_at(due.wrapping_sub(1), now) {
+            // The tick came meanwhile: at once.
+            cortex_m::peripheral::NVIC::pend(stm32f4::stm32f405::Interrupt::TIM5);
         }
     }
 
@@ -318,7 +335,6 @@ impl StepIsr {
     /// [`StepIsr::drop_queued`] and [`StepIsr::restart`].
     pub fn stop(&mut self) {
         self.armed = false;
-        self.far = false;
         self.alarm.stop();
         Pulse::stop();
         pins::write(pins::FALL);

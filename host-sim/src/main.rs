@@ -1379,7 +1379,7 @@ fn run_soak(args: &SoakArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
 /// instructions per step in every phase and in its longest entry, the
 /// receive interrupt's per byte; the worst lateness of any event at
 /// 200 000 events a second, ticks.
-const STEP_PER_EVENT: f64 = 140.0;
+const STEP_PER_EVENT: f64 = 116.0;
 const STEP_ENTRY: u64 = 400;
 const RECEIVE_PER_BYTE: u64 = 300;
 const WORST_LATE_TICKS: u64 = 1;

@@ -297,9 +297,13 @@ pub fn rx_pause() {
 /// In the `qemu-timed` build the core never sleeps: QEMU's virtual time
 /// then advances by the instructions run (`-icount`), and a timer fires
 /// on its tick instead of when the host wakes QEMU up (tens of
-/// microseconds to milliseconds late).
+/// microseconds to milliseconds late). In the `qemu-paced` build it does
+/// not sleep while the step interrupt has work: QEMU wakes a sleeping core
+/// only once the host runs its thread again, milliseconds later on a
+/// loaded host, and the protocol must keep the planner fed in real time
+/// (the board wakes in a dozen cycles).
 pub fn sleep_unless(mut ready: impl FnMut() -> bool) {
-    if cfg!(feature = "qemu-timed") {
+    if cfg!(feature = "qemu-timed") || (cfg!(feature = "qemu-paced") && !crate::step::is_idle()) {
         return;
     }
     cortex_m::interrupt::free(|_| {
@@ -495,7 +499,8 @@ fn step_timers(
     {
         // TIM5 stays unused.
         let _ = tim5;
-        let per_tick = (per_tick - per_tick / 16).max(1);
+        // At most what keeps the longest alarm within SysTick's 24 bits.
+        let per_tick = (per_tick - per_tick / 16).clamp(1, 0x00FF_FFFF / ALARM_MAX_TICKS);
         (Alarm { syst, per_tick }, Pulse {})
     }
 }
@@ -515,6 +520,10 @@ impl Alarm {
     /// Fires in `ticks` (1 at least).
     #[inline(always)]
     pub fn arm(&mut self, ticks: u32) {
+        #[cfg(not(feature = "qemu"))]
+        let t = ticks.min(ALARM_MAX_TICKS);
+        // Within SysTick's 24 bits: `per_tick` is bounded for it.
+        #[cfg(feature = "qemu")]
         let t = ticks.min(ALARM_MAX_TICKS) * self.per_tick;
         // SAFETY: TIM5's own registers: the period, and CR1 with the bits
         // of `step_timers` and CEN. One-pulse mode leaves the counter at 0
@@ -531,7 +540,7 @@ impl Alarm {
         // short, it fires early, and the step interrupt waits for the rest.
         #[cfg(feature = "qemu")]
         unsafe {
-            self.syst.rvr.write(t.min(0x00FF_FFFF));
+            self.syst.rvr.write(t);
             self.syst.cvr.write(0);
             self.syst.csr.write(SYST_ON);
         }
