@@ -7,7 +7,7 @@
 //! | priority | task | bound to | timing contract |
 //! |---|---|---|---|
 //! | 5 | supervisor | TIM3, every 1 ms | judges and kicks the watchdog; shares atomics only |
-//! | 4 | step | TIM5 (alarm), pended | pops a ready entry, writes the pins, arms the next alarm: about 50 instructions a step |
+//! | 4 | step | TIM5 (alarm), pended | pops a ready entry, writes the pins, arms the next alarm: about 105 instructions a step |
 //! | 4 | pulse end | SysTick | STEP lines low: a few instructions (under paced QEMU SysTick is the step alarm) |
 //! | 3 | prep | EXTI0, pended | fills the ready queue (255 entries) from the stepper |
 //! | 2 | receive | USART1 | buffers a byte or queues a real-time byte: under 100 instructions |

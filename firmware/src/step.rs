@@ -18,7 +18,7 @@
 //! | | |
 //! |---|---|
 //! | priority | below the supervisor, above the prep |
-//! | work per step | about 50 instructions (`host-sim qemu-bench`) |
+//! | work per step | about 105 instructions (`host-sim qemu-bench`) |
 //! | longest entry | a run's end with the step before it |
 
 use crate::board::spindle::Spindle;
