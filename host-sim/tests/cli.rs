@@ -165,9 +165,8 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
         text,
         format!(
             "{p}: dialect: FANUC (line 3 is one of its words)\n\
-             {p}:9:1: G17 plane not supported: a lathe cuts in G18 (ZX)\n\
              {p}:11:1: G71 canned cycles not supported\n\
-             {p}: 2 lines the device would refuse\n"
+             {p}: 1 line the device would refuse\n"
         )
     );
     // Read as ISO, the Fanuc words are named where they stand.
