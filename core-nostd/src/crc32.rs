@@ -31,7 +31,7 @@ const TABLE: [u32; 256] = {
 /// assert_eq!(c.finish(), 0xCBF4_3926);
 /// assert_eq!(Crc32::new().finish(), 0);
 /// ```
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Crc32 {
     state: u32,
 }

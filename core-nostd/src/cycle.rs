@@ -159,20 +159,25 @@ impl<'a> Roughing<'a> {
         if depth <= 0 {
             return Err(CycleError::Depth);
         }
-        let (ui, vi) = match along {
-            Along::Z => (0, 1),
-            Along::X => (1, 0),
+        // The depth (u) and cut (v) coordinates of a point.
+        let u = |p: &[i64; 2]| match along {
+            Along::Z => p[0],
+            Along::X => p[1],
         };
-        let sd = (a[ui] - s[ui]).signum();
+        let v = |p: &[i64; 2]| match along {
+            Along::Z => p[1],
+            Along::X => p[0],
+        };
+        let sd = (u(&a) - u(&s)).signum();
         if sd == 0 {
             return Err(CycleError::Start);
         }
         // The cut runs towards the profile's farthest point from S.
         let far = core::iter::once(a)
             .chain(segments.iter().map(|g| g.to))
-            .max_by_key(|p| (p[vi] - s[vi]).abs())
+            .max_by_key(|p| (v(p) - v(&s)).abs())
             .unwrap_or(last.to);
-        let sc = match (far[vi] - s[vi]).signum() {
+        let sc = match (v(&far) - v(&s)).signum() {
             0 => -1,
             v => v,
         };
@@ -267,7 +272,7 @@ impl<'a> Roughing<'a> {
             };
             let _ = xs.push(c);
         });
-        xs.sort_unstable();
+        sort_small(&mut xs);
         // From the start side: stock where the profile is deeper.
         let mut cut = self.frame.to_cd(self.a)[1] >= d;
         let mut from = 0i64;
@@ -397,7 +402,11 @@ fn split_arc(
             let _ = cuts.push((a, e));
         }
     }
-    cuts.sort_unstable_by_key(|x| x.0);
+    if let [p, q] = cuts.as_mut_slice() {
+        if q.0 < p.0 {
+            core::mem::swap(p, q);
+        }
+    }
     let mut start = from;
     for (_, e) in cuts.iter().chain(core::iter::once(&(sweep, to))) {
         let mid_side = {
@@ -456,10 +465,26 @@ fn sweep_of(a: [i64; 2], b: [i64; 2], ccw: bool) -> i128 {
 
 /// The angle of `v` as a number growing with the turn (`ccw`): its
 /// quadrant and, within it, the ratio of its components.
+/// Sorts a few values in place (insertion sort: no bounds to check, no
+/// panic path).
+fn sort_small(v: &mut [i64]) {
+    for i in 1..v.len() {
+        let mut j = i;
+        while j > 0 {
+            match v.get_mut(j - 1..=j) {
+                Some([p, q]) if *q < *p => core::mem::swap(p, q),
+                _ => break,
+            }
+            j -= 1;
+        }
+    }
+}
+
 fn pseudo_angle(v: [i64; 2], ccw: bool) -> i128 {
     let (x, y) = (i128::from(v[0]), i128::from(if ccw { v[1] } else { -v[1] }));
     let one = 1i128 << 62;
-    let ratio = |num: i128, den: i128| if den == 0 { 0 } else { num * one / den };
+    // |num| ≤ |den| < 2^41, so the product fits and the quotient is ≤ one.
+    let ratio = |num: i128, den: i128| num.wrapping_mul(one).checked_div(den).unwrap_or(0);
     if y >= 0 && x > 0 {
         ratio(y, x + y)
     } else if x <= 0 && y > 0 {

@@ -31,7 +31,10 @@
 //!   window, each block's trapezoid.
 //! - [`step`]: the timed step generator: each event's tick, integer-only.
 //! - [`stepper`]: started motion in order, pulled one event at a time (the
-//!   stage a step interrupt runs), with what has been issued.
+//!   stage the prep runs), with what has been handed out.
+//! - [`prep`]: the prep stage: started motion turned into ready events
+//!   (tick, pins, TSEQ) ahead of the step interrupt, which only issues
+//!   them, and what it issued.
 //! - [`store`]: the tool table and work offsets as a record in two flash
 //!   slots that a power cut during a write cannot break.
 //! - [`machine`]: the planner and the stepper behind one front, as the
@@ -71,6 +74,7 @@ pub mod length;
 pub mod machine;
 pub mod outputs;
 pub mod plan;
+pub mod prep;
 pub mod protocol;
 pub mod step;
 pub mod stepdir;

@@ -769,6 +769,27 @@ impl Record {
         }
     }
 
+    /// The record of `events` events whose CRC ended in `crc`, the last
+    /// run that ended `run_ticks` long; the next event starts a new run.
+    /// What a step interrupt issued, kept apart from what was handed out
+    /// ahead of it.
+    pub const fn restore(events: u64, crc: Crc32, run_ticks: u64) -> Record {
+        Record {
+            events,
+            crc,
+            before: crc,
+            last: 0,
+            run_ticks,
+        }
+    }
+
+    /// The CRC's state after the last event (what [`Record::restore`]
+    /// takes).
+    #[inline(always)]
+    pub const fn crc(&self) -> Crc32 {
+        self.crc
+    }
+
     /// A run ended after `ticks`; the next event starts a new run.
     pub fn run_end(&mut self, ticks: u64) {
         self.last = 0;

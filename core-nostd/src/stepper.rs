@@ -473,26 +473,36 @@ impl<const R: usize> Stepper<R> {
         Some(Pulled::RunStart)
     }
 
+    /// The item being issued, as a reset would report it: the events of
+    /// its block handed out and all of them; a fixed-rate run's total is
+    /// `None` (counting it walks its events: see [`Stepper::abort`]).
+    pub fn running(&self) -> Option<(u32, Option<u32>)> {
+        match &self.now {
+            Now::Timed(events, block) => {
+                let (skip, _) = block.span();
+                let (nx, nz) = block.events().delta();
+                Some((
+                    skip + events.done(),
+                    Some(nx.unsigned_abs().max(nz.unsigned_abs())),
+                ))
+            }
+            Now::Fixed(run) => Some((run.n, None)),
+            Now::Idle => None,
+        }
+    }
+
     /// Reset: drops everything started at once, the hold with it; the
     /// registers keep the steps issued. Reports the block that was running.
     pub fn abort(&mut self) -> Aborted {
         let dropped = self.pending();
-        let aborted = match &self.now {
-            Now::Timed(events, block) => {
-                let (skip, _) = block.span();
-                let (nx, nz) = block.events().delta();
-                Aborted {
-                    done: skip + events.done(),
-                    of: nx.unsigned_abs().max(nz.unsigned_abs()),
-                    dropped,
-                }
-            }
-            Now::Fixed(run) => Aborted {
+        let aborted = match (&self.now, self.running()) {
+            (Now::Fixed(run), _) => Aborted {
                 done: run.n,
                 of: run.n + run.events.clone().count() as u32,
                 dropped,
             },
-            Now::Idle => Aborted {
+            (_, Some((done, Some(of)))) => Aborted { done, of, dropped },
+            _ => Aborted {
                 done: 0,
                 of: 0,
                 dropped,
@@ -533,6 +543,17 @@ impl<const R: usize> Stepper<R> {
     /// Sets the registers, at rest (`ZERO`, a price change).
     pub fn set_issued(&mut self, registers: ImpulsePoint) {
         self.issued = registers;
+    }
+
+    /// The record of what was handed out, as it stands.
+    pub const fn record(&self) -> &Record {
+        &self.record
+    }
+
+    /// Replaces the record (a reset: what was issued, not what was handed
+    /// out ahead of it).
+    pub fn set_record(&mut self, record: Record) {
+        self.record = record;
     }
 
     /// What ran since the record last started again; it starts again.

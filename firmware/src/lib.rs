@@ -1,11 +1,26 @@
-//! STM32F405 firmware of the lathe retrofit controller: the board layer.
+//! STM32F405 firmware of the lathe retrofit controller.
 //!
 //! USART1 (115200 8N1) serves the pendant line protocol through the core's
 //! handler, byte for byte as the host simulator's in-process device does.
-//! Blocks start as the planner's window fills (or at a flush) and go to the
-//! step interrupt ([`motion`]), which issues their events on the STEP/DIR
-//! outputs at their ticks of TIM2 (1 MHz) while the protocol goes on;
-//! received bytes are queued by the USART1 interrupt meanwhile.
+//! Blocks start as the planner's window fills (or at a flush); the prep
+//! stage turns them into ready step events ahead of the step interrupt,
+//! which issues them on the STEP/DIR outputs at their ticks of TIM2 (1 MHz)
+//! while the protocol goes on.
+//!
+//! | module | role |
+//! |---|---|
+//! | [`board`] | registers: clocks, pins, USART1, the timers, the spindle outputs |
+//! | [`step`] | the step interrupt's state and work |
+//! | [`motion`] | the prep task, the real-time task, thread mode's motion |
+//! | [`serial`] | the receive interrupt |
+//! | [`supervisor`] | the watchdog and its supervisor |
+//! | [`storage`] | the offsets kept in flash |
+//! | [`Controller`] | the protocol's transport in thread mode |
+//!
+//! The tasks and their priorities are in `main.rs` (RTIC). `→` says what a
+//! module uses: `board` → nothing of ours; `step`, `serial`, `supervisor`,
+//! `storage` → `board`; `motion` → `step`, `serial`, `board`; the
+//! controller → all of them.
 //!
 //! Release builds contain no panic path: their panic handler calls a symbol
 //! that does not exist, so the link fails if any panic survives optimisation.
@@ -16,23 +31,31 @@
 pub mod board;
 pub mod log;
 pub mod motion;
-pub mod spindle;
+pub mod serial;
+pub mod step;
 pub mod storage;
 pub mod supervisor;
 
-use board::{Board, Serial};
+use board::Serial;
 use core_nostd::interleave::ImpulsePoint;
 use core_nostd::machine::Background;
 use core_nostd::protocol::{status_line, Io, Realtime, StatusView, Timing};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
 use core_nostd::stepper::{Aborted, Item, Motion};
+use motion::{PrepStage, Shared};
+use rtic::Mutex;
+use step::StepIsr;
 
-/// The transport side of the device: the serial line, and the step
-/// interrupt that takes its motion.
-pub struct Controller {
+/// The transport side of the device in thread mode: the serial line, and
+/// the motion it hands to the prep and the step interrupt.
+pub struct Controller<P, S> {
     /// USART1.
     pub serial: Serial,
+    /// Bytes the receive interrupt queued.
+    pub bytes: serial::Bytes,
+    /// The prep stage and the step interrupt.
+    pub motion: Shared<P, S>,
     /// What a status line needs of the session, and the blocks queued.
     view: StatusView,
     queued: usize,
@@ -44,18 +67,22 @@ pub struct Controller {
     pub grbl: Option<core_nostd::protocol::grbl::Extras>,
 }
 
-impl Controller {
-    /// Takes the board: the timers and the step outputs go to the step
-    /// interrupt (STEP outputs low); the offsets kept in flash go to the
-    /// device.
-    pub fn new(board: Board, device: &mut core_nostd::protocol::Device) -> Self {
-        let storage = storage::Storage::load(board.flash, device);
-        motion::install(board.tim2, board.tim5, board.spindle);
-        supervisor::start(board.watchdog);
+impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Controller<P, S> {
+    /// The transport over the serial line, its byte queue, the offsets
+    /// loaded, and the two motion resources.
+    pub fn new(
+        serial: Serial,
+        bytes: serial::Bytes,
+        storage: storage::Storage,
+        prep: P,
+        step: S,
+    ) -> Self {
         Controller {
             storage,
             grbl: None,
-            serial: board.serial,
+            serial,
+            bytes,
+            motion: Shared { prep, step },
             view: StatusView {
                 hx: 0,
                 hz: 0,
@@ -71,11 +98,11 @@ impl Controller {
     }
 
     /// Nothing runs or waits to run: the axes at rest, no block queued.
-    pub fn idle(&self) -> bool {
-        self.queued == 0 && motion::drained()
+    pub fn idle(&mut self) -> bool {
+        self.queued == 0 && self.motion.drained()
     }
 
-    /// Answers what the serial interrupt left for thread mode through the
+    /// Answers what the real-time task left for thread mode through the
     /// protocol: a reset's report and new session first, else a status
     /// line. Returns whether there was anything.
     pub fn realtime(&mut self, device: &mut core_nostd::protocol::Device) -> bool {
@@ -89,48 +116,60 @@ impl Controller {
         }
         true
     }
-}
 
-/// The board's timing for a status line answering a byte that arrived at
-/// TIM2 count `asked`.
-fn timing(asked: u32) -> Timing {
-    Timing {
-        latency_us: board::ticks().wrapping_sub(asked),
-        late_events: motion::late_events(),
+    /// The board's timing for a status line answering a byte that arrived
+    /// at TIM2 count `asked`.
+    fn timing(&mut self, asked: u32) -> Timing {
+        let (late, _worst) = self.motion.lateness();
+        #[cfg(feature = "qemu")]
+        report_lateness(late, _worst);
+        Timing {
+            latency_us: board::ticks().wrapping_sub(asked),
+            late_events: late,
+        }
     }
-}
 
-/// Sends the `!STATUS` line a real-time byte asked for, if one did, while
-/// thread mode waits or works (it ends with `LAT= LATE=`, as the
-/// protocol's).
-fn answer_status(
-    serial: &mut Serial,
-    view: &StatusView,
-    queued: usize,
-    grbl: Option<&core_nostd::protocol::grbl::Extras>,
-) {
-    if let Some(asked) = motion::take_status() {
-        let issued = motion::issued().unwrap_or_default();
-        let view = StatusView {
-            outputs: motion::outputs().unwrap_or(view.outputs),
-            ..*view
-        };
-        let mut line = status_line("!STATUS", motion::motion(), issued, queued, &view);
-        match grbl {
-            Some(extras) => {
-                let mut report = core_nostd::protocol::grbl::status_report(line.as_bytes(), extras);
-                report.push_bytes(b"\r\n");
-                serial.send(report.as_bytes());
-            }
-            None => {
-                timing(asked).write_to(&mut line);
-                serial.send(line.finish());
+    /// Sends the `!STATUS` line a real-time byte asked for, if one did,
+    /// while thread mode waits or works (it ends with `LAT= LATE=`, as the
+    /// protocol's).
+    fn answer_status(&mut self) {
+        if let Some(asked) = motion::take_status() {
+            let issued = self.motion.issued();
+            let view = StatusView {
+                outputs: self.motion.outputs(),
+                ..self.view
+            };
+            let state = self.motion.motion();
+            let mut line = status_line("!STATUS", state, issued, self.queued, &view);
+            match self.grbl.as_ref() {
+                Some(extras) => {
+                    let mut report =
+                        core_nostd::protocol::grbl::status_report(line.as_bytes(), extras);
+                    report.push_bytes(b"\r\n");
+                    self.serial.send(report.as_bytes());
+                }
+                None => {
+                    self.timing(asked).write_to(&mut line);
+                    self.serial.send(line.finish());
+                }
             }
         }
     }
 }
 
-impl Io for Controller {
+/// Under QEMU the worst lateness goes to the host beside each status
+/// line's (the line's own format is the protocol's): `timing: LATE= WORST=`.
+#[cfg(feature = "qemu")]
+fn report_lateness(late: u32, worst: u32) {
+    let mut line: heapless::String<64> = heapless::String::new();
+    let _ = core::fmt::write(
+        &mut line,
+        format_args!("timing: LATE={late} WORST={worst}\n"),
+    );
+    log::host_print(&line);
+}
+
+impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
     fn send(&mut self, line: &[u8]) {
         self.serial.send(line);
     }
@@ -145,12 +184,7 @@ impl Io for Controller {
 
     fn pause(&mut self) {
         supervisor::beat();
-        answer_status(
-            &mut self.serial,
-            &self.view,
-            self.queued,
-            self.grbl.as_ref(),
-        );
+        self.answer_status();
     }
 
     fn dwell(&mut self, us: u64) {
@@ -174,71 +208,71 @@ impl Io for Controller {
     }
 
     fn timing(&mut self) -> Option<Timing> {
-        self.asked.take().map(timing)
+        self.asked
+            .take()
+            .map(|asked| Controller::timing(self, asked))
     }
 
     fn outputs(&mut self, outputs: &core_nostd::outputs::Outputs) {
-        motion::set_outputs(outputs);
+        self.motion.set_outputs(outputs);
     }
 }
 
-// The step interrupt's state exists from `Controller::new` on: its
-// functions hand back nothing only before `motion::install`.
-impl Background for Controller {
+impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P, S> {
     fn start(&mut self, item: Item, drive: &DriveTiming) {
-        let (serial, view, queued) = (&mut self.serial, self.view, self.queued);
-        let grbl = self.grbl;
-        let _ = motion::start(item, drive, || {
-            answer_status(serial, &view, queued, grbl.as_ref())
-        });
+        let mut item = item;
+        loop {
+            match self.motion.try_start(item, drive) {
+                Ok(()) => return,
+                Err(back) => item = back,
+            }
+            // Full: status lines meanwhile, then sleep until there is room.
+            self.answer_status();
+            let motion = &mut self.motion;
+            board::sleep_unless(|| motion::wanted() || motion.has_room());
+            supervisor::beat();
+        }
     }
 
     fn drain(&mut self) {
-        while !motion::drained() {
-            answer_status(
-                &mut self.serial,
-                &self.view,
-                self.queued,
-                self.grbl.as_ref(),
-            );
-            board::sleep_unless(|| motion::wanted() || motion::drained());
+        while !self.motion.drained() {
+            self.answer_status();
+            let motion = &mut self.motion;
+            board::sleep_unless(|| motion::wanted() || motion.drained());
+            supervisor::beat();
         }
     }
 
     fn issued(&mut self) -> ImpulsePoint {
-        motion::issued().unwrap_or_default()
+        self.motion.issued()
     }
 
     fn set_issued(&mut self, registers: ImpulsePoint) {
-        motion::set_issued(registers);
+        self.motion.set_issued(registers);
     }
 
     fn take_record(&mut self) -> Record {
-        motion::take_record().unwrap_or_default()
+        self.motion.take_record()
     }
 
     fn hold(&mut self) {
-        motion::act(Realtime::Hold);
+        self.motion.act(Realtime::Hold);
     }
 
     fn resume(&mut self) {
-        motion::act(Realtime::Resume);
+        self.motion.act(Realtime::Resume);
     }
 
     fn abort(&mut self) -> Aborted {
-        motion::abort().unwrap_or(Aborted {
-            done: 0,
-            of: 0,
-            dropped: false,
-        })
+        self.motion.abort()
     }
 
     fn motion(&mut self) -> Motion {
-        motion::motion()
+        self.motion.motion()
     }
 
     fn hungry(&mut self) -> bool {
-        motion::hungry()
+        self.motion.hungry()
     }
 
     fn queued(&mut self, blocks: usize) {
@@ -246,31 +280,36 @@ impl Background for Controller {
     }
 
     fn spindle(&mut self) -> Option<u32> {
-        motion::outputs().map(|o| o.rpm)
+        Some(self.motion.outputs().rpm)
     }
-}
-
-/// Reset to running: takes the peripherals (once, at reset), starts the
-/// logger and brings up clocks, pins, USART1 and the step timer.
-pub fn boot() -> board::Board {
-    // `take` succeeds once, at reset; there is no other caller.
-    let Some(dp) = stm32f4::stm32f405::Peripherals::take() else {
-        halt()
-    };
-    log::init();
-    board::init(dp)
 }
 
 /// A fault stops the steps; the watchdog then resets the board.
 #[cortex_m_rt::exception]
+// SAFETY: cortex-m-rt's signature for the handler; it only drives the outputs low and waits for the watchdog.
 unsafe fn HardFault(_: &cortex_m_rt::ExceptionFrame) -> ! {
     halt()
+}
+
+/// Reset to running without the scheduler (the measurements): takes the
+/// peripherals (once, at reset), starts the logger and brings up clocks,
+/// pins, USART1 and the step timers.
+pub fn boot() -> board::Board {
+    // `take` succeeds once, at reset; there is no other caller.
+    let (Some(dp), Some(cp)) = (
+        stm32f4::stm32f405::Peripherals::take(),
+        cortex_m::Peripherals::take(),
+    ) else {
+        halt()
+    };
+    log::init();
+    board::init(dp, cp.SYST)
 }
 
 /// Stops here for good, outputs safe.
 pub fn halt() -> ! {
     board::step_outputs_low();
-    spindle::all_low();
+    board::spindle::all_low();
     loop {
         cortex_m::asm::wfi();
     }
@@ -293,7 +332,7 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 fn panic(info: &core::panic::PanicInfo) -> ! {
     // The axes first: no STEP pulse may stay high or follow.
     board::step_outputs_low();
-    spindle::all_low();
+    board::spindle::all_low();
     cortex_m::interrupt::disable();
     defmt::error!("panic: {}", defmt::Display2Format(info));
     #[cfg(feature = "qemu")]

@@ -93,6 +93,7 @@ mod flash {
         fn ready(&mut self) {
             if self.flash.cr().read().lock().bit_is_set() {
                 for key in KEYS {
+                    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
                     self.flash.keyr().write(|w| unsafe { w.key().bits(key) });
                 }
             }
@@ -153,6 +154,7 @@ mod flash {
                 return;
             };
             self.ready();
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
             self.flash
                 .cr()
                 .write(|w| unsafe { w.psize().psize32().ser().set_bit().snb().bits(sector) });

@@ -1245,10 +1245,10 @@ fn run_qemu(args: &QemuArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
     })
 }
 
-/// The calculators' image (`--features calc`) in QEMU answers every
+/// The controller's one image in QEMU answers every
 /// calculator request as the in-process device does.
 fn calculators_qemu() -> Result<bool, Box<dyn std::error::Error>> {
-    let elf = host_sim::qemu::build_firmware("qemu,calc")?;
+    let elf = host_sim::qemu::build_firmware("qemu")?;
     let mut qemu = host_sim::qemu::Qemu::boot(&elf, true)?;
     let mut client = qemu.connect(Duration::from_secs(60))?;
     let session = host_sim::scenario::calculator_session();
@@ -1258,7 +1258,7 @@ fn calculators_qemu() -> Result<bool, Box<dyn std::error::Error>> {
     let lines = got.iter().filter(|&&b| b == b'\n').count();
     let equal = got == expected;
     println!(
-        "calculators' image (THREAD, WEAR, DEFLECT, TRI, TAPE): {requests} requests, {lines} reply lines, {}",
+        "calculators on the one image (THREAD, WEAR, DEFLECT, TRI, TAPE): {requests} requests, {lines} reply lines, {}",
         if equal {
             "identical to the in-process device"
         } else {
@@ -1384,19 +1384,100 @@ fn run_soak(args: &SoakArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
     })
 }
 
+/// The budgets `qemu-bench` holds the firmware to: the step interrupt's
+/// instructions per step in every phase and in its longest entry, the
+/// receive interrupt's per byte; the worst lateness of any event at
+/// 200 000 events a second, ticks.
+const STEP_PER_EVENT: f64 = 116.0;
+const STEP_ENTRY: u64 = 400;
+const RECEIVE_PER_BYTE: u64 = 300;
+const WORST_LATE_TICKS: u64 = 1;
+
 fn qemu_bench() -> Result<ExitCode, Box<dyn std::error::Error>> {
-    let elf = host_sim::qemu::build_firmware("qemu")?;
+    // The bench of the timed build: its step interrupt runs paced, as on
+    // the board.
+    let elf = host_sim::qemu::build_firmware("qemu-timed")?;
     let bench = elf.with_file_name("bench");
     println!("Cortex-M4 instruction counts (QEMU netduinoplus2, -icount shift=0):");
-    for line in host_sim::qemu::icount_bench(&bench)? {
+    let lines = host_sim::qemu::icount_bench(&bench)?;
+    let mut within = true;
+    for line in &lines {
         println!("  {line}");
+        within &= within_budget(line);
     }
-    // The calculators' image (`--features calc`): each request in full.
-    let calc = host_sim::qemu::build_firmware("qemu,calc")?.with_file_name("bench");
-    for line in host_sim::qemu::icount_bench(&calc)? {
-        println!("  {line}");
+    let latency = status_latency()?;
+    let late = lateness_at_200k()?;
+    println!(
+        "budgets: step interrupt <= {STEP_PER_EVENT} instructions a step in every phase and <= {STEP_ENTRY} in any entry, receive interrupt <= {RECEIVE_PER_BYTE} a byte, worst lateness <= {WORST_LATE_TICKS} tick: {}",
+        if within && late { "within" } else { "EXCEEDED" }
+    );
+    Ok(if within && late && latency == ExitCode::SUCCESS {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+/// Whether a bench line is within its budget (lines without one are).
+fn within_budget(line: &str) -> bool {
+    let number_after = |key: &str| -> Option<f64> {
+        let (before, _) = line.split_once(key)?;
+        before.split_whitespace().last()?.parse().ok()
+    };
+    if line.starts_with("step interrupt,") {
+        let per = number_after(" instructions per step").unwrap_or(f64::MAX);
+        let pulse = line
+            .split_once("(+")
+            .and_then(|(_, r)| r.split_whitespace().next())
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0);
+        let entry = number_after(" at most in one entry").unwrap_or(f64::MAX);
+        let ok = per + pulse <= STEP_PER_EVENT && entry <= STEP_ENTRY as f64;
+        if !ok {
+            println!("  OVER BUDGET: {line}");
+        }
+        return ok;
     }
-    status_latency()
+    if line.starts_with("receive interrupt per byte") {
+        let worst = line
+            .rsplit(": ")
+            .next()
+            .and_then(|r| r.split_whitespace().next())
+            .and_then(|v| v.parse::<u64>().ok())
+            .unwrap_or(u64::MAX);
+        let ok = worst <= RECEIVE_PER_BYTE;
+        if !ok {
+            println!("  OVER BUDGET: {line}");
+        }
+        return ok;
+    }
+    true
+}
+
+/// Every event on time at 200 000 events a second, through block starts,
+/// ramps, a hold and a resume: the timed firmware (under `-icount`, its
+/// core never sleeping, so QEMU fires each timer on its tick) reports
+/// the most late event it issued.
+fn lateness_at_200k() -> Result<bool, Box<dyn std::error::Error>> {
+    let elf = host_sim::qemu::build_firmware("qemu-timed")?;
+    let lines = host_sim::stream::rate_program(200_000, 150);
+    let mut q = host_sim::qemu::Qemu::boot_paced_timed(&elf)?;
+    let mut c = q.connect(Duration::from_secs(60))?;
+    let r = host_sim::stream::hold_and_resume(&mut c, &lines)?;
+    host_sim::stream::realtime(&mut c, 0x80)?;
+    std::thread::sleep(Duration::from_millis(200));
+    let (late, worst) = host_sim::stream::lateness(&q.log()).unwrap_or((u64::MAX, u64::MAX));
+    let same = r.end == r.expected;
+    println!(
+        "lateness at 200000 events/s with a hold and a resume (150 blocks): worst {worst} tick(s), {late} events late by a tick or more; held at {}; end {} / {} ({})",
+        host_sim::stream::registers(&r.held)
+            .map(|(x, z)| format!("PX={x} PZ={z}"))
+            .unwrap_or_default(),
+        r.end.0,
+        r.end.1,
+        if same { "as in-process" } else { "DIFFERENT from in-process" }
+    );
+    Ok(same && worst <= WORST_LATE_TICKS)
 }
 
 /// `!STATUS` answers while the step interrupt runs at rising event rates:
@@ -1426,8 +1507,12 @@ fn status_latency() -> Result<ExitCode, Box<dyn std::error::Error>> {
         let want = local.replies.last().map(|r| r.last.as_str());
         let equal = got.replies.last().map(String::as_str) == want;
         all_equal &= equal;
+        host_sim::stream::realtime(&mut c, 0x80)?;
+        std::thread::sleep(Duration::from_millis(100));
+        let late =
+            host_sim::stream::lateness(&q.log()).map_or("?".to_string(), |(_, w)| w.to_string());
         println!(
-            "  {rate:>8}   {:>6.2} ms   {:>6.2} ms   {:>7}   {}",
+            "  {rate:>8}   {:>6.2} ms   {:>6.2} ms   {:>7}   {late:>11}   {}",
             f64::from(worst) / 1000.0,
             f64::from(median) / 1000.0,
             got.samples.len(),

@@ -428,3 +428,56 @@ pub fn status_latency(
     }
     Ok(out)
 }
+
+/// How late the firmware issued its events: `LATE=` (events after their
+/// tick) and `WORST=` (ticks) of the last `timing:` line a QEMU build
+/// writes to its log beside each `!STATUS` (the status line's format is
+/// the protocol's).
+pub fn lateness(log: &[u8]) -> Option<(u64, u64)> {
+    let text = String::from_utf8_lossy(log);
+    let line = text.rsplit("timing: ").next()?;
+    let value = |k: &str| -> Option<u64> {
+        line.split_whitespace()
+            .find_map(|w| w.strip_prefix(k))?
+            .trim_matches(|c: char| !c.is_ascii_digit())
+            .parse()
+            .ok()
+    };
+    Some((value("LATE=")?, value("WORST=")?))
+}
+
+/// What [`hold_and_resume`] found.
+#[derive(Debug)]
+pub struct HeldStream {
+    /// The final `SYNC`'s events and `POS`, from the firmware.
+    pub end: (String, String),
+    /// The same from the in-process device (no hold).
+    pub expected: (String, String),
+    /// Where the hold came to rest.
+    pub held: String,
+}
+
+/// Streams `lines` with a feed hold after half of them, waits until the
+/// axes rest, resumes, and streams on; then `POS`. The events and the end
+/// point must be the in-process device's (the hold retimes, it does not
+/// move the path).
+pub fn hold_and_resume(client: &mut Client, lines: &[String]) -> Result<HeldStream, LinkError> {
+    let local = steps(lines)?;
+    let mid = lines.len() / 2;
+    let mut held = String::new();
+    let got = stream(client, lines, |i, c| {
+        if i == mid {
+            realtime(c, 0x82)?;
+            held = until_at_rest(c)?;
+            realtime(c, 0x81)?;
+        }
+        Ok(())
+    })?;
+    let pos = Transport::request(client, "POS")?;
+    let ev = |r: Option<&Reply>| r.and_then(|r| r.value("EV")).unwrap_or("").to_string();
+    Ok(HeldStream {
+        end: (ev(got.last()), pos.last),
+        expected: (ev(local.replies.last()), local.pos),
+        held,
+    })
+}

@@ -46,8 +46,8 @@ fn the_calculators_answer_on_the_board_as_in_process() {
     if !qemu_or_skip() {
         return;
     }
-    // The calculators' image: the same firmware with `--features calc`.
-    let elf = build_firmware("qemu,calc").unwrap();
+    // The one image: the controller with the calculators.
+    let elf = build_firmware("qemu").unwrap();
     let mut qemu = Qemu::boot(&elf, true).unwrap();
     let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
     let session = scenario::calculator_session();
@@ -411,4 +411,35 @@ fn the_example_programs_run_on_the_firmware_as_in_process() {
         }
     }
     eprintln!("{blocks} requests of the example programs answered alike, none refused");
+}
+
+/// The supervisor, above the step interrupt, catches it stalled (the
+/// `stall-test` build stalls it at its 100th step, STEP lines high) and
+/// drives the outputs low within 10 ms, in its own time.
+#[test]
+fn a_stalled_step_interrupt_is_stopped_by_the_supervisor_within_10_ms() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let elf = build_firmware("stall-test").unwrap();
+    let mut qemu = Qemu::boot(&elf, true).unwrap();
+    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    client.write_raw(b"MOVE Z=-10 F=1000\r\nSYNC\r\n").unwrap();
+    let status = qemu.wait_exit(Duration::from_secs(60)).expect("QEMU exits");
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(status.success(), "{status}");
+    let log = String::from_utf8_lossy(&qemu.log()).to_string();
+    let line = log
+        .lines()
+        .find_map(|l| l.split_once("supervisor: ").map(|(_, r)| r.to_string()))
+        .unwrap_or_else(|| panic!("no supervisor line in {log:?}"));
+    eprintln!("supervisor: {line}");
+    assert!(line.starts_with("StepStalled"), "{line}");
+    assert!(line.ends_with("STEP lines low"), "{line}");
+    let after: u32 = line
+        .split_once(": ")
+        .and_then(|(_, r)| r.split(" us after").next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    assert!(after <= 10_000, "{after} us after the stall");
 }

@@ -17,6 +17,7 @@ use cortex_m_rt::entry;
 use embedded_hal::delay::DelayNs;
 use firmware::board::{PortCPin, StepTimer};
 use firmware::halt;
+use firmware::step::StepIsr;
 
 /// A line of text for the host.
 struct Line(heapless::String<256>);
@@ -150,7 +151,8 @@ fn drain(t: &core_nostd::step::TimedBlock, sink: &mut u32) -> u32 {
 
 /// The planner and the timed step generator on blocks along Z at the
 /// default limits (3000 mm/min, 150 mm/s², 0.01 mm per impulse).
-fn timed(tim: &StepTimer) {
+#[inline(never)]
+fn timed(tim: &StepTimer) -> Option<[core_nostd::plan::Started; 3]> {
     use core_nostd::impulse::{quantize, ImpulsePrice};
     use core_nostd::length::Length;
     use core_nostd::plan::{q32, Block, Feed, Planner, Rates, WINDOW};
@@ -178,9 +180,9 @@ fn timed(tim: &StepTimer) {
     // accelerating from rest and 8 mm braking to rest around 400 mm of
     // cruise (3000 mm/min needs 8.3 mm at 150 mm/s²).
     let mut p = Planner::<WINDOW>::new(WINDOW);
-    let Some(b) = block(0, -5_000) else { return };
+    let b = block(0, -5_000)?;
     let _ = p.push(b, &rates);
-    let Some(t) = p.start(&rates) else { return };
+    let t = p.start(&rates)?;
     let (c, n) = run(&t);
     Line::print(format_args!(
         "timed step events, 5 mm triangle from rest to rest: {n} events, {}.{:02} instructions per event",
@@ -189,7 +191,7 @@ fn timed(tim: &StepTimer) {
     ));
     let mut p = Planner::<WINDOW>::new(WINDOW);
     for (a, b) in [(0, -8_000), (-8_000, -408_000), (-408_000, -416_000)] {
-        let Some(b) = block(a, b) else { return };
+        let b = block(a, b)?;
         let _ = p.push(b, &rates);
     }
     let (Some(sa), Some(sb), Some(sc)) = (
@@ -197,7 +199,7 @@ fn timed(tim: &StepTimer) {
         p.start_block(&rates),
         p.start_block(&rates),
     ) else {
-        return;
+        return None;
     };
     let (ca, na) = run(sa.timed());
     let (cb, nb) = run(sb.timed());
@@ -213,56 +215,10 @@ fn timed(tim: &StepTimer) {
         cb / nb,
         (cb % nb) * 100 / nb
     ));
-    // The step interrupt's own work per event, without its waits: pull from
-    // the stepper (tick, TSEQ, registers; a block's start included) and
-    // write STEP/DIR. Each event is measured alone: the average and the
-    // worst.
-    let work = |items: &[Item]| {
-        let mut s = Stepper::<AHEAD>::new();
-        let mut axes = StepDir::new(PortCPin(0), PortCPin(1), PortCPin(2), PortCPin(3));
-        let timing = DriveTiming::DEFAULT;
-        let (mut n, mut total, mut worst) = (0u32, 0u32, 0u32);
-        for item in items {
-            let _ = s.push(item.clone());
-            loop {
-                let mut stepped = None;
-                let c = measure(tim, || {
-                    while let Some(p) = s.pull() {
-                        if let Pulled::Step(e, tick) = p {
-                            let _ = axes.issue(e, tick, &timing, &mut Free, &mut Free);
-                            stepped = Some(());
-                            break;
-                        }
-                    }
-                });
-                if stepped.is_none() {
-                    break;
-                }
-                n += 1;
-                total = total.wrapping_add(c);
-                worst = worst.max(c);
-            }
-        }
-        (total, n, worst)
-    };
-    // Hundredths of instructions per event.
-    let per = |c: u32, n: u32| (u64::from(c) * 100).checked_div(u64::from(n)).unwrap_or(0);
-    let (c, n, w) = work(&[Item::RunStart, Item::Block(sb)]);
-    let p = per(c, n);
-    Line::print(format_args!(
-        "step interrupt's work per event (pull, TSEQ, registers, STEP/DIR), cruise: {}.{:02} instructions, {w} at most",
-        p / 100,
-        p % 100
-    ));
-    let (c, n, w) = work(&[Item::RunStart, Item::Block(sa), Item::Block(sc)]);
-    let p = per(c, n);
-    Line::print(format_args!(
-        "step interrupt's work per event, ramps: {}.{:02} instructions, {w} at most (a block's start included)",
-        p / 100,
-        p % 100
-    ));
-    // A feed hold in the middle of the cruise: what acting on the byte
-    // costs (in the serial interrupt), and how soon the events slow down.
+    let started = [sa, sb, sc];
+    // A feed hold in the middle of the cruise: what acting on it costs
+    // (the real-time task, at the prep's priority), and how soon the
+    // events slow down.
     let mut s = Stepper::<AHEAD>::new();
     let _ = s.push(Item::RunStart);
     let _ = s.push(Item::Block(sb));
@@ -290,7 +246,7 @@ fn timed(tim: &StepTimer) {
         }
     }
     Line::print(format_args!(
-        "feed hold at cruise (3000 mm/min, 150 mm/s²): {c} instructions to act on it; the events after it first leave the plan's 1 µs ticks at event {k} ({cruise} ticks apart)"
+        "feed hold at cruise (3000 mm/min, 150 mm/s²): {c} instructions to act on it (real-time task, prep's priority; no longer in the receive interrupt); the events after it first leave the plan's 1 µs ticks at event {k} ({cruise} ticks apart)"
     ));
     // Planning: short blocks along a polygon (chords of a circle at F600),
     // the window full: making the block, its junction, queueing it and
@@ -308,7 +264,7 @@ fn timed(tim: &StepTimer) {
             z: quantize(p[1], h[1]).unwrap_or(Impulses(0)),
         };
         let Ok(events) = LinearBlock::new(pt(from), pt(to)) else {
-            return;
+            return None;
         };
         let c = measure(tim, || {
             if let Some(b) = Block::new(
@@ -335,6 +291,7 @@ fn timed(tim: &StepTimer) {
         "planned block (made, queued, its window planned, started): {} instructions on average over {count}",
         total / count.max(1)
     ));
+    Some(started)
 }
 
 fn arcs(tim: &StepTimer) {
@@ -475,6 +432,9 @@ fn calculators(tim: &StepTimer) {
 #[entry]
 fn main() -> ! {
     let mut b = firmware::boot();
+    // Nothing interrupts the measurements: the alarm and the pends the
+    // step interrupt's code makes stay pending.
+    cortex_m::interrupt::disable();
     b.tim2.free_run();
     let tim = &b.tim2;
 
@@ -484,12 +444,18 @@ fn main() -> ! {
     Line::print(format_args!(
         "calibration: delay(100000) = {delay} ticks, empty = {empty}"
     ));
-
-    // The calculators' image measures its requests alone.
-    if cfg!(feature = "calc") {
-        calculators(tim);
-        finish()
-    }
+    // What one peripheral register access costs in QEMU's count (it ends
+    // a translation block, which is counted again): 1000 reads of TIM2.
+    let reads = measure(tim, || {
+        for _ in 0..1000 {
+            core::hint::black_box(tim.count());
+        }
+    });
+    Line::print(format_args!(
+        "calibration: a peripheral register read counts {}.{} instructions under -icount (1000 reads: {reads})",
+        reads / 1000,
+        (reads % 1000) / 100
+    ));
 
     let p = |x, z| ImpulsePoint {
         x: Impulses(x),
@@ -527,6 +493,331 @@ fn main() -> ! {
         (t % n) * 100 / n
     ));
 
+    requests(tim, &block, n);
+    arcs(tim);
+    receive(tim);
+    let started = timed(tim);
+    let Some((mut qtx, rx)) = firmware::step::READY.split() else {
+        halt()
+    };
+    let mut isr = StepIsr::new(rx, b.alarm, b.pulse, b.spindle);
+    if let Some(started) = started {
+        step_interrupt(tim, &mut isr, &mut qtx, &started);
+    }
+    compensation(tim);
+    calculators(tim);
+    finish()
+}
+
+/// Hundredths, as `a.bc`.
+struct Hundredths(u64);
+
+impl core::fmt::Display for Hundredths {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}.{:02}", self.0 / 100, self.0 % 100)
+    }
+}
+
+fn per(c: u64, n: u64) -> Hundredths {
+    Hundredths((c * 100).checked_div(n).unwrap_or(0))
+}
+
+/// What one phase of the step interrupt cost: entries, steps, the
+/// instructions of all its entries, and of the longest.
+#[derive(Default)]
+struct Phase {
+    steps: u64,
+    total: u64,
+    worst: u32,
+}
+
+/// TIM2 counts 1 GHz here (one instruction, one count); the ready
+/// entries' ticks are scaled to it, 16 counts a tick: each step still comes
+/// after the step interrupt's work for the one before, and the waits
+/// between them stay short.
+const SCALE: u32 = 16;
+
+/// Steps a phase runs at most.
+const LONGEST: u64 = 6_000;
+
+/// The prep and the bench's own queue between it and the scaling, in
+/// static memory.
+type Bench = (
+    &'static mut core_nostd::prep::Prep,
+    core_nostd::prep::ReadyTx<'static>,
+    core_nostd::prep::ReadyRx<'static>,
+);
+
+/// Runs the step interrupt as its alarm would, each call when the step
+/// it armed for is due, over everything the prep makes of `items`
+/// (`hold_after`: a feed hold after so many steps, and the resume once
+/// at rest). Returns the phases: before the hold, braking, after the
+/// resume; and the prep's work per entry.
+#[inline(never)]
+fn run_isr(
+    tim: &StepTimer,
+    isr: &mut StepIsr,
+    qtx: &mut core_nostd::prep::ReadyTx<'static>,
+    (prep, tx, rx): &mut Bench,
+    items: impl IntoIterator<Item = core_nostd::stepper::Item>,
+    hold_after: Option<u64>,
+) -> ([Phase; 3], (u64, u64), u32) {
+    use core_nostd::prep::Ready;
+    let mut items = items.into_iter();
+    let mut phases: [Phase; 3] = Default::default();
+    let mut phase = 0usize;
+    let (mut prep_cost, mut prep_entries) = (0u64, 0u64);
+    let mut hold_cost = 0u32;
+    let mut steps = 0u64;
+    // Whether each entry in the step interrupt's queue is a step.
+    let mut kinds = heapless::Deque::<bool, 256>::new();
+    loop {
+        while prep.has_room() {
+            match items.next() {
+                Some(i) => {
+                    let _ = prep.push(i);
+                }
+                None => break,
+            }
+        }
+        // The prep's work, as its task does it, a few entries at a time
+        // (the step interrupt would preempt it on the board).
+        if rx.len() < 240 {
+            let mut n = 0;
+            let c = measure(tim, || n = prep.fill(tx));
+            prep_cost += u64::from(c);
+            prep_entries += n as u64;
+        }
+        // Scaled into the step interrupt's queue when it runs low: between
+        // most entries the bench only waits.
+        while qtx.len() < 32 || (qtx.ready() && !isr.busy()) {
+            let Some(r) = rx.dequeue() else { break };
+            let _ = kinds.push_back(matches!(r, Ready::Step { .. }));
+            let r = match r {
+                Ready::Step { tick, event, turns } => Ready::Step {
+                    tick: tick.wrapping_mul(SCALE),
+                    event,
+                    turns,
+                },
+                other => other,
+            };
+            let _ = qtx.enqueue(r);
+        }
+        if !isr.busy() && rx.is_empty() {
+            if phase == 1 && prep.motion() == core_nostd::stepper::Motion::Held {
+                // At rest: resume.
+                phase = 2;
+                let _ = prep.resume(tx);
+                continue;
+            }
+            if prep.is_idle() {
+                break;
+            }
+            continue;
+        }
+        // The alarm: when the step armed for is due.
+        if let Some(due) = isr.due() {
+            while (tim.count().wrapping_sub(due) as i32) < 0 {}
+        }
+        let before = isr.passed();
+        let c = measure(tim, || isr.service());
+        let passed = isr.passed().wrapping_sub(before);
+        let mut issued = 0;
+        for _ in 0..passed {
+            issued += u64::from(kinds.pop_front().unwrap_or(false));
+        }
+        if let Some(p) = phases.get_mut(phase) {
+            p.total += u64::from(c);
+            // An entry that finds more than one step due was called late
+            // by the bench itself (standing in for the prep, which the
+            // step interrupt would preempt): not an entry of the board's.
+            if issued <= 1 {
+                p.worst = p.worst.max(c);
+            }
+            p.steps += issued;
+        }
+        steps += issued;
+        if let (0, Some(h)) = (phase, hold_after) {
+            if steps >= h {
+                phase = 1;
+                hold_cost = measure(tim, || prep.hold());
+            }
+        }
+        if steps >= LONGEST {
+            // Enough: a reset ends the phase.
+            isr.stop();
+            let (passed, dropped) = isr.drop_queued();
+            let _ = prep.abort(passed, dropped.chain(core::iter::from_fn(|| rx.dequeue())));
+            isr.restart();
+            break;
+        }
+    }
+    (phases, (prep_cost, prep_entries), hold_cost)
+}
+
+/// The step interrupt in every phase: cruise, ramps, block starts, hold
+/// and resume; the prep's work per entry beside it.
+#[inline(never)]
+fn step_interrupt(
+    tim: &StepTimer,
+    isr: &mut StepIsr,
+    qtx: &mut core_nostd::prep::ReadyTx<'static>,
+    started: &[core_nostd::plan::Started; 3],
+) {
+    use core_nostd::prep::{Prep, ReadyQueue};
+    use core_nostd::stepper::Item;
+    static LOCAL: ReadyQueue = ReadyQueue::new();
+    let (Some(prep), Some((tx, rx))) = (cortex_m::singleton!(: Prep = Prep::new()), LOCAL.split())
+    else {
+        return;
+    };
+    let bench = &mut (prep, tx, rx);
+    let [sa, sb, sc] = started;
+    let pulse = firmware::board::pulse_timer_cost(tim);
+    let line = |what: &str, p: &Phase| {
+        let steps = p.steps.max(1);
+        Line::print(format_args!(
+            "step interrupt, {what}: {} steps, {} instructions per step (+{pulse} for the board's pulse timer), {} at most in one entry",
+            p.steps,
+            per(p.total + steps * u64::from(pulse), steps),
+            p.worst
+        ));
+    };
+    let (ph, prep_cruise, _) = run_isr(
+        tim,
+        isr,
+        qtx,
+        bench,
+        [Item::RunStart, Item::Block(*sb), Item::RunEnd(0)],
+        None,
+    );
+    line("cruise", &ph[0]);
+    let (ph, prep_ramps, _) = run_isr(
+        tim,
+        isr,
+        qtx,
+        bench,
+        [
+            Item::RunStart,
+            Item::Block(*sa),
+            Item::Block(*sc),
+            Item::RunEnd(0),
+        ],
+        None,
+    );
+    line("ramps", &ph[0]);
+    Line::print(format_args!(
+        "prep per entry: cruise {} instructions, ramps {} (thread-mode figures, at the prep's priority)",
+        per(prep_cruise.0, prep_cruise.1),
+        per(prep_ramps.0, prep_ramps.1),
+    ));
+    // A hold 2000 steps into the cruise, braking to rest, and the resume.
+    let (ph, _, hold) = run_isr(
+        tim,
+        isr,
+        qtx,
+        bench,
+        [Item::RunStart, Item::Block(*sb), Item::RunEnd(0)],
+        Some(2000),
+    );
+    line("hold (braking)", &ph[1]);
+    line("resume", &ph[2]);
+    Line::print(format_args!(
+        "hold's re-timing in the prep: {hold} instructions"
+    ));
+    // Block starts: 200 short blocks of 10 steps each, run through.
+    let (ph, _, _) = run_isr(tim, isr, qtx, bench, short_blocks(), None);
+    line("block starts (200 blocks of 10 steps)", &ph[0]);
+}
+
+/// A run of 200 blocks of 0.1 mm along Z at F600, planned as a window
+/// does, one item at a time.
+fn short_blocks() -> impl Iterator<Item = core_nostd::stepper::Item> {
+    use core_nostd::impulse::{quantize, ImpulsePrice};
+    use core_nostd::length::Length;
+    use core_nostd::plan::{q32, Block, Feed, Planner, Rates, WINDOW};
+    use core_nostd::stepper::Item;
+    let h = [ImpulsePrice::DEFAULT_X, ImpulsePrice::DEFAULT_Z];
+    let rates = Rates::DEFAULT;
+    let mm = |um: i64| Length::from_um(um).unwrap_or(Length::ZERO);
+    let feed = Feed::new(mm(600_000));
+    let mut p = Planner::<WINDOW>::new(WINDOW);
+    let (mut k, mut started, mut ended) = (0i64, false, false);
+    core::iter::from_fn(move || {
+        if !started {
+            started = true;
+            return Some(Item::RunStart);
+        }
+        while k < 200 && !p.window_full() {
+            let (a, b) = (mm(-100 * k), mm(-100 * (k + 1)));
+            k += 1;
+            let at = |z: Length| ImpulsePoint {
+                x: Impulses(0),
+                z: quantize(z, h[1]).unwrap_or(Impulses(0)),
+            };
+            let events = LinearBlock::new(at(a), at(b)).ok()?;
+            let block = Block::new([0, q32(a)], [0, q32(b)], events, feed, h, &rates)?;
+            let _ = p.push(block, &rates);
+        }
+        if let Some(s) = p.start_block(&rates) {
+            return Some(Item::Block(s));
+        }
+        if ended {
+            return None;
+        }
+        ended = true;
+        Some(Item::RunEnd(p.end_run().unwrap_or(0)))
+    })
+}
+
+/// The receive interrupt per byte: a plain byte, a real-time byte, a
+/// grbl real-time byte (the register reads measured apart).
+fn receive(tim: &StepTimer) {
+    use firmware::serial::{Receiver, RtEvent};
+    use heapless::spsc::Queue;
+    static mut BYTES: Queue<u8, 512> = Queue::new();
+    static mut RT: Queue<RtEvent, 16> = Queue::new();
+    // SAFETY: the bench's own queues, split once here; nothing else
+    // touches them.
+    let (bytes, rt) = unsafe {
+        (
+            (*core::ptr::addr_of_mut!(BYTES)).split(),
+            (*core::ptr::addr_of_mut!(RT)).split(),
+        )
+    };
+    let (mut bytes_rx, mut rt_rx) = (bytes.1, rt.1);
+    let mut r = Receiver::new(bytes.0, rt.0);
+    let regs = measure(tim, || {
+        let _ = core::hint::black_box(firmware::board::rx_ready());
+        let _ = core::hint::black_box(firmware::board::rx_byte());
+    });
+    let mut worst = 0;
+    for (what, byte, grbl) in [
+        ("a plain byte", b'G', false),
+        ("a status byte 0x80", 0x80, false),
+        ("a reset 0x18", 0x18, false),
+        ("a grbl '?'", b'?', true),
+        ("a grbl jog cancel 0x85", 0x85, true),
+    ] {
+        firmware::serial::set_grbl(grbl);
+        let c = measure(tim, || r.take(byte)) + regs;
+        worst = worst.max(c);
+        let _ = (bytes_rx.dequeue(), rt_rx.dequeue());
+        Line::print(format_args!(
+            "receive interrupt, {what}: {c} instructions (with the USART's registers)"
+        ));
+    }
+    firmware::serial::set_grbl(false);
+    Line::print(format_args!(
+        "receive interrupt per byte, worst case: {worst} instructions"
+    ));
+}
+
+/// Whole requests through the handler, in a frame of their own (the
+/// device is large).
+#[inline(never)]
+fn requests(tim: &StepTimer, block: &LinearBlock, n: u32) {
+    let _ = block;
     // The handler: a MOVE of the same block (parse, quantize, SEQ over every
     // event), then an empty MOVE for the per-request cost.
     let mut dev = Device::new();
@@ -561,11 +852,6 @@ fn main() -> ! {
         dev.receive_bytes(b"CFG HX=0.001 HZ=0.002 DIAM=1\r\n", &mut quiet)
     });
     Line::print(format_args!("CFG request: {t} instructions"));
-
-    arcs(tim);
-    timed(tim);
-    compensation(tim);
-    finish()
 }
 
 /// Ends the run: QEMU exits.

@@ -22,7 +22,7 @@ use stm32f4::stm32f405 as pac;
 /// The PWM's period in counts of TIM4: 5 kHz from 84 MHz.
 const PERIOD: u32 = 16_800;
 /// TIM4's prescaler for about that (QEMU's timer clock is 1 GHz).
-const PSC: u32 = (crate::board::TIM2_CLK_HZ / (5_000 * PERIOD)).saturating_sub(1);
+const PSC: u32 = (super::TIM2_CLK_HZ / (5_000 * PERIOD)).saturating_sub(1);
 
 const RUN: u32 = 7;
 const CCW: u32 = 8;
@@ -40,7 +40,9 @@ impl Spindle {
     /// TIM4. Clocks of GPIOB and TIM4 must be on.
     pub fn new(tim: pac::TIM4, gpiob: &pac::GPIOB) -> Spindle {
         all_low();
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         gpiob.afrl().modify(|_, w| unsafe { w.afrl6().bits(2) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         gpiob.moder().modify(|_, w| unsafe {
             w.moder6()
                 .bits(0b10)
@@ -53,10 +55,14 @@ impl Spindle {
                 .moder10()
                 .bits(0b01)
         });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.psc().write(|w| unsafe { w.bits(PSC) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.arr().write(|w| unsafe { w.bits(PERIOD - 1) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.ccr1().write(|w| unsafe { w.bits(0) });
         // PWM mode 1, preloaded: a new duty takes effect at the period's end.
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         tim.ccmr1_output()
             .modify(|_, w| unsafe { w.oc1m().bits(0b110).oc1pe().set_bit() });
         tim.ccer().modify(|_, w| w.cc1e().set_bit());
@@ -108,6 +114,7 @@ impl Spindle {
 
     fn duty(&mut self) {
         let c = self.now.compare(PERIOD);
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
         self.tim.ccr1().write(|w| unsafe { w.bits(c) });
     }
 }

@@ -1,0 +1,724 @@
+//! The board: clocks, pins, USART1, the step clock and the step
+//! interrupt's two timers, by register. Nothing here knows a task.
+//!
+//! | signal | pin | |
+//! |---|---|---|
+//! | USART1 TX / RX | PA9 / PA10 (AF7) | 115200 8N1 |
+//! | X STEP / X DIR | PC0 / PC1 | push-pull |
+//! | Z STEP / Z DIR | PC2 / PC3 | push-pull |
+//! | spindle and coolant | PB6 … PB10 | [`spindle`] |
+//!
+//! Two configurations. The real board runs from an 8 MHz crystal through the
+//! PLL at 168 MHz (APB2 84 MHz, APB1 42 MHz, timers 84 MHz). QEMU 7.2's
+//! `netduinoplus2` emulates no RCC ready bits, so the `qemu` build stays on
+//! the 16 MHz HSI and waits for nothing; QEMU's timers count at 1 GHz.
+
+use core::convert::Infallible;
+use core_nostd::interleave::StepEvent;
+use core_nostd::step::TickRate;
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{ErrorType, OutputPin};
+use stm32f4::stm32f405::{self as pac, Interrupt};
+
+pub mod spindle;
+
+/// Whether the last reset came from the watchdog (the flags are cleared).
+fn was_reset_by_watchdog(rcc: &pac::RCC) -> bool {
+    let by_watchdog = rcc.csr().read().wdgrstf().bit_is_set();
+    rcc.csr().modify(|_, w| w.rmvf().set_bit());
+    by_watchdog
+}
+
+/// Core clock.
+#[cfg(not(feature = "qemu"))]
+pub const SYSCLK_HZ: u32 = 168_000_000;
+#[cfg(feature = "qemu")]
+pub const SYSCLK_HZ: u32 = 16_000_000;
+
+/// USART1's bus clock (APB2).
+#[cfg(not(feature = "qemu"))]
+const PCLK2_HZ: u32 = 84_000_000;
+#[cfg(feature = "qemu")]
+const PCLK2_HZ: u32 = 16_000_000;
+
+/// TIM2's counter clock before its prescaler.
+#[cfg(not(feature = "qemu"))]
+pub const TIM2_CLK_HZ: u32 = 84_000_000;
+#[cfg(feature = "qemu")]
+pub const TIM2_CLK_HZ: u32 = 1_000_000_000;
+
+const BAUD: u32 = 115_200;
+
+/// Brings up clocks, pins, USART1 and TIM2, and readies TIM5 and SysTick
+/// for the step interrupt. Returns the board's devices; their interrupts
+/// are the caller's to enable.
+pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
+    clocks(&dp);
+    let rcc = &dp.RCC;
+    rcc.ahb1enr().modify(|_, w| {
+        w.gpioaen()
+            .set_bit()
+            .gpioben()
+            .set_bit()
+            .gpiocen()
+            .set_bit()
+    });
+    rcc.apb2enr().modify(|_, w| w.usart1en().set_bit());
+    rcc.apb1enr().modify(|_, w| {
+        w.tim2en()
+            .set_bit()
+            .tim3en()
+            .set_bit()
+            .tim4en()
+            .set_bit()
+            .tim5en()
+            .set_bit()
+    });
+
+    // PA9, PA10: alternate function 7, PA10 pulled up.
+    let gpioa = &dp.GPIOA;
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    gpioa
+        .afrh()
+        .modify(|_, w| unsafe { w.afrh9().bits(7).afrh10().bits(7) });
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    gpioa
+        .moder()
+        .modify(|_, w| unsafe { w.moder9().bits(0b10).moder10().bits(0b10) });
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    gpioa
+        .pupdr()
+        .modify(|_, w| unsafe { w.pupdr10().bits(0b01) });
+
+    // PC0..PC3: outputs, low.
+    let gpioc = &dp.GPIOC;
+    gpioc.bsrr().write(|w| {
+        w.br0()
+            .set_bit()
+            .br1()
+            .set_bit()
+            .br2()
+            .set_bit()
+            .br3()
+            .set_bit()
+    });
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    gpioc.moder().modify(|_, w| unsafe {
+        w.moder0()
+            .bits(0b01)
+            .moder1()
+            .bits(0b01)
+            .moder2()
+            .bits(0b01)
+            .moder3()
+            .bits(0b01)
+    });
+
+    let usart = dp.USART1;
+    // Both boards give a divider well below 2^16.
+    let brr = ((PCLK2_HZ + BAUD / 2) / BAUD) as u16;
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    usart.brr().write(|w| unsafe { w.bits(brr) });
+    usart.cr1().write(|w| {
+        w.ue()
+            .set_bit()
+            .te()
+            .set_bit()
+            .re()
+            .set_bit()
+            .rxneie()
+            .set_bit()
+    });
+
+    let mut tim2 = StepTimer { tim: dp.TIM2 };
+    tim2.count_ticks();
+    let (alarm, pulse) = step_timers(dp.TIM5, syst, &tim2);
+    if was_reset_by_watchdog(&dp.RCC) {
+        defmt::warn!("the watchdog reset the board");
+    }
+    Board {
+        serial: Serial { usart },
+        tim2,
+        alarm,
+        pulse,
+        spindle: spindle::Spindle::new(dp.TIM4, &dp.GPIOB),
+        watchdog: Watchdog {
+            iwdg: dp.IWDG,
+            tim3: dp.TIM3,
+            dbgmcu: dp.DBGMCU,
+        },
+        flash: dp.FLASH,
+    }
+}
+
+#[cfg(not(feature = "qemu"))]
+fn clocks(dp: &pac::Peripherals) {
+    let rcc = &dp.RCC;
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    while rcc.cr().read().hserdy().bit_is_clear() {}
+    // 168 MHz needs 5 wait states at 3.3 V.
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    dp.FLASH.acr().modify(|_, w| unsafe {
+        w.latency()
+            .bits(5)
+            .prften()
+            .set_bit()
+            .icen()
+            .set_bit()
+            .dcen()
+            .set_bit()
+    });
+    // 8 MHz / 8 × 336 / 2 = 168 MHz; USB 336 / 7 = 48 MHz.
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    rcc.pllcfgr().write(|w| unsafe {
+        w.pllsrc()
+            .set_bit()
+            .pllm()
+            .bits(8)
+            .plln()
+            .bits(336)
+            .pllp()
+            .bits(0b00)
+            .pllq()
+            .bits(7)
+    });
+    rcc.cr().modify(|_, w| w.pllon().set_bit());
+    while rcc.cr().read().pllrdy().bit_is_clear() {}
+    // AHB /1, APB1 /4 (42 MHz), APB2 /2 (84 MHz), system clock from the PLL.
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    rcc.cfgr().modify(|_, w| unsafe {
+        w.hpre()
+            .bits(0)
+            .ppre1()
+            .bits(0b101)
+            .ppre2()
+            .bits(0b100)
+            .sw()
+            .bits(0b10)
+    });
+    while rcc.cfgr().read().sws().bits() != 0b10 {}
+}
+
+#[cfg(feature = "qemu")]
+fn clocks(_: &pac::Peripherals) {
+    // HSI 16 MHz from reset; QEMU 7.2 would hang on any ready-bit wait.
+}
+
+/// USART1 and the timers of the step outputs.
+pub struct Board {
+    /// USART1.
+    pub serial: Serial,
+    /// The run clock of the step events.
+    pub tim2: StepTimer,
+    /// The step interrupt's alarm (TIM5, stopped).
+    pub alarm: Alarm,
+    /// The STEP pulse's end (SysTick, stopped).
+    pub pulse: Pulse,
+    /// The spindle and coolant outputs (low).
+    pub spindle: spindle::Spindle,
+    /// The watchdog and its supervisor's timer (not started).
+    pub watchdog: Watchdog,
+    /// The flash interface, for the offsets kept across power cuts.
+    pub flash: pac::FLASH,
+}
+
+/// What [`crate::supervisor::start`] takes.
+pub struct Watchdog {
+    /// The independent watchdog.
+    pub iwdg: pac::IWDG,
+    /// The supervisor's timer (enabled, not configured).
+    pub tim3: pac::TIM3,
+    /// Debug freeze of both.
+    pub dbgmcu: pac::DBGMCU,
+}
+
+/// USART1: replies out, request bytes in through its interrupt.
+pub struct Serial {
+    usart: pac::USART1,
+}
+
+impl Serial {
+    /// Sends bytes, waiting for the transmitter each time.
+    pub fn send(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            while self.usart.sr().read().txe().bit_is_clear() {}
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+            self.usart.dr().write(|w| unsafe { w.bits(u16::from(b)) });
+        }
+    }
+
+    /// Takes received bytes again after [`rx_pause`].
+    pub fn rx_resume(&mut self) {
+        self.usart.cr1().modify(|_, w| w.rxneie().set_bit());
+        // SAFETY: the line's handler shares only its queue and atomics;
+        // its priority was set before the scheduler started.
+        unsafe { pac::NVIC::unmask(Interrupt::USART1) };
+    }
+}
+
+/// The received byte, if USART1 holds one (from its interrupt).
+#[inline(always)]
+pub fn rx_byte() -> Option<u8> {
+    // SAFETY: read-only status access, and the data register, which only
+    // the line's interrupt reads.
+    let usart = unsafe { &*pac::USART1::ptr() };
+    let sr = usart.sr().read();
+    (sr.rxne().bit_is_set() || sr.ore().bit_is_set()).then(|| usart.dr().read().bits() as u8)
+}
+
+/// Whether USART1 holds a received byte.
+#[inline(always)]
+pub fn rx_ready() -> bool {
+    // SAFETY: read-only status access.
+    let sr = unsafe { &*pac::USART1::ptr() }.sr().read();
+    sr.rxne().bit_is_set() || sr.ore().bit_is_set()
+}
+
+/// Stops taking received bytes (its queue is full): the byte stays in
+/// USART1 until [`Serial::rx_resume`]. The NVIC line is masked too: QEMU
+/// 7.2 keeps the USART's interrupt raised while RXNE is set, whatever
+/// RXNEIE says.
+pub fn rx_pause() {
+    // SAFETY: a read-modify-write of CR1 from the line's own interrupt,
+    // the only writer besides `rx_resume`, which runs only once this has
+    // masked the interrupt.
+    unsafe { &*pac::USART1::ptr() }
+        .cr1()
+        .modify(|_, w| w.rxneie().clear_bit());
+    pac::NVIC::mask(Interrupt::USART1);
+}
+
+/// Sleeps until an interrupt unless `ready` already holds; no wake-up is
+/// lost between the check and the sleep.
+/// The check runs with every interrupt masked (the one global critical
+/// section left, a few instructions long): an interrupt that comes then
+/// still wakes the core, and is taken as soon as the check is over.
+///
+/// In the `qemu-timed` build the core never sleeps: QEMU's virtual time
+/// then advances by the instructions run (`-icount`), and a timer fires
+/// on its tick instead of when the host wakes QEMU up (tens of
+/// microseconds to milliseconds late). In the `qemu-paced` build it does
+/// not sleep while the step interrupt has work: QEMU wakes a sleeping core
+/// only once the host runs its thread again, milliseconds later on a
+/// loaded host, and the protocol must keep the planner fed in real time
+/// (the board wakes in a dozen cycles).
+pub fn sleep_unless(mut ready: impl FnMut() -> bool) {
+    if cfg!(feature = "qemu-timed") || (cfg!(feature = "qemu-paced") && !crate::step::is_idle()) {
+        return;
+    }
+    cortex_m::interrupt::free(|_| {
+        if !ready() {
+            cortex_m::asm::wfi();
+        }
+    });
+}
+
+/// TIM2's count: microseconds, free-running (it wraps after 71 minutes).
+#[inline(always)]
+pub fn ticks() -> u32 {
+    // SAFETY: a read of the counter, which nothing else writes after init.
+    unsafe { &*pac::TIM2::ptr() }.cnt().read().bits()
+}
+
+/// TIM2 as the step clock: a free-running 32-bit counter at the device's
+/// tick rate (1 MHz); runs are timed from its count at their start.
+pub struct StepTimer {
+    tim: pac::TIM2,
+}
+
+impl StepTimer {
+    /// The timer's counter.
+    #[inline(always)]
+    pub fn count(&self) -> u32 {
+        self.tim.cnt().read().bits()
+    }
+
+    /// Counts freely at the device's tick rate.
+    fn count_ticks(&mut self) {
+        let psc = TIM2_CLK_HZ / TickRate::TIMER.hz() - 1;
+        self.start(psc);
+    }
+
+    /// Runs the counter freely at the undivided timer clock (measurements).
+    pub fn free_run(&mut self) {
+        self.start(0);
+    }
+
+    fn start(&mut self, psc: u32) {
+        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+        self.tim.psc().write(|w| unsafe { w.bits(psc) });
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+        self.tim.arr().write(|w| unsafe { w.bits(u32::MAX) });
+        self.tim.egr().write(|w| w.ug().set_bit());
+        self.tim.dier().modify(|_, w| w.uie().clear_bit());
+        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    }
+}
+
+/// The longest alarm, ticks (under QEMU within SysTick's 24 bits at up
+/// to 1000 cycles a tick); a longer wait is armed again when it fires.
+const ALARM_MAX_TICKS: u32 = if cfg!(feature = "qemu") {
+    16_000
+} else {
+    1 << 30
+};
+
+/// The step interrupt's alarm: one-shot, in ticks of TIM2. On the board
+/// TIM5; under paced QEMU SysTick, which pends the step interrupt: QEMU
+/// 7.2's STM32 timers do not schedule a one-shot update right.
+pub struct Alarm {
+    #[cfg(not(feature = "qemu"))]
+    tim: pac::TIM5,
+    #[cfg(feature = "qemu")]
+    syst: cortex_m::peripheral::SYST,
+    /// Alarm counts per tick of TIM2.
+    per_tick: u32,
+}
+
+/// The STEP pulse's end: SysTick on the board; none under QEMU, where
+/// the step interrupt ends the pulse when it comes to the next step.
+pub struct Pulse {
+    #[cfg(not(feature = "qemu"))]
+    syst: cortex_m::peripheral::SYST,
+    #[cfg(not(feature = "qemu"))]
+    per_tick: u32,
+}
+
+/// What the board's pulse timer adds to a step, in instructions (under
+/// QEMU, where SysTick is the alarm, measured on the same writes to it
+/// with its interrupt masked): the step interrupt starts it, its own
+/// interrupt stops it and writes the STEP lines low.
+pub fn pulse_timer_cost(clock: &StepTimer) -> u32 {
+    let t0 = clock.count();
+    // SAFETY: SysTick's and SCB's registers, as `Pulse::arm`, then as the
+    // pulse's end does; the bench runs with interrupts masked.
+    unsafe {
+        (*cortex_m::peripheral::SCB::PTR).icsr.write(1 << 25);
+        (*cortex_m::peripheral::SYST::PTR).cvr.write(0);
+        (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF);
+        (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF);
+    }
+    pins::write(pins::FALL);
+    let t1 = clock.count();
+    let t2 = clock.count();
+    t1.wrapping_sub(t0).saturating_sub(t2.wrapping_sub(t1))
+}
+
+/// Whether a timer ends each STEP pulse (the board).
+pub const PULSE_TIMER: bool = !cfg!(feature = "qemu");
+
+/// Core cycles per tick of TIM2: known on the board, measured under QEMU.
+///
+/// QEMU runs both clocks on the host's time, and the host may stop QEMU
+/// for milliseconds between any two instructions; its SysTick also reads
+/// 0 until QEMU has loaded it, some time after it was started, and while
+/// a wrap waits to be handled. So each reading of the two clocks is taken
+/// within one tick of TIM2 and with SysTick running, a window of 1000
+/// ticks lies between two readings, a window with a wrap in it is not
+/// used, and the ratio is the median of five windows.
+fn cycles_per_tick(syst: &mut cortex_m::peripheral::SYST, clock: &StepTimer) -> u32 {
+    use cortex_m::peripheral::syst::SystClkSource;
+    syst.set_clock_source(SystClkSource::Core);
+    syst.disable_interrupt();
+    if !cfg!(feature = "qemu") {
+        return SYSCLK_HZ / TickRate::TIMER.hz();
+    }
+    syst.set_reload(0x00FF_FFFF);
+    syst.clear_current();
+    syst.enable_counter();
+    // Both clocks read together: TIM2's count and SysTick's, or none.
+    let reading = || {
+        let a = clock.count();
+        let v = cortex_m::peripheral::SYST::get_current();
+        let b = clock.count();
+        (b.wrapping_sub(a) <= 1 && v != 0).then_some((a, v))
+    };
+    let mut ratios = [0u32; 5];
+    let mut n = 0;
+    let mut tries = 0;
+    while n < ratios.len() && tries < 200 {
+        tries += 1;
+        let Some((t0, v0)) = reading() else { continue };
+        while clock.count().wrapping_sub(t0) < 1000 {}
+        let Some((t1, v1)) = reading() else { continue };
+        let dt = t1.wrapping_sub(t0);
+        // SysTick counts down: a window with a wrap (or a stop) in it
+        // reads no lower at its end. 50 ms stays well inside one wrap at
+        // any clock QEMU gives the core.
+        if v1 >= v0 || dt > 50_000 {
+            continue;
+        }
+        if let (Some(r), Some(ratio)) = (ratios.get_mut(n), (v0 - v1).checked_div(dt)) {
+            *r = ratio;
+            n += 1;
+        }
+    }
+    syst.disable_counter();
+    let found = ratios.get_mut(..n).unwrap_or_default();
+    found.sort_unstable();
+    // QEMU 7.2 runs the netduinoplus2's core (SysTick's clock) at 168 MHz:
+    // its count per tick if nothing could be measured.
+    found.get(n / 2).copied().unwrap_or(168).max(1)
+}
+
+/// SysTick's control bits: ENABLE, TICKINT, the core clock; or only the
+/// clock (stopped).
+const SYST_ON: u32 = 0b111;
+const SYST_OFF: u32 = 0b100;
+
+/// Makes the two step timers: TIM5 and SysTick on the board, SysTick as
+/// the alarm under QEMU.
+fn step_timers(
+    tim5: pac::TIM5,
+    mut syst: cortex_m::peripheral::SYST,
+    clock: &StepTimer,
+) -> (Alarm, Pulse) {
+    let per_tick = cycles_per_tick(&mut syst, clock);
+    #[cfg(not(feature = "qemu"))]
+    {
+        let psc = TIM2_CLK_HZ / TickRate::TIMER.hz() - 1;
+        // SAFETY (all the writes below): TIM5's own registers, raw values
+        // of fields the reference manual documents.
+        tim5.cr1().write(|w| unsafe { w.bits(Alarm::CR1) });
+        tim5.psc().write(|w| unsafe { w.bits(psc) });
+        // Load the prescaler without an interrupt (URS).
+        tim5.egr().write(|w| w.ug().set_bit());
+        // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+        tim5.sr().write(|w| unsafe { w.bits(0) });
+        tim5.dier().write(|w| w.uie().set_bit());
+        (
+            Alarm {
+                tim: tim5,
+                per_tick: 1,
+            },
+            Pulse { syst, per_tick },
+        )
+    }
+    #[cfg(feature = "qemu")]
+    {
+        // TIM5 stays unused.
+        let _ = tim5;
+        // At most what keeps the longest alarm within SysTick's 24 bits.
+        let per_tick = (per_tick - per_tick / 16).clamp(1, 0x00FF_FFFF / ALARM_MAX_TICKS);
+        (Alarm { syst, per_tick }, Pulse {})
+    }
+}
+
+impl Alarm {
+    #[cfg(not(feature = "qemu"))]
+    const CR1: u32 = 0b1100; // URS, OPM
+
+    /// The longest wait it takes, ticks: a longer one fires early, at this.
+    pub const LONGEST: u32 = ALARM_MAX_TICKS;
+
+    /// Its counts per tick of TIM2.
+    pub fn per_tick(&self) -> u32 {
+        self.per_tick
+    }
+
+    /// Fires in `ticks` (1 at least).
+    #[inline(always)]
+    pub fn arm(&mut self, ticks: u32) {
+        #[cfg(not(feature = "qemu"))]
+        let t = ticks.min(ALARM_MAX_TICKS);
+        // Within SysTick's 24 bits: `per_tick` is bounded for it.
+        #[cfg(feature = "qemu")]
+        let t = ticks.min(ALARM_MAX_TICKS) * self.per_tick;
+        // SAFETY: TIM5's own registers: the period, and CR1 with the bits
+        // of `step_timers` and CEN. One-pulse mode leaves the counter at 0
+        // when it fires (`stop` clears it too).
+        #[cfg(not(feature = "qemu"))]
+        {
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+            self.tim.arr().write(|w| unsafe { w.bits(t) });
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+            self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1 | 1) });
+        }
+        // SAFETY: SysTick's own registers (24 bits of reload). Its clock
+        // against TIM2 is measured, not known: `per_tick` is a sixteenth
+        // short, it fires early, and the step interrupt waits for the rest.
+        #[cfg(feature = "qemu")]
+        unsafe {
+            self.syst.rvr.write(t);
+            self.syst.cvr.write(0);
+            self.syst.csr.write(SYST_ON);
+        }
+    }
+
+    /// Its interrupt is being answered.
+    #[inline(always)]
+    pub fn clear(&mut self) {
+        // SAFETY: writing 0 clears the update flag.
+        #[cfg(not(feature = "qemu"))]
+        self.tim.sr().write(|w| unsafe { w.bits(0) });
+    }
+
+    /// Stops it.
+    pub fn stop(&mut self) {
+        // SAFETY: as in `arm`, without CEN; the counter back to 0, the
+        // flag cleared.
+        #[cfg(not(feature = "qemu"))]
+        {
+            self.tim.cr1().write(|w| unsafe { w.bits(Self::CR1) });
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+            self.tim.cnt().write(|w| unsafe { w.bits(0) });
+            // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+            self.tim.sr().write(|w| unsafe { w.bits(0) });
+        }
+        // SAFETY: SysTick's control register.
+        #[cfg(feature = "qemu")]
+        unsafe {
+            self.syst.csr.write(SYST_OFF)
+        };
+    }
+}
+
+/// SysTick's interrupt under paced QEMU: the alarm fired; SysTick stops
+/// and the step interrupt runs.
+#[cfg(feature = "qemu")]
+pub fn alarm_fired() {
+    // SAFETY: SysTick's control register, which only the alarm writes.
+    unsafe { (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF) };
+    pac::NVIC::pend(Interrupt::TIM5);
+}
+
+impl Pulse {
+    /// The pulse lasts `ticks` ticks from [`Pulse::arm`].
+    pub fn set_width(&mut self, ticks: u32) {
+        #[cfg(not(feature = "qemu"))]
+        self.syst
+            .set_reload((ticks.max(1) * self.per_tick).min(0x00FF_FFFF));
+        let _ = ticks;
+    }
+
+    /// Starts the pulse's time; an end of the pulse before that is still
+    /// pending is forgotten (it would end this one early).
+    #[inline(always)]
+    pub fn arm(&mut self) {
+        // SAFETY: SysTick's own registers: a write clears the current
+        // value; CSR with the bits above. ICSR's PENDSTCLR only clears
+        // SysTick's pending state.
+        #[cfg(not(feature = "qemu"))]
+        unsafe {
+            (*cortex_m::peripheral::SCB::PTR).icsr.write(1 << 25);
+            self.syst.cvr.write(0);
+            self.syst.csr.write(SYST_ON);
+        }
+    }
+
+    /// Stops it (from its own interrupt, or a reset).
+    #[inline(always)]
+    pub fn stop() {
+        // SAFETY: SysTick's control register, which only the step
+        // interrupt and this one (at its priority) write.
+        #[cfg(not(feature = "qemu"))]
+        unsafe {
+            (*cortex_m::peripheral::SYST::PTR).csr.write(SYST_OFF)
+        }
+    }
+}
+
+/// The STEP and DIR pins in one word of GPIOC's BSRR: X STEP PC0, X DIR
+/// PC1, Z STEP PC2, Z DIR PC3 (DIR high: negative).
+pub mod pins {
+    use super::StepEvent;
+
+    /// Both STEP lines low.
+    pub const FALL: u32 = (1 << 16) | (1 << 18);
+
+    /// The STEP lines of an event high.
+    pub const fn rise(bits: u8) -> u32 {
+        let mut w = 0;
+        if bits & StepEvent::X_STEP != 0 {
+            w |= 1 << 0;
+        }
+        if bits & StepEvent::Z_STEP != 0 {
+            w |= 1 << 2;
+        }
+        w
+    }
+
+    /// The STEP lines low and the DIR lines of an event's stepping axes
+    /// as it needs them.
+    pub const fn fall_dir(bits: u8) -> u32 {
+        let mut w = FALL;
+        if bits & StepEvent::X_STEP != 0 {
+            w |= if bits & StepEvent::X_NEG != 0 {
+                1 << 1
+            } else {
+                1 << 17
+            };
+        }
+        if bits & StepEvent::Z_STEP != 0 {
+            w |= if bits & StepEvent::Z_NEG != 0 {
+                1 << 3
+            } else {
+                1 << 19
+            };
+        }
+        w
+    }
+
+    /// One write of GPIOC's BSRR: atomic, only the bits set change.
+    #[inline(always)]
+    pub fn write(word: u32) {
+        // SAFETY: BSRR writes are atomic and touch only the pins whose
+        // bits are set; these pins belong to the step interrupt.
+        unsafe {
+            (*stm32f4::stm32f405::GPIOC::ptr())
+                .bsrr()
+                .write(|w| w.bits(word))
+        };
+    }
+}
+
+/// Whether time is kept: on the board and in `qemu-paced`; a plain `qemu`
+/// build issues steps and passes dwells as fast as the core runs.
+pub const PACED: bool = cfg!(any(not(feature = "qemu"), feature = "qemu-paced"));
+
+/// Busy-wait delays counted in core cycles.
+pub struct CycleDelay;
+
+impl DelayNs for CycleDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        let cycles = (u64::from(ns) * u64::from(SYSCLK_HZ)).div_ceil(1_000_000_000);
+        cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX));
+    }
+}
+
+/// One pin of GPIOC, driven through its set/reset register.
+pub struct PortCPin(pub u8);
+
+impl ErrorType for PortCPin {
+    type Error = Infallible;
+}
+
+impl OutputPin for PortCPin {
+    #[inline(always)]
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        // SAFETY: BSRR writes are atomic and touch only this pin.
+        let gpioc = unsafe { &*pac::GPIOC::ptr() };
+        gpioc
+            .bsrr()
+            .write(|w| unsafe { w.bits(1u32 << (16 + u32::from(self.0 & 15))) });
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        // SAFETY: as above.
+        let gpioc = unsafe { &*pac::GPIOC::ptr() };
+        gpioc
+            .bsrr()
+            .write(|w| unsafe { w.bits(1u32 << u32::from(self.0 & 15)) });
+        Ok(())
+    }
+}
+
+/// Drives every STEP output low at once, without needing the driver (panics).
+pub fn step_outputs_low() {
+    // SAFETY: a single atomic BSRR write.
+    let gpioc = unsafe { &*pac::GPIOC::ptr() };
+    gpioc.bsrr().write(|w| w.br0().set_bit().br2().set_bit());
+}
