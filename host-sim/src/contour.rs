@@ -2,15 +2,15 @@
 //! device's compensated blocks with the f64 reference, block by block.
 
 use crate::link::{Reply, Transport};
-use crate::reference::{RefConfig, RefMachine, TieStats};
-use crate::reference_arc::ChordCoord;
-use crate::reference_comp::{tie_margin, CompSettings, RefContour};
-use crate::reference_motion::{MotionLimits, Point, RefMotion};
 use crate::scenario::nm_to_decimal;
 use core_nostd::arc::ArcDir;
 use core_nostd::comp::Shape;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use reference::arc::ChordCoord;
+use reference::comp::{tie_margin, CompSettings, RefContour};
+use reference::impulse::{RefConfig, RefMachine, TieStats};
+use reference::motion::{MotionLimits, Point, RefMotion};
 
 /// A compensated program and its tool.
 #[derive(Clone, Debug, PartialEq)]

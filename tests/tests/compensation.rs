@@ -10,8 +10,8 @@ use host_sim::compensate::{compensate, Settings};
 use host_sim::contour::{compare_contour, random_contours, ContourCase, ContourTally};
 use host_sim::device::LocalDevice;
 use host_sim::link::Transport;
-use host_sim::reference_comp::{CompSettings, RefContour};
 use proptest::prelude::*;
+use reference::comp::{CompSettings, RefContour};
 
 /// The compensated blocks of a program through the device, as printed.
 fn device_blocks(program: &str, rn: &str, tip: u8) -> Vec<String> {

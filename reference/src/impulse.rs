@@ -97,13 +97,6 @@
 
 use std::fmt;
 
-// Arcs live in `reference_arc`; their types are re-exported here so that the
-// whole reference is reachable from one module.
-pub use crate::reference_arc::{
-    em907_block_text, feed_word_circular, feed_word_linear, Em907Words, RefArc, RefArcError,
-    RefDirect,
-};
-
 /// Unit of the exact commanded coordinate: half-nanometres per mm.
 pub(crate) const HALF_NM_PER_MM: i64 = 2_000_000;
 
@@ -592,10 +585,10 @@ mod tests {
         RefMachine::new(RefConfig::default())
     }
 
-    /// Exact `Q(n/d)`, `d > 0`, round half away from zero, in integers.
+    /// Exact `Q(n/d)`, round half away from zero, in integers: the exact
+    /// model's.
     fn q_exact(n: i128, d: i128) -> i64 {
-        let m = (2 * n.abs() + d) / (2 * d);
-        (if n < 0 { -m } else { m }) as i64
+        crate::exact::q_div(n, d) as i64
     }
 
     /// A whole number of nanometres written as a decimal word.
