@@ -6,7 +6,7 @@
 //! [`RefMotion`], and at every `SYNC` the device's `EV`, `T` and `TSEQ`
 //! (the CRC of every step event with its tick) must equal the reference's:
 //! the time of every step event is compared. The tally keeps how close the
-//! rounding decisions came to a tie (SPEC §7), so the margin is visible.
+//! rounding decisions came to a tie (`docs/verification.md` §2), so the margin is visible.
 
 use crate::link::{LinkError, Reply, Transport};
 use reference::arc::{ChordCoord, RefArc, RefArcError, RefDirect};

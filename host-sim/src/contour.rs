@@ -300,7 +300,7 @@ fn q(u: i64, h: i64) -> i64 {
 
 /// Queues a compensated block on the motion reference: the line from
 /// `from` to `to`, or the chords of the arc about `centre` (10⁻⁷ mm, X
-/// radius), cut as SPEC §3 says with the session's tolerance (0.01 mm,
+/// radius), cut as `docs/arcs.md` §1 says with the session's tolerance (0.01 mm,
 /// finishing). The chords come from the reference's arc machine run at ten
 /// times scale, where the 10⁻⁷ mm grid of compensated points is its
 /// nanometre grid of words (Δφ, the chord count and `Q(P/h)` do not change

@@ -1,9 +1,11 @@
 //! Double-precision (f64) reference of arcs: arcs by chords (`ARC`) and the
 //! ЭМ-907 circular interpolator (`ARC … MODE=DIRECT`).
 //!
-//! Written from SPEC.md (§1, §2, §3, §5, §7) and the `ARC` command of
-//! PROTOCOL.md alone, independently of the controller's fixed-point core, so
-//! that the two can be compared bit for bit. It extends the linear-block
+//! Written from `docs/arcs.md` §1–§2, `docs/impulses.md` §2–§3,
+//! `docs/units.md` §1–§3, `docs/tapes.md` §1.1 (the feed word),
+//! `docs/verification.md` §2 and the `ARC` command of `docs/protocol.md` §4
+//! alone, independently of the controller's fixed-point core, so that the two
+//! can be compared bit for bit. It extends the linear-block
 //! reference of [`crate::impulse`] and shares its machine state
 //! ([`RefMachine`]), its quantizer and its step interleaver.
 //!

@@ -1,13 +1,13 @@
 //! Reference model of motion in time: the planner and the step timer.
 //!
-//! This module gives every step event its tick exactly as SPEC.md §10 and
-//! `docs/motion.md` define it: blocks, junction speeds, the plan over a
+//! This module gives every step event its tick exactly as `docs/motion.md`
+//! §1–§6 defines it: blocks, junction speeds, the plan over a
 //! rolling window of `W` blocks, runs between flushes, event times at the
 //! rounding boundaries of the lead axis, `Q(T·TICK)`, the fixed rate of
-//! `ARC … MODE=DIRECT` and what `SYNC` reports. It is written from those two
-//! documents alone, independently of the controller's fixed-point core, so
+//! `ARC … MODE=DIRECT` and what `SYNC` reports. It is written from that page
+//! alone, independently of the controller's fixed-point core, so
 //! that the two can be compared event by event. The step bytes themselves
-//! come from [`crate::impulse::step_events`] (SPEC §2).
+//! come from [`crate::impulse::step_events`] (`docs/impulses.md` §3).
 //!
 //! The arithmetic is double-double (an unevaluated sum of two f64, about 106
 //! bits); see *Arithmetic and error bound* below for why plain f64 would not
@@ -227,7 +227,7 @@ fn decimal(x: f64) -> Dd {
 // ---------------------------------------------------------------------------
 // Public types.
 
-/// Motion limits (SPEC §10, `docs/motion.md`); they apply at rest.
+/// Motion limits (`docs/motion.md` §1); they apply at rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotionLimits {
     /// Rapid rates `VX`, `VZ` of X (on the radius) and Z, mm/min.
@@ -347,7 +347,7 @@ impl From<[f64; 2]> for Point {
 /// One step event with its tick.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimedEvent {
-    /// The step byte (SPEC §2, `SEQ` bits).
+    /// The step byte (`docs/impulses.md` §3.2, `SEQ` bits).
     pub byte: u8,
     /// Its tick, `Q(T·TICK)`, counted from the start of its run.
     pub tick: u64,

@@ -1,7 +1,8 @@
-//! The references stand apart from the core: nothing `reference` depends
-//! on, directly or through another crate, is `core-nostd`. And where the two
-//! state the same fact, a list both keep, they agree: the protocol's error
-//! codes, in the core and in the reference the oracles use.
+//! The references stand apart from the core (`docs/verification.md` §3.2):
+//! nothing `reference` depends on, directly or through another crate, is
+//! `core-nostd`. And where the two state the same fact, a list both keep,
+//! they agree (§3.3): the protocol's error codes, in the core, in the
+//! reference the oracles use, and in `docs/protocol.md` §10.
 
 use core_nostd::protocol::ErrorCode;
 use std::collections::{BTreeMap, BTreeSet};
@@ -95,6 +96,20 @@ fn place(code: ErrorCode) -> usize {
     }
 }
 
+/// The upper-case words in backticks of a section of a page.
+fn codes_in_section(page: &str, heading: &str) -> Vec<String> {
+    let text = page
+        .split("\n## ")
+        .find(|s| s.starts_with(heading))
+        .unwrap_or_else(|| panic!("no section {heading:?}"));
+    text.split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|w| !w.is_empty() && w.chars().all(|c| c.is_ascii_uppercase() || c == '_'))
+        .map(str::to_string)
+        .collect()
+}
+
 #[test]
 fn the_error_codes_are_one_list() {
     for (i, c) in CORE.iter().enumerate() {
@@ -103,4 +118,21 @@ fn the_error_codes_are_one_list() {
     let core: Vec<&str> = CORE.iter().map(|c| c.as_str()).collect();
     let reference = reference::protocol::ERROR_CODES;
     assert_eq!(core, reference, "the core's codes and the reference's");
+    let page = std::fs::read_to_string(root().join("docs/protocol.md")).unwrap();
+    assert_eq!(
+        codes_in_section(&page, "10. Errors"),
+        reference,
+        "docs/protocol.md §10"
+    );
+    let minimum = codes_in_section(&page, "1. The required minimum");
+    let n = reference::protocol::REQUIRED_ERROR_CODES;
+    for code in &reference[..n] {
+        assert!(minimum.contains(&code.to_string()), "§1 lacks {code}");
+    }
+    for code in &reference[n..] {
+        assert!(
+            !minimum.contains(&code.to_string()),
+            "{code} is an extension"
+        );
+    }
 }
