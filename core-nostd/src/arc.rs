@@ -1,5 +1,5 @@
-//! Arcs: by chords with residual carry (SPEC §3), and step by step as the
-//! ЭМ-907's circular interpolator does.
+//! Arcs: by chords with residual carry (`docs/arcs.md` §1), and step by step
+//! as the ЭМ-907's circular interpolator does (`docs/arcs.md` §2).
 //!
 //! Coordinates are exact [`Length`]s: X on the radius, Z. Angles lie in the
 //! (Z to the right, X up) plane, `φ = atan2(X − Xc, Z − Zc)`; counter-clockwise

@@ -409,7 +409,7 @@ fn intersect(a: Offset, b: Offset, r: i64) -> Option<V> {
     best.map(|(_, p)| p)
 }
 
-/// Tool tip orientation code 0…9 (Fanuc/Haas convention, see PROTOCOL.md).
+/// Tool tip orientation code 0…9 (Fanuc/Haas convention, `docs/protocol.md` §4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TipCode(u8);

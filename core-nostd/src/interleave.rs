@@ -1,4 +1,4 @@
-//! Step-event interleaving of a linear block (SPEC §2, decided rule).
+//! Step-event interleaving of a linear block (`docs/impulses.md` §3.1, a decided rule).
 //!
 //! A block goes from impulse position `(a0, b0)` to `(a1, b1)`. The leading
 //! axis is the one with the larger `|Δ|`, X when equal. For `i = 1 … |Δlead|`
@@ -271,7 +271,7 @@ mod tests {
             .collect()
     }
 
-    /// The rule written with a division per event, as SPEC §2 states it.
+    /// The rule written with a division per event, as `docs/impulses.md` §3.1 states it.
     fn by_definition(from: ImpulsePoint, to: ImpulsePoint) -> Vec<u8> {
         let (dx, dz) = (i64::from(to.x.0 - from.x.0), i64::from(to.z.0 - from.z.0));
         let lead_x = dx.abs() >= dz.abs();

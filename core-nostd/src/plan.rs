@@ -1,5 +1,5 @@
 //! The velocity planner: per-axis limits, junction speeds, the look-ahead
-//! window and each block's trapezoid (`docs/motion.md`, SPEC §10).
+//! window and each block's trapezoid (`docs/motion.md` §1–§4).
 //!
 //! A [`Block`] is a straight segment with its impulses, checked when it is
 //! made; the [`Planner`] queues blocks and, when one starts, fixes its
@@ -432,7 +432,7 @@ impl Block {
         }
         // 2aL = 2·a·|dn|·2^scale, Q96 · Q32·Q32 → Q64.
         let two_al = mul_shr(accel, lnq, (95 - scale) as u32);
-        // The lead axis by impulses, X when equal (SPEC §2); a block
+        // The lead axis by impulses, X when equal (`docs/impulses.md` §3.1); a block
         // without impulses is measured along the axis that moves most.
         let lead = if nx == 0 && nz == 0 {
             usize::from(d[1].unsigned_abs() > d[0].unsigned_abs())
@@ -588,7 +588,7 @@ impl Block {
         self.junction2
     }
 
-    /// The junction `v²` from `self` into `next` (SPEC §10, grbl's rule),
+    /// The junction `v²` from `self` into `next` (`docs/motion.md` §3, grbl's rule),
     /// capped by both blocks' `v_max²`.
     fn junction_into(&self, next: &Block, delta: u64) -> u128 {
         let cap = self.vmax2.min(next.vmax2);

@@ -1,5 +1,5 @@
 //! Step events at their ticks: the timed generator a timer interrupt pulls
-//! (`docs/motion.md`, SPEC §10).
+//! (`docs/motion.md` §5).
 //!
 //! A started block's profile (fixed by [`crate::plan`]) becomes a
 //! [`TimedBlock`]; its [`TimedEvents`] yield `(event, tick)` one at a time,

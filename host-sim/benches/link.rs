@@ -4,7 +4,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use host_sim::device::LocalDevice;
 use host_sim::link::{Client, PtyDevice, Transport};
-use host_sim::reference::{RefConfig, RefMachine};
+use reference::impulse::{RefConfig, RefMachine};
 use std::time::Duration;
 
 const MOVES: [&str; 4] = [

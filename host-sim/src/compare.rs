@@ -6,12 +6,12 @@
 //! [`RefMotion`], and at every `SYNC` the device's `EV`, `T` and `TSEQ`
 //! (the CRC of every step event with its tick) must equal the reference's:
 //! the time of every step event is compared. The tally keeps how close the
-//! rounding decisions came to a tie (SPEC §7), so the margin is visible.
+//! rounding decisions came to a tie (`docs/verification.md` §2), so the margin is visible.
 
 use crate::link::{LinkError, Reply, Transport};
-use crate::reference::{RefBlock, RefConfig, RefMachine, TieStats};
-use crate::reference_arc::{ChordCoord, RefArc, RefArcError, RefDirect};
-use crate::reference_motion::{MotionLimits, Point, RefMotion};
+use reference::arc::{ChordCoord, RefArc, RefArcError, RefDirect};
+use reference::impulse::{RefBlock, RefConfig, RefMachine, TieStats};
+use reference::motion::{MotionLimits, Point, RefMotion};
 use std::fmt::Write as _;
 
 /// One request of a scenario.
@@ -316,7 +316,7 @@ pub struct Comparator<T: Transport> {
     pub tally: Tally,
     /// Keep the reference's events of the last `SYNC` ([`Self::last_events`]).
     pub keep_events: bool,
-    last_events: Vec<crate::reference_motion::TimedEvent>,
+    last_events: Vec<reference::motion::TimedEvent>,
 }
 
 impl<T: Transport> Comparator<T> {
@@ -519,7 +519,7 @@ impl<T: Transport> Comparator<T> {
     }
 
     /// The reference's events of the last `SYNC`, when kept.
-    pub fn last_events(&self) -> &[crate::reference_motion::TimedEvent] {
+    pub fn last_events(&self) -> &[reference::motion::TimedEvent] {
         &self.last_events
     }
 }

@@ -2,15 +2,15 @@
 //! device's compensated blocks with the f64 reference, block by block.
 
 use crate::link::{Reply, Transport};
-use crate::reference::{RefConfig, RefMachine, TieStats};
-use crate::reference_arc::ChordCoord;
-use crate::reference_comp::{tie_margin, CompSettings, RefContour};
-use crate::reference_motion::{MotionLimits, Point, RefMotion};
 use crate::scenario::nm_to_decimal;
 use core_nostd::arc::ArcDir;
 use core_nostd::comp::Shape;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use reference::arc::ChordCoord;
+use reference::comp::{tie_margin, CompSettings, RefContour};
+use reference::impulse::{RefConfig, RefMachine, TieStats};
+use reference::motion::{MotionLimits, Point, RefMotion};
 
 /// A compensated program and its tool.
 #[derive(Clone, Debug, PartialEq)]
@@ -300,7 +300,7 @@ fn q(u: i64, h: i64) -> i64 {
 
 /// Queues a compensated block on the motion reference: the line from
 /// `from` to `to`, or the chords of the arc about `centre` (10⁻⁷ mm, X
-/// radius), cut as SPEC §3 says with the session's tolerance (0.01 mm,
+/// radius), cut as `docs/arcs.md` §1 says with the session's tolerance (0.01 mm,
 /// finishing). The chords come from the reference's arc machine run at ten
 /// times scale, where the 10⁻⁷ mm grid of compensated points is its
 /// nanometre grid of words (Δφ, the chord count and `Q(P/h)` do not change

@@ -1,9 +1,9 @@
 //! Host simulator of the lathe retrofit controller.
 //!
-//! - [`reference`]: the f64 reference of the impulse rules, written from the
-//!   domain brief independently of the fixed-point core;
-//! - [`reference_arc`]: the same reference for arcs (by chords and by the
-//!   ЭМ-907 circular interpolator);
+//! The models the device is compared with are the crate `reference`, written
+//! from `docs/` alone and independent of the fixed-point core
+//! (`docs/verification.md` §3); this crate drives both and compares them.
+//!
 //! - [`device`]: the core's protocol handler in this process;
 //! - [`board`]: the simulated board `serve` runs: the device behind a
 //!   receiver, the axes on the wall clock and the protocol, as the firmware
@@ -15,14 +15,8 @@
 //!   reference;
 //! - [`reliable`]: requests that survive a faulty link, and the fault
 //!   injector; [`soak`]: long faulted sessions against the reference;
-//! - [`reference_motion`]: the f64 reference of motion in time (planner and
-//!   step timer), written from `docs/motion.md`;
-//! - [`reference_trihedral`]: the trihedral-angle set-up built from three
-//!   edge vectors (dot and cross products), independent of the calculator;
 //! - [`table`]: what the calculators print: text, CSV or JSON;
 //! - [`calculators`]: `thread-speed`, `trihedral`, `deflection`, `wear`;
-//! - [`reference_comp`]: the f64 reference of nose radius compensation
-//!   (G41/G42 contours), written from `docs/compensation.md`;
 //! - [`contour`]: random compensated contours and their block-by-block
 //!   comparison with the reference;
 //! - [`compensate`]: `host-sim compensate`, a G41/G42 program printed as the
@@ -49,7 +43,6 @@ pub mod check;
 pub mod compare;
 pub mod compensate;
 pub mod contour;
-mod dd;
 pub mod device;
 pub mod dialect;
 pub mod expand;
@@ -57,12 +50,6 @@ pub mod link;
 pub mod plot;
 pub mod program;
 pub mod qemu;
-pub mod reference;
-pub mod reference_arc;
-pub mod reference_comp;
-pub mod reference_cone;
-pub mod reference_motion;
-pub mod reference_trihedral;
 pub mod reliable;
 pub mod report;
 pub mod scenario;

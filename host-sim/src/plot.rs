@@ -1955,7 +1955,7 @@ fn draw_panel(
 mod tests {
     use super::*;
     use crate::program::{run_setup, Traced};
-    use crate::reference_comp::CompSettings;
+    use reference::comp::CompSettings;
 
     const FIG22: &str = include_str!("../../examples/krylenko-fig22.nc");
     const FIG12: &str = include_str!("../../examples/krylenko-fig12.nc");

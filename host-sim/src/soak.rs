@@ -3,9 +3,9 @@
 
 use crate::compare::{block_matches, Step};
 use crate::link::LinkError;
-use crate::reference::{RefConfig, RefMachine};
 use crate::reliable::{ByteLink, FaultStats, ReliableSession, SessionStats, Shadow};
 use crate::scenario::{self, nm_to_decimal};
+use reference::impulse::{RefConfig, RefMachine};
 use std::time::{Duration, Instant};
 
 /// The outcome of a soak.
@@ -35,13 +35,14 @@ impl SoakReport {
 }
 
 fn shadow_of(r: &RefMachine, hx: &str, hz: &str) -> Shadow {
+    let (x, z) = r.commanded_half_nm();
     Shadow {
         hx: hx.into(),
         hz: hz.into(),
-        diam: r.cfg.diam,
-        // cmd_x is the radius in half-nanometres: the diameter in nm.
-        x_diameter: nm_to_decimal(r.cmd_x),
-        z: nm_to_decimal(r.cmd_z / 2),
+        diam: r.config().diam,
+        // X is the radius in half-nanometres: the diameter in nm.
+        x_diameter: nm_to_decimal(x),
+        z: nm_to_decimal(z / 2),
     }
 }
 

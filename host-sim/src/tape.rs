@@ -4,7 +4,7 @@
 //! The program runs through the in-process device first ([`crate::program`]),
 //! so the tape carries every motion block exactly as the device ran it: X on
 //! the radius, machine coordinates, offsets and nose compensation done. Each
-//! axis position is quantized with the carry rule (`SPEC.md` §2): a block
+//! axis position is quantized with the carry rule (`docs/impulses.md` §2): a block
 //! issues `Q(P_k/h) − Q(P_{k−1}/h)` impulses, so the tape's impulses sum to
 //! the program's end position and nothing accumulates.
 //!
@@ -23,7 +23,7 @@
 //!   of a G02/G03: the control interpolates lines only) the feed code nearest
 //!   `S/0.6` Hz, `S` the feed in mm/min (mm/rev × rpm under G95/G99).
 //!   Arcs are cut into chords no farther than `--chord` mm from the arc
-//!   (the finishing rule of `SPEC.md` §3).
+//!   (the finishing rule of `docs/arcs.md` §1.2).
 //! - Ш: the speed of Table 23 nearest the program's (code 11, 12, 21 or 22 of
 //!   its gear range) plus 04 for M03, 40 for M04; `Ш00` for M05. Under G96
 //!   the speed is `1000·V/(π·d)` at the largest diameter the tool feeds at

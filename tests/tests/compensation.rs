@@ -10,8 +10,8 @@ use host_sim::compensate::{compensate, Settings};
 use host_sim::contour::{compare_contour, random_contours, ContourCase, ContourTally};
 use host_sim::device::LocalDevice;
 use host_sim::link::Transport;
-use host_sim::reference_comp::{CompSettings, RefContour};
 use proptest::prelude::*;
+use reference::comp::{CompSettings, RefContour};
 
 /// The compensated blocks of a program through the device, as printed.
 fn device_blocks(program: &str, rn: &str, tip: u8) -> Vec<String> {
@@ -131,7 +131,7 @@ fn fig_17_internal_tapers_from_a_g41_contour() {
 #[test]
 fn fig_22_arcs_from_a_g42_contour() {
     let blocks = device_blocks(&example("krylenko-fig22.nc"), "0.4", 3);
-    // SPEC §9: line 12 of the figure says Z-14, its own comment −14.4.
+    // docs/errata.md §1.1: line 12 of the figure says Z-14, its own comment −14.4.
     let seed = [
         (7.2, 0.0),
         (12.0, -2.4),

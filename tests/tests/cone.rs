@@ -3,7 +3,7 @@
 
 use host_sim::device::LocalDevice;
 use host_sim::link::{words_value, Transport};
-use host_sim::reference_cone::NOMURA_TABLE;
+use reference::cone::NOMURA_TABLE;
 
 fn cone(dev: &mut LocalDevice, a: &str, rn: &str) -> host_sim::link::Reply {
     let r = Transport::request(dev, &format!("CONE A={a} RN={rn}")).unwrap();
@@ -101,7 +101,7 @@ fn cone_equals_the_reference_on_random_angles() {
             )
         };
         let rn = format!("{}.{:06}", rn / 1_000_000, rn % 1_000_000);
-        let expected = host_sim::reference_cone::cone(&word, rn.parse().unwrap()).expect(&word);
+        let expected = reference::cone::cone(&word, rn.parse().unwrap()).expect(&word);
         let got = Transport::request(&mut dev, &format!("CONE A={word} RN={rn}")).unwrap();
         if expected.min_tie_distance_mm < 1e-9 {
             near += 1;

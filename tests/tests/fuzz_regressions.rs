@@ -79,9 +79,9 @@ fn with_checksum(body: &str) -> String {
 
 /// Found by the `length` target: a length from 99 999.99995 mm up prints as
 /// `100000.0000`. Lengths in replies are rounded half away from zero to 4
-/// decimals (PROTOCOL.md), so a coordinate within 0.00005 mm of the
+/// decimals (`docs/protocol.md` §3), so a coordinate within 0.00005 mm of the
 /// ±100 000 mm limit prints one past the largest word a request may carry;
-/// the product keeps this and documents it (docs/protocol.md, Limits).
+/// the product keeps this and documents it (`docs/protocol.md` §11).
 /// Everything below that edge reads back to within 0.00005 mm.
 #[test]
 fn printed_length_at_the_limit() {

@@ -3,10 +3,10 @@
 //! reference's report.
 
 use host_sim::device::{Issued, LocalDevice};
-use host_sim::reference::{RefConfig, RefMachine};
-use host_sim::reference_motion::{MotionLimits, Point, RefMotion, TimedEvent};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use reference::impulse::{RefConfig, RefMachine};
+use reference::motion::{MotionLimits, Point, RefMotion, TimedEvent};
 
 /// A length in 10⁻⁷ mm as a request word.
 fn word(units: i64) -> String {

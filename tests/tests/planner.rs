@@ -1,5 +1,5 @@
 //! Properties of the velocity planner and the timed step generator
-//! (`docs/motion.md`, SPEC §10), checked against an independent f64 model
+//! (`docs/motion.md` §1–§4), checked against an independent f64 model
 //! of the rules on random programs and random limits, and the `SYNC`,
 //! `STATUS` and refusal behaviour of the protocol at their boundaries.
 //!

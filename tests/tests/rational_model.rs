@@ -1,31 +1,12 @@
-//! Exact rational model of the pendant's `MOVE` replies, checked against the
-//! device line for line.
+//! The pendant's `MOVE`, `CFG`, `ZERO` and `POS` replies against the exact
+//! rational model (`reference::exact`), line for line.
 //!
-//! The model is written from the domain brief (SPEC.md §1–§2) and the line
-//! protocol (PROTOCOL.md) alone and shares no arithmetic with the product:
-//!
-//! - every length is an exact rational (`Ratio`, an `i128` fraction kept in
-//!   lowest terms); a request word with up to 6 decimals is `n / 10^6`, and an
-//!   X diameter word is halved exactly to give the radius;
-//! - the session keeps the exact commanded coordinates `(X radius, Z)` since
-//!   the last `ZERO`, the impulse prices `HX`, `HZ` and the `DIAM` mode;
-//! - an axis position in impulses is `Q(P / h)`, `P` the exact commanded
-//!   coordinate, `Q` rounding half away from zero in integer arithmetic, so a
-//!   block issues `Q(P_k/h) − Q(P_{k−1}/h)` impulses (residual carry);
-//! - the step events of a block follow SPEC.md §2 straight from the
-//!   definition: the leading axis is the one with the larger `|Δ|` (X when
-//!   equal), event `i = 1 … |Δlead|` steps it once and puts the other axis at
-//!   `b0 + Q(i·Δb/|Δlead|)`; one byte per event (bit0 X steps, bit1 Z steps,
-//!   bit2 X negative, bit3 Z negative) and `SEQ` is the bitwise CRC-32 (IEEE,
-//!   reflected polynomial 0xEDB88320, as in zlib) of those bytes;
-//! - `CFG HX=/HZ=` keeps the commanded coordinates and re-expresses each
-//!   register as `Q(P / h_new)` without motion; `DIAM` only changes how later
-//!   X words are read and how `POS` prints X; `ZERO` sets coordinates and
-//!   registers to 0; a block of more than 1 000 000 impulses on an axis, or a
-//!   position beyond 999 999 999 impulses, is `ERR RANGE`, and an error
-//!   changes no state;
-//! - `POS` prints the registers and the exact coordinates (X as a diameter
-//!   when `DIAM=1`) with 4 decimals rounded half away from zero.
+//! The model is written from `docs/impulses.md` §2–§3, `docs/units.md` §3 and
+//! the commands of `docs/protocol.md` §4 alone and shares no arithmetic with
+//! the product: exact rationals for lengths, `Q` in integers, the step events
+//! straight from the definition and a CRC-32 of its own (its module docs say
+//! how). This test drives seeded random sessions, small proptest sessions,
+//! closed paths, split segments, ties and range refusals through both.
 //!
 //! Every reply line's `*HH` checksum (XOR of the bytes before `*`) is checked
 //! too. The sessions are seeded and deterministic.
@@ -35,163 +16,14 @@ use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use reference::exact::{crc32, xor_checksum, ExactMachine as Model, Ratio, MICRO};
+use reference::protocol::{parse_mm, BLOCK_MAX};
 
-/// Denominator of a request length (6 decimals).
-const MICRO: i128 = 1_000_000;
 /// Most impulses one block may issue per axis.
-const BLOCK_MAX: i128 = 1_000_000;
-/// Largest position register magnitude, in impulses.
-const POS_MAX: i128 = 999_999_999;
+const BLOCK: i128 = BLOCK_MAX as i128;
 /// Generated coordinates stay within this many mm (X radius and Z), so that
 /// every word, absolute or incremental, stays below the 99999.999999 mm limit.
 const COORD_LIMIT_UM: i128 = 49_999 * MICRO;
-
-// ---------------------------------------------------------------------------
-// Exact arithmetic
-// ---------------------------------------------------------------------------
-
-fn gcd(mut a: i128, mut b: i128) -> i128 {
-    a = a.abs();
-    b = b.abs();
-    while b != 0 {
-        let t = a % b;
-        a = b;
-        b = t;
-    }
-    a
-}
-
-/// `n / d` rounded to the nearest integer, exact halves away from zero.
-fn q_div(n: i128, d: i128) -> i128 {
-    assert!(d != 0, "division by zero in the model");
-    let (n, d) = if d < 0 { (-n, -d) } else { (n, d) };
-    let q = (2 * n.abs() + d) / (2 * d);
-    if n < 0 {
-        -q
-    } else {
-        q
-    }
-}
-
-/// Whether `n / d` is exactly an integer plus one half.
-fn is_half(n: i128, d: i128) -> bool {
-    let d = d.abs();
-    (2 * n) % d == 0 && ((2 * n) / d) % 2 != 0
-}
-
-/// An exact rational in lowest terms, denominator positive.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Ratio {
-    n: i128,
-    d: i128,
-}
-
-impl Ratio {
-    fn new(n: i128, d: i128) -> Self {
-        assert!(d != 0, "zero denominator in the model");
-        let (n, d) = if d < 0 { (-n, -d) } else { (n, d) };
-        let g = gcd(n, d).max(1);
-        Ratio { n: n / g, d: d / g }
-    }
-    fn int(n: i128) -> Self {
-        Ratio { n, d: 1 }
-    }
-    /// A request length given in micrometres (`um / 10^6` mm).
-    fn micro(um: i128) -> Self {
-        Ratio::new(um, MICRO)
-    }
-    fn add(self, o: Ratio) -> Ratio {
-        Ratio::new(self.n * o.d + o.n * self.d, self.d * o.d)
-    }
-    fn sub(self, o: Ratio) -> Ratio {
-        Ratio::new(self.n * o.d - o.n * self.d, self.d * o.d)
-    }
-    fn mul(self, o: Ratio) -> Ratio {
-        Ratio::new(self.n * o.n, self.d * o.d)
-    }
-    fn div(self, o: Ratio) -> Ratio {
-        Ratio::new(self.n * o.d, self.d * o.n)
-    }
-    fn half(self) -> Ratio {
-        Ratio::new(self.n, self.d * 2)
-    }
-    fn double(self) -> Ratio {
-        Ratio::new(self.n * 2, self.d)
-    }
-    /// `Q(self)`: nearest integer, halves away from zero.
-    fn round(self) -> i128 {
-        q_div(self.n, self.d)
-    }
-    fn is_half(self) -> bool {
-        is_half(self.n, self.d)
-    }
-    /// Truncated towards zero to a whole number of micrometres.
-    fn to_micro_trunc(self) -> i128 {
-        (self.n * MICRO) / self.d
-    }
-}
-
-/// A length as the pendant prints it: mm, exactly 4 decimals, rounded half
-/// away from zero (no sign on a zero).
-fn fmt4(r: Ratio) -> String {
-    let q = r.mul(Ratio::int(10_000)).round();
-    let sign = if q < 0 { "-" } else { "" };
-    let a = q.abs();
-    format!("{sign}{}.{:04}", a / 10_000, a % 10_000)
-}
-
-/// CRC-32 (IEEE 802.3, as in zlib), bit by bit.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = 0xFFFF_FFFFu32;
-    for &b in bytes {
-        c ^= u32::from(b);
-        for _ in 0..8 {
-            c = if c & 1 != 0 {
-                (c >> 1) ^ 0xEDB8_8320
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
-}
-
-/// The XOR of all bytes, as a line checksum.
-fn xor_sum(s: &str) -> u8 {
-    s.bytes().fold(0, |a, b| a ^ b)
-}
-
-/// The step events of a block issuing `dx`, `dz` impulses, by SPEC.md §2.
-/// Counts the events whose other-axis value `i·Δb/|Δlead|` is an exact tie.
-fn step_sequence(dx: i128, dz: i128, ties: &mut u64) -> Vec<u8> {
-    let x_leads = dx.abs() >= dz.abs();
-    let (dl, db) = if x_leads { (dx, dz) } else { (dz, dx) };
-    let len = dl.abs();
-    let mut out = Vec::with_capacity(len as usize);
-    let mut prev = 0i128;
-    for i in 1..=len {
-        let num = i * db;
-        if db != 0 && is_half(num, len) {
-            *ties += 1;
-        }
-        let b = q_div(num, len);
-        assert!((b - prev).abs() <= 1, "other axis jumps by more than one");
-        let other = b != prev;
-        prev = b;
-        let (xs, xn, zs, zn) = if x_leads {
-            (true, dl < 0, other, other && db < 0)
-        } else {
-            (other, other && db < 0, true, dl < 0)
-        };
-        out.push(u8::from(xs) | u8::from(zs) << 1 | u8::from(xn) << 2 | u8::from(zn) << 3);
-    }
-    assert_eq!(prev, db, "the other axis must end on its target");
-    out
-}
-
-// ---------------------------------------------------------------------------
-// The session model
-// ---------------------------------------------------------------------------
 
 /// What the model expects as the final reply line (body before `*HH`).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -236,142 +68,47 @@ impl Stats {
     }
 }
 
-#[derive(Debug, Clone)]
-struct Model {
-    hx: Ratio,
-    hz: Ratio,
-    diam: bool,
-    /// Exact commanded X, on the radius.
-    cx: Ratio,
-    /// Exact commanded Z.
-    cz: Ratio,
-    px: i128,
-    pz: i128,
+/// A `MOVE` on the model, counted.
+fn model_move(
+    m: &mut Model,
+    x: Option<Ratio>,
+    z: Option<Ratio>,
+    inc: bool,
+    st: &mut Stats,
+) -> Expect {
+    match m.mov(x, z, inc) {
+        Ok(b) => {
+            st.endpoint_ties += b.endpoint_ties;
+            st.step_ties += b.step_ties;
+            st.step_events += b.events.len() as u64;
+            Expect::Ok(b.reply())
+        }
+        Err(_) => {
+            st.range_errors += 1;
+            Expect::Err("RANGE")
+        }
+    }
 }
 
-impl Model {
-    /// Power-on: HX 0.005, HZ 0.01, DIAM=1, at program zero.
-    fn new() -> Self {
-        Model {
-            hx: Ratio::micro(5_000),
-            hz: Ratio::micro(10_000),
-            diam: true,
-            cx: Ratio::int(0),
-            cz: Ratio::int(0),
-            px: 0,
-            pz: 0,
+/// A `CFG` on the model, counted.
+fn model_cfg(
+    m: &mut Model,
+    hx: Option<Ratio>,
+    hz: Option<Ratio>,
+    diam: Option<bool>,
+    st: &mut Stats,
+) -> Expect {
+    match m.cfg(hx, hz, diam) {
+        Ok(c) => {
+            st.cfg_ties += c.ties;
+            st.cfg_changes += u64::from(c.price_changed);
+            st.diam_changes += u64::from(c.diam_changed);
+            Expect::Ok(m.cfg_reply())
         }
-    }
-
-    fn mov(&mut self, x: Option<Ratio>, z: Option<Ratio>, inc: bool, st: &mut Stats) -> Expect {
-        let tx = match x {
-            None => self.cx,
-            Some(w) => {
-                let r = if self.diam { w.half() } else { w };
-                if inc {
-                    self.cx.add(r)
-                } else {
-                    r
-                }
-            }
-        };
-        let tz = match z {
-            None => self.cz,
-            Some(w) => {
-                if inc {
-                    self.cz.add(w)
-                } else {
-                    w
-                }
-            }
-        };
-        let qx = tx.div(self.hx);
-        let qz = tz.div(self.hz);
-        let (px, pz) = (qx.round(), qz.round());
-        let (nx, nz) = (px - self.px, pz - self.pz);
-        if nx.abs() > BLOCK_MAX || nz.abs() > BLOCK_MAX || px.abs() > POS_MAX || pz.abs() > POS_MAX
-        {
+        Err(_) => {
             st.range_errors += 1;
-            return Expect::Err("RANGE");
+            Expect::Err("RANGE")
         }
-        if x.is_some() && qx.is_half() {
-            st.endpoint_ties += 1;
-        }
-        if z.is_some() && qz.is_half() {
-            st.endpoint_ties += 1;
-        }
-        let seq = step_sequence(nx, nz, &mut st.step_ties);
-        st.step_events += seq.len() as u64;
-        self.cx = tx;
-        self.cz = tz;
-        self.px = px;
-        self.pz = pz;
-        Expect::Ok(format!(
-            "OK NX={nx} NZ={nz} PX={px} PZ={pz} SEQ={:08X}",
-            crc32(&seq)
-        ))
-    }
-
-    fn cfg(
-        &mut self,
-        hx: Option<Ratio>,
-        hz: Option<Ratio>,
-        diam: Option<bool>,
-        st: &mut Stats,
-    ) -> Expect {
-        let hx = hx.unwrap_or(self.hx);
-        let hz = hz.unwrap_or(self.hz);
-        let diam = diam.unwrap_or(self.diam);
-        let qx = self.cx.div(hx);
-        let qz = self.cz.div(hz);
-        let (px, pz) = (qx.round(), qz.round());
-        if px.abs() > POS_MAX || pz.abs() > POS_MAX {
-            st.range_errors += 1;
-            return Expect::Err("RANGE");
-        }
-        if hx != self.hx && qx.is_half() {
-            st.cfg_ties += 1;
-        }
-        if hz != self.hz && qz.is_half() {
-            st.cfg_ties += 1;
-        }
-        if hx != self.hx || hz != self.hz {
-            st.cfg_changes += 1;
-        }
-        if diam != self.diam {
-            st.diam_changes += 1;
-        }
-        self.hx = hx;
-        self.hz = hz;
-        self.diam = diam;
-        self.px = px;
-        self.pz = pz;
-        Expect::Ok(format!(
-            "OK HX={} HZ={} DIAM={} RN=0.4000 TIP=3 TOL=0.0100 PASS=FIN",
-            fmt4(hx),
-            fmt4(hz),
-            u8::from(diam)
-        ))
-    }
-
-    fn zero(&mut self, st: &mut Stats) -> Expect {
-        st.zeros += 1;
-        self.cx = Ratio::int(0);
-        self.cz = Ratio::int(0);
-        self.px = 0;
-        self.pz = 0;
-        Expect::Ok("OK".to_owned())
-    }
-
-    fn pos(&self) -> String {
-        let x = if self.diam { self.cx.double() } else { self.cx };
-        format!(
-            "OK PX={} PZ={} X={} Z={}",
-            self.px,
-            self.pz,
-            fmt4(x),
-            fmt4(self.cz)
-        )
     }
 }
 
@@ -487,7 +224,7 @@ fn checked_body(line: &str) -> Result<&str, String> {
     let (body, hh) = line
         .rsplit_once('*')
         .ok_or_else(|| format!("reply without checksum: {line:?}"))?;
-    let want = format!("{:02X}", xor_sum(body));
+    let want = format!("{:02X}", xor_checksum(body.as_bytes()));
     if hh != want {
         return Err(format!(
             "reply checksum {hh:?}, the XOR of its bytes is {want}: {line:?}"
@@ -573,7 +310,7 @@ impl Session {
 
     fn check_pos(&mut self) -> Result<(), String> {
         let got = self.send("POS")?;
-        let want = self.model.pos();
+        let want = self.model.pos_reply();
         self.compare(&got, &Expect::Ok(want))
     }
 
@@ -592,15 +329,19 @@ impl Session {
                 st.moves += 1;
                 st.inc_moves += u64::from(inc);
                 st.omitted_words += u64::from(x.is_none()) + u64::from(z.is_none());
-                self.model
-                    .mov(x.map(Ratio::micro), z.map(Ratio::micro), inc, st)
+                let (x, z) = (x.map(Ratio::micro), z.map(Ratio::micro));
+                model_move(&mut self.model, x, z, inc, st)
             }
             Op::Cfg { hx, hz, diam, .. } => {
-                self.model
-                    .cfg(hx.map(Ratio::micro), hz.map(Ratio::micro), diam, st)
+                let (hx, hz) = (hx.map(Ratio::micro), hz.map(Ratio::micro));
+                model_cfg(&mut self.model, hx, hz, diam, st)
             }
-            Op::Zero => self.model.zero(st),
-            Op::Pos => Expect::Ok(self.model.pos()),
+            Op::Zero => {
+                st.zeros += 1;
+                self.model.zero();
+                Expect::Ok("OK".to_owned())
+            }
+            Op::Pos => Expect::Ok(self.model.pos_reply()),
         };
         self.compare(&got, &want)?;
         if matches!(op, Op::Move { .. }) {
@@ -650,7 +391,7 @@ fn axis_word(
         -1
     };
     let k = if span < 0 {
-        let over = BLOCK_MAX + rng.random_range(1..100);
+        let over = BLOCK + rng.random_range(1..100);
         p + if rng.random_bool(0.5) { over } else { -over }
     } else {
         p + rng.random_range(-span..=span)
@@ -658,21 +399,19 @@ fn axis_word(
     let kind = rng.random_range(0..10);
     let target = match kind {
         // Exactly half-way: (2k+1)·h/2.
-        0..=2 => Ratio::int(2 * k + 1).mul(h).half(),
+        0..=2 => (Ratio::int(2 * k + 1) * h).half(),
         // Exactly on an impulse.
-        3 | 4 => Ratio::int(k).mul(h),
+        3 | 4 => Ratio::int(k) * h,
         // Within one impulse of one, to half a micrometre.
         5..=7 => {
-            let hu = h.mul(Ratio::int(2 * MICRO)).round();
-            Ratio::int(k)
-                .mul(h)
-                .add(Ratio::new(rng.random_range(-hu..=hu), 2 * MICRO))
+            let hu = (h * Ratio::int(2 * MICRO)).round();
+            Ratio::int(k) * h + Ratio::new(rng.random_range(-hu..=hu), 2 * MICRO)
         }
         // Anywhere near.
         _ => {
             let s = span.abs().max(1);
-            let lo = Ratio::int(p - s).mul(h).to_micro_trunc();
-            let hi = Ratio::int(p + s).mul(h).to_micro_trunc();
+            let lo = (Ratio::int(p - s) * h).to_micro_trunc();
+            let hi = (Ratio::int(p + s) * h).to_micro_trunc();
             Ratio::micro(rng.random_range(lo.min(hi)..=hi.max(lo)))
         }
     };
@@ -684,7 +423,7 @@ fn axis_word(
     } else {
         target
     };
-    let word = if inc { target.sub(coord) } else { target };
+    let word = if inc { target - coord } else { target };
     let word = if doubled { word.double() } else { word };
     // A word has at most 6 decimals.
     word.to_micro_trunc()
@@ -1002,20 +741,10 @@ fn splitting_a_segment_keeps_the_end_point() {
 // Ties, by hand
 // ---------------------------------------------------------------------------
 
-/// Parses a request length `[+-]digits[.digits]` into micrometres.
+/// Parses a request length `[+-]digits[.digits]` into millionths of a mm.
 fn parse_len(v: &str) -> i128 {
-    let (neg, v) = match v.strip_prefix('-') {
-        Some(r) => (true, r),
-        None => (false, v.strip_prefix('+').unwrap_or(v)),
-    };
-    let (i, f) = v.split_once('.').unwrap_or((v, ""));
-    assert!(f.len() <= 6, "{v}");
-    let um = i.parse::<i128>().unwrap() * MICRO + format!("{f:0<6}").parse::<i128>().unwrap();
-    if neg {
-        -um
-    } else {
-        um
-    }
+    let angstrom = parse_mm(v).unwrap_or_else(|e| panic!("{v}: {e:?}"));
+    i128::from(angstrom / 10)
 }
 
 /// The model's view of a literal `MOVE` or `CFG` line.
@@ -1079,7 +808,7 @@ fn lit(s: &mut Session, line: &str, n: (i128, i128), p: (i128, i128), steps: &[u
 fn crc_and_checksum_are_the_standard_ones() {
     assert_eq!(crc32(b""), 0);
     assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
-    assert_eq!(xor_sum("OK"), b'O' ^ b'K');
+    assert_eq!(xor_checksum(b"OK"), b'O' ^ b'K');
     assert!(checked_body("OK*04").is_ok());
     assert!(checked_body("OK*05").is_err());
     assert!(checked_body("OK*4").is_err());
@@ -1087,27 +816,31 @@ fn crc_and_checksum_are_the_standard_ones() {
 
 #[test]
 fn model_self_checks() {
-    assert_eq!(q_div(1, 2), 1);
-    assert_eq!(q_div(-1, 2), -1);
-    assert_eq!(q_div(3, 2), 2);
-    assert_eq!(q_div(-3, 2), -2);
-    assert_eq!(q_div(49, 100), 0);
-    assert_eq!(q_div(-51, 100), -1);
-    assert_eq!(q_div(5, -2), -3);
-    assert_eq!(fmt4(Ratio::new(-1, 20_000)), "-0.0001");
-    assert_eq!(fmt4(Ratio::new(-49, 1_000_000)), "0.0000");
-    assert_eq!(fmt4(Ratio::micro(12_345_678_900)), "12345.6789");
+    // The model's own arithmetic is tested in `reference::exact`; here, what
+    // this test adds to it: spelling requests and reading them back.
     assert_eq!(fmt_len(-1_500_000, 0), "-1.5");
     assert_eq!(fmt_len(2_000_000, 2), "+2");
     assert_eq!(fmt_len(5, 4), "0.000005");
-    let mut t = 0;
-    assert_eq!(step_sequence(4, 2, &mut t), [0x03, 0x01, 0x03, 0x01]);
-    assert_eq!(step_sequence(-4, -2, &mut t), [0x0F, 0x05, 0x0F, 0x05]);
-    assert_eq!(step_sequence(1, 4, &mut t), [0x02, 0x03, 0x02, 0x02]);
-    assert_eq!(step_sequence(-1, -4, &mut t), [0x0A, 0x0F, 0x0A, 0x0A]);
-    assert_eq!(step_sequence(3, -3, &mut t), [0x0B, 0x0B, 0x0B]);
-    assert!(step_sequence(0, 0, &mut t).is_empty());
-    assert_eq!(t, 6);
+    for (um, style) in [(-1_500_000, 0), (2_000_000, 2), (5, 4), (-123_456_789, 6)] {
+        assert_eq!(parse_len(&fmt_len(um, style)), um);
+    }
+    let mut m = Model::new();
+    let mut st = Stats::default();
+    let got = model_move(
+        &mut m,
+        Some(Ratio::micro(40_000)),
+        Some(Ratio::micro(20_000)),
+        false,
+        &mut st,
+    );
+    assert_eq!(
+        got,
+        Expect::Ok(format!(
+            "OK NX=4 NZ=2 PX=4 PZ=2 SEQ={:08X}",
+            crc32(&[3, 1, 3, 1])
+        ))
+    );
+    assert_eq!((st.step_events, st.step_ties), (4, 2));
 }
 
 #[test]

@@ -1,14 +1,14 @@
 //! The trihedral-angle calculator (spherical trigonometry, `core-nostd`)
 //! against an independent construction of the same corner from three edge
-//! vectors (`host_sim::reference_trihedral`): every angle, every edge and
+//! vectors (`reference::trihedral`): every angle, every edge and
 //! row point, the table's rotation and tilt.
 
 use core_nostd::calc::trihedral::{
     Corner, CornerAngles, Edge, Job, PlaneAngles, Point3, Quadrant, Setup, TiltRotaryTable,
 };
-use host_sim::reference_trihedral as reference;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use reference::trihedral as vectors;
 
 const TOL_DEG: f64 = 1e-9;
 const TOL_MM: f64 = 1e-9;
@@ -24,7 +24,7 @@ fn close(a: f64, b: f64, tol: f64, what: &str) {
 
 /// Random corners whose edges all rise from the vertex along the cone's
 /// axis (the ones that can be milled), with the reference corner.
-fn corners(n: usize) -> Vec<(PlaneAngles, Corner, reference::Corner)> {
+fn corners(n: usize) -> Vec<(PlaneAngles, Corner, vectors::Corner)> {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     let mut out = Vec::new();
     while out.len() < n {
@@ -35,14 +35,14 @@ fn corners(n: usize) -> Vec<(PlaneAngles, Corner, reference::Corner)> {
         ];
         let Ok(plane) = PlaneAngles::new(a[0], a[1], a[2]) else {
             assert!(
-                reference::Corner::from_plane_angles(a[0], a[1], a[2]).is_none()
+                vectors::Corner::from_plane_angles(a[0], a[1], a[2]).is_none()
                     || a.iter().sum::<f64>() >= 359.999
                     || a.iter().any(|&x| 2.0 * x >= a.iter().sum::<f64>() - 1e-9),
                 "refused a corner the reference builds: {a:?}"
             );
             continue;
         };
-        let Some(r) = reference::Corner::from_plane_angles(a[0], a[1], a[2]) else {
+        let Some(r) = vectors::Corner::from_plane_angles(a[0], a[1], a[2]) else {
             panic!("the reference cannot build {a:?}");
         };
         match Corner::new(plane) {
@@ -177,7 +177,7 @@ fn mixed_plane_and_linear_angles_give_the_corner_back() {
             1e-8,
             &format!("COA of {p:?} from AOB, BOC, ЛУ_OB"),
         );
-        let third = reference::third_plane_angle_deg(p[0], p[1], c.linear_ob_deg)
+        let third = vectors::third_plane_angle_deg(p[0], p[1], c.linear_ob_deg)
             .expect("the reference's third angle");
         close(
             sas.coa_deg(),

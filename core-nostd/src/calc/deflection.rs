@@ -1,6 +1,6 @@
 //! Deflection of a part between centres and the "mirror image" pass that
 //! compensates it (Kosenko 1977, ch. II §2: eq. 16–31, Tables 6–10;
-//! `SPEC.md` §11).
+//! `docs/calculators.md` §1).
 //!
 //! # Model
 //! The part is a beam on two supports, the headstock and the tailstock
@@ -1314,7 +1314,7 @@ impl Deflection {
 
     /// The compliance `Σ(x)` at `x_mm` (0…l from the headstock end),
     /// mm/kgf: the displacement between tool and part per kgf of radial
-    /// force (eq. 17–19, `SPEC.md` §11).
+    /// force (eq. 17–19, `docs/calculators.md` §1.1).
     ///
     /// ```
     /// use core_nostd::calc::deflection::*;
@@ -2098,8 +2098,8 @@ mod tests {
     }
 
     /// Table 12 (`d_np = 25`, columns t = 0.05, 0.2, 0.75), the Проминь's
-    /// print-out. Not reproducible from Table 10's inputs (`SPEC.md` §11);
-    /// only the fit the spec states is checked, loosely.
+    /// print-out. Not reproducible from Table 10's inputs (`docs/errata.md` §2.4);
+    /// only the fit that page states is checked, loosely.
     const TABLE_12: [(f64, [f64; 3]); 26] = [
         (0.0, [0.019, 0.066, f64::NAN]), // "0,2П": illegible
         (10.0, [0.019, 0.066, 0.218]),

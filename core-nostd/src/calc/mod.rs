@@ -1,5 +1,5 @@
 //! The seeds' other calculators: what a machinist on an old lathe works
-//! out by hand from the same books (`SPEC.md` §11). Floating point (`f64`,
+//! out by hand from the same books (`docs/calculators.md`). Floating point (`f64`,
 //! `libm`) is fine here: nothing of it moves an axis.
 
 pub mod deflection;

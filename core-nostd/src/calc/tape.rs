@@ -1,6 +1,6 @@
 //! Punched tapes of the old controls: the АТПр-2М12's BCK-5 frames and the
 //! ЭМ-907's ISO-7bit blocks, encoded and verified (Kosenko 1977, ch. III §2,
-//! ch. IV §5, ch. VI; `SPEC.md` §5 and §11).
+//! ch. IV §5, ch. VI; `docs/tapes.md` §2, §3).
 //!
 //! # BCK-5 (АТПр-2М12 with the «Салют-2М» control)
 //! Five tracks: digits on tracks 1–4 (weights 1, 2, 4, 8), an address
@@ -80,7 +80,7 @@
 //!   and are followed by the three digits of the number too. G is only
 //!   written with X or Z, F in every G01–G03 block.
 //!
-//! # Seed slips (`SPEC.md` §11 and beyond)
+//! # Seed slips (`docs/errata.md` §2)
 //! - К000, К004, К007: check digits 0, 9, 8 printed; the frames as printed
 //!   need 7, 8, 7. К004's 9 is in fact right for the frame meant: its
 //!   `Д514800` (14 800 impulses, 74 mm) is `Д504800` (24 mm, Tables 21–22),

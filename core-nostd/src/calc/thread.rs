@@ -21,7 +21,7 @@
 //! word (address K along, J across) is the pitch times the mode's factor
 //! in impulses of that axis, at most 1000. The seed prints the G09 cap as
 //! 19200 rpm; it is 1920 (= 1200/0.625, the pattern of the other three
-//! modes; `SPEC.md` §11).
+//! modes; `docs/errata.md` §2.7).
 
 use core::fmt;
 

@@ -20,7 +20,7 @@
 //! 3. [`TableMeasurement`]: the table's parameters `L`, `m` from the two
 //!    measurements of a roller, at tilt 0° and at tilt 90°.
 //!
-//! # Exact spherical trigonometry (`SPEC.md` §11)
+//! # Exact spherical trigonometry (`docs/calculators.md` §4.2)
 //! With `s` the half-sum of the plane angles,
 //! `σ_a = s − BOC`, `σ_b = s − COA`, `σ_c = s − AOB` (each edge's angle to
 //! the tangent lines, equal in its two faces),
@@ -43,7 +43,7 @@
 //! `AB` lies on `x = −r`, `A` at `y < 0`, `B` at `y > 0`, `C` at `x > 0`
 //! (seen from the tool, `A → B → C` runs clockwise).
 //!
-//! # Where the paper slips (decided in `SPEC.md` §11)
+//! # Where the paper slips (`docs/errata.md` §3)
 //! - `Y_BO = −r/tan α_b` for the edge point but `y_b = +r/tan α_b` for the
 //!   rows: `B` is at `+Y` (the rows are right).
 //! - `X_CO = −r·(sin γ_a − sin γ_b)/sin(γ_a − γ_b)` for the edge point but
@@ -650,7 +650,7 @@ fn check_edges_rise(sigma: [f64; 3]) -> Result<(), TrihedralError> {
 }
 
 impl Corner {
-    /// The corner by exact spherical trigonometry (`SPEC.md` §11).
+    /// The corner by exact spherical trigonometry (`docs/calculators.md` §4.2).
     /// Refuses a corner with an edge not above the vertex along the cone
     /// axis (`σ ≥ 90°`).
     ///

@@ -1,5 +1,5 @@
 //! Tool wear over a batch of parts (Kosenko 1977, ch. II §3: eq. 31–35,
-//! Tables 13–14; `SPEC.md` §11).
+//! Tables 13–14; `docs/calculators.md` §2).
 //!
 //! # Model
 //! A tool's radial (dimensional) wear grows by an initial amount `u_init`
@@ -21,8 +21,8 @@
 //! wear land `h` and the clearance angle `α` (eq. 35, Table 13).
 //!
 //! The seed writes `1000` for `10⁶` in eq. 32 and its `L` formula (a path
-//! in metres labelled km); the units here are made consistent as `SPEC.md`
-//! §11 decides: `d`, `l` in mm, `S` in mm/rev, `L` in km, wear in µm
+//! in metres labelled km); the units here are made consistent as
+//! `docs/calculators.md` §2 decides: `d`, `l` in mm, `S` in mm/rev, `L` in km, wear in µm
 //! (Table 13's wear land and radial wear in mm, as printed).
 //!
 //! ```
@@ -417,7 +417,7 @@ pub enum Pass {
 
 /// A row of Table 13: the flank wear land a tool may reach, hence its full
 /// radial wear `h·tan α`. The seed's column says "rake angle γ"; its
-/// numbers are `h·tan` of that angle, a clearance angle (`SPEC.md` §11).
+/// numbers are `h·tan` of that angle, a clearance angle (`docs/errata.md` §2.5).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FlankWearLimit {
     /// The work material group.

@@ -1,4 +1,4 @@
-//! The pendant line protocol (`PROTOCOL.md`): transport-agnostic, bytes in,
+//! The pendant line protocol (`docs/protocol.md`): transport-agnostic, bytes in,
 //! reply lines out, bounded buffers.
 //!
 //! [`Device`] is what a transport owns: it frames received bytes into lines

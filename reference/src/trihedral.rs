@@ -1,13 +1,14 @@
 //! Double-precision (f64) reference of the trihedral angle set-up (Lyakun &
 //! Yurkevich, "Algorithm of the control program for milling a trihedral angle
-//! on NC machines", SPEC.md §11), built from **vector geometry only**.
+//! on NC machines", `docs/calculators.md` §4), built from **vector geometry
+//! only**.
 //!
 //! The production calculator follows the paper's order with spherical
 //! trigonometry. This reference does not: it builds the corner as three unit
 //! edge vectors `OA`, `OB`, `OC` in 3-D and derives every quantity from dot
 //! and cross products, projections and 3×3 linear systems, so that the two
 //! can be compared number for number. The closed forms of the paper and of
-//! SPEC §11 appear only in the unit tests, as cross-checks.
+//! `docs/calculators.md` §4.2 appear only in the unit tests, as cross-checks.
 //!
 //! All angles are in **degrees** at the API, all lengths in the caller's unit
 //! (mm on the machine). Vectors are `[x, y, z]`.
@@ -844,7 +845,7 @@ mod tests {
         }
     }
 
-    /// Spherical-trig closed forms (SPEC §11), for cross-checks only.
+    /// Spherical-trig closed forms (`docs/calculators.md` §4.2), for cross-checks only.
     fn spec_phi_sigma_alpha(p: [f64; 3]) -> (f64, [f64; 3], [f64; 3]) {
         let [aob, boc, coa] = p;
         let s = 0.5 * (aob + boc + coa);
@@ -1000,7 +1001,7 @@ mod tests {
             let p = random_corner(&mut rng, 1.0);
             let k = Corner::from_plane_angles(p[0], p[1], p[2]).unwrap();
             let (phi, sig, alpha) = spec_phi_sigma_alpha(p);
-            assert_close(k.phi_deg(), phi, 1e-9, "SPEC tan²φ");
+            assert_close(k.phi_deg(), phi, 1e-9, "spherical tan²φ");
             let s = k.sigma_deg();
             let a = k.alpha_deg();
             for i in 0..3 {

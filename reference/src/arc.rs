@@ -1,10 +1,12 @@
 //! Double-precision (f64) reference of arcs: arcs by chords (`ARC`) and the
 //! ЭМ-907 circular interpolator (`ARC … MODE=DIRECT`).
 //!
-//! Written from SPEC.md (§1, §2, §3, §5, §7) and the `ARC` command of
-//! PROTOCOL.md alone, independently of the controller's fixed-point core, so
-//! that the two can be compared bit for bit. It extends the linear-block
-//! reference of [`crate::reference`] and shares its machine state
+//! Written from `docs/arcs.md` §1–§2, `docs/impulses.md` §2–§3,
+//! `docs/units.md` §1–§3, `docs/tapes.md` §1.1 (the feed word),
+//! `docs/verification.md` §2 and the `ARC` command of `docs/protocol.md` §4
+//! alone, independently of the controller's fixed-point core, so that the two
+//! can be compared bit for bit. It extends the linear-block
+//! reference of [`crate::impulse`] and shares its machine state
 //! ([`RefMachine`]), its quantizer and its step interleaver.
 //!
 //! # Arcs by chords ([`RefMachine::arc`])
@@ -28,7 +30,7 @@
 //!   vector `S − C` rotated by `±i·Δφ`; chord `n` ends exactly at `E`.
 //! * Each chord end is quantized absolutely (`Q(P/h)`, ties away from zero)
 //!   and each chord is interleaved as a linear block
-//!   ([`crate::reference::step_events`]). `SEQ` is the CRC-32 over all
+//!   ([`crate::impulse::step_events`]). `SEQ` is the CRC-32 over all
 //!   chords' step bytes in order. The commanded point becomes `E` exactly
 //!   and the registers `Q(E/h)`, as after a linear block to `E`.
 //!
@@ -100,7 +102,7 @@
 use std::f64::consts::PI;
 use std::fmt;
 
-use crate::reference::{
+use crate::impulse::{
     parse_length_nm, quantize, register, step_events, RefMachine, TieStats, BIT_X_NEG, BIT_X_STEP,
     BIT_Z_NEG, BIT_Z_STEP, HALF_NM_PER_MM, MAX_COORD_MM,
 };
@@ -112,18 +114,18 @@ const QUARTER_TURN_ARCSEC: i64 = FULL_TURN_ARCSEC / 4;
 const EIGHTH_TURN_ARCSEC: i64 = FULL_TURN_ARCSEC / 8;
 
 /// Largest accepted difference between the start and end radii, mm.
-pub const RADIUS_MISMATCH_MM: f64 = 0.002;
+pub const RADIUS_MISMATCH_MM: f64 = crate::protocol::RADIUS_MISMATCH_MM;
 /// [`RADIUS_MISMATCH_MM`] in half-nanometres.
 const RADIUS_MISMATCH_HALF_NM: u128 = 4_000;
 
 /// Largest number of chords of one arc.
-pub const MAX_CHORDS: i64 = 10_000;
+pub const MAX_CHORDS: i64 = crate::protocol::CHORDS_MAX;
 
 /// Largest number of impulses per axis of one chord or one direct arc.
-pub const MAX_ARC_BLOCK_IMPULSES: i64 = 1_000_000;
+pub const MAX_ARC_BLOCK_IMPULSES: i64 = crate::protocol::BLOCK_MAX;
 
 /// Largest register value (absolute) an arc may reach.
-pub const MAX_POSITION_IMPULSES: i64 = 999_999_999;
+pub const MAX_POSITION_IMPULSES: i64 = crate::protocol::REGISTER_MAX;
 
 /// Half-nanometres per mm, as f64.
 const HALF_NM_F: f64 = HALF_NM_PER_MM as f64;
@@ -991,7 +993,7 @@ impl RefMachine {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reference::{seq_crc, RefConfig};
+    use crate::impulse::{seq_crc, RefConfig};
     use proptest::prelude::*;
 
     const ARCSEC_PER_RAD: f64 = 206_264.806_247_096_36;
@@ -1004,10 +1006,9 @@ mod tests {
         RefMachine::new(RefConfig { hx_mm, hz_mm, diam })
     }
 
-    /// Exact `Q(n/d)`, `d > 0`, round half away from zero.
+    /// Exact `Q(n/d)`, round half away from zero: the exact model's.
     fn q_exact(n: i128, d: i128) -> i64 {
-        let m = (2 * n.abs() + d) / (2 * d);
-        (if n < 0 { -m } else { m }) as i64
+        crate::exact::q_div(n, d) as i64
     }
 
     /// A whole number of nanometres as a decimal word.

@@ -1,9 +1,9 @@
 //! Double-precision (f64) reference of tool-nose-radius compensation
 //! (`G41`/`G42`/`G40`) on G-code contours.
 //!
-//! Written from SPEC.md §1, §4, §8, §9, PROTOCOL.md, `docs/compensation.md`
-//! (the rule set, followed rule by rule) and the "G-code blocks" section of
-//! `docs/protocol.md` alone, independently of the controller's fixed-point
+//! Written from `docs/units.md` §1, `docs/compensation.md` (the rule set of
+//! §1–§6, followed rule by rule; the figures of §8 and the errata of
+//! `docs/errata.md` §1) and the G-code blocks of `docs/protocol.md` §5 alone, independently of the controller's fixed-point
 //! core, so that the two can be compared block by block. It does not call the
 //! core crate.
 //!
@@ -220,7 +220,7 @@ impl UPt {
 pub struct CompSettings {
     /// Nose radius `r`, mm (`0 ≤ r ≤ 25`).
     pub rn_mm: f64,
-    /// Tip orientation code `0 … 9` (PROTOCOL.md, `CFG TIP`).
+    /// Tip orientation code `0 … 9` (`docs/protocol.md` §4, `CFG TIP`).
     pub tip: u8,
     /// X words (and printed X values) are diameters.
     pub diam: bool,

@@ -1,13 +1,13 @@
 //! Reference model of motion in time: the planner and the step timer.
 //!
-//! This module gives every step event its tick exactly as SPEC.md §10 and
-//! `docs/motion.md` define it: blocks, junction speeds, the plan over a
+//! This module gives every step event its tick exactly as `docs/motion.md`
+//! §1–§6 defines it: blocks, junction speeds, the plan over a
 //! rolling window of `W` blocks, runs between flushes, event times at the
 //! rounding boundaries of the lead axis, `Q(T·TICK)`, the fixed rate of
-//! `ARC … MODE=DIRECT` and what `SYNC` reports. It is written from those two
-//! documents alone, independently of the controller's fixed-point core, so
+//! `ARC … MODE=DIRECT` and what `SYNC` reports. It is written from that page
+//! alone, independently of the controller's fixed-point core, so
 //! that the two can be compared event by event. The step bytes themselves
-//! come from [`crate::reference::step_events`] (SPEC §2).
+//! come from [`crate::impulse::step_events`] (`docs/impulses.md` §3).
 //!
 //! The arithmetic is double-double (an unevaluated sum of two f64, about 106
 //! bits); see *Arithmetic and error bound* below for why plain f64 would not
@@ -186,7 +186,7 @@
 use std::collections::VecDeque;
 
 use crate::dd::Dd;
-use crate::reference::{step_events, TieStats};
+use crate::impulse::{step_events, TieStats};
 
 /// Length unit of [`Point`]: 10⁻⁷ mm per unit.
 pub const UNITS_PER_MM: i64 = 10_000_000;
@@ -227,7 +227,7 @@ fn decimal(x: f64) -> Dd {
 // ---------------------------------------------------------------------------
 // Public types.
 
-/// Motion limits (SPEC §10, `docs/motion.md`); they apply at rest.
+/// Motion limits (`docs/motion.md` §1); they apply at rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotionLimits {
     /// Rapid rates `VX`, `VZ` of X (on the radius) and Z, mm/min.
@@ -272,7 +272,7 @@ impl Point {
     }
 
     /// An exact point in half-nanometres (5·10⁻⁷ mm), the unit of the
-    /// commanded coordinates in [`crate::reference`].
+    /// commanded coordinates in [`crate::impulse`].
     pub fn from_half_nm(x: i64, z: i64) -> Point {
         Point::from_units(x * 5, z * 5)
     }
@@ -347,7 +347,7 @@ impl From<[f64; 2]> for Point {
 /// One step event with its tick.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimedEvent {
-    /// The step byte (SPEC §2, `SEQ` bits).
+    /// The step byte (`docs/impulses.md` §3.2, `SEQ` bits).
     pub byte: u8,
     /// Its tick, `Q(T·TICK)`, counted from the start of its run.
     pub tick: u64,
@@ -1083,12 +1083,11 @@ fn junction2(d0: [Dd; 2], l0: Dd, d1: [Dd; 2], l1: Dd, a_min: Dd, delta: Dd, cap
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reference::seq_crc;
+    use crate::impulse::seq_crc;
 
-    /// Exact `Q(n/d)`, `d > 0`, half away from zero.
+    /// Exact `Q(n/d)`, round half away from zero: the exact model's.
     fn q_exact(n: i128, d: i128) -> i64 {
-        let m = (2 * n.abs() + d) / (2 * d);
-        (if n < 0 { -m } else { m }) as i64
+        crate::exact::q_div(n, d) as i64
     }
 
     /// mm → units of 10⁻⁷ mm (for test values with at most 7 decimals).
@@ -1853,8 +1852,8 @@ mod tests {
             let (x, z) = (5.0 * phi.sin(), -5.0 + 5.0 * phi.cos());
             let mut t = TieStats::new();
             let r = [
-                crate::reference::quantize(x / 0.005, &mut t),
-                crate::reference::quantize(z / 0.01, &mut t),
+                crate::impulse::quantize(x / 0.005, &mut t),
+                crate::impulse::quantize(z / 0.01, &mut t),
             ];
             m.push(Point::from_mm(x, z), r, Some(300.0));
             regs_prev = r;

@@ -2,8 +2,9 @@
 //! tool-nose corrections for tapers (Krylenko's `Xc`, `Zc` and the Nomura
 //! table's `A`, `B`, `C`).
 //!
-//! Written from SPEC.md §4 (cones, the Nomura table, the angles appendix) and
-//! the `CONE` command, numbers and angles of PROTOCOL.md alone, independently
+//! Written from `docs/compensation.md` §7.1–§7.2 (tapers, the Nomura table),
+//! `docs/units.md` §3.3 (angles) and the `CONE` command and numbers of
+//! `docs/protocol.md` §3–§4 alone, independently
 //! of the controller's fixed-point core, so that the two can be compared
 //! digit for digit.
 //!
@@ -213,8 +214,9 @@ impl RefCone {
     }
 }
 
-/// The Nomura (MELDAS 65SLC) nose correction table of the domain brief
-/// (`data/nomura-nose-correction-table.txt`, 204 values): one row per kind
+/// The Nomura (MELDAS 65SLC) nose correction table as printed in Krylenko's
+/// appendix, corrected (`docs/compensation.md` §7.2, `docs/errata.md` §1.3;
+/// 204 values): one row per kind
 /// and nose radius, `A2` (2A, the diameter correction), `B` or `C`, then r,
 /// then the values for a = 5°, 10°, … 85°, as printed.
 pub const NOMURA_TABLE: &str = "\

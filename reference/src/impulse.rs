@@ -2,9 +2,10 @@
 //!
 //! This module computes, for every linear block, the impulses each axis issues,
 //! the axis positions in impulses and the interleaved step sequence with its
-//! CRC-32 (`SEQ`), exactly as SPEC.md §1, §2 and §7 and the `MOVE`, `CFG` and
-//! `ZERO` commands of PROTOCOL.md define them. It is written from those two
-//! documents alone, independently of the controller's fixed-point core, so
+//! CRC-32 (`SEQ`), exactly as `docs/units.md` §1–§3, `docs/impulses.md`
+//! §2–§3, `docs/verification.md` §2 and the `MOVE`, `CFG` and `ZERO` commands
+//! of `docs/protocol.md` §4 define them. It is written from those pages
+//! alone, independently of the controller's fixed-point core, so
 //! that the two can be compared bit for bit: same impulse counts, same step
 //! bytes, same `SEQ`.
 //!
@@ -14,7 +15,7 @@
 //!   commanded coordinate since program zero (X on the radius; a diameter word
 //!   is halved exactly), `h` the axis price. A block issues
 //!   `Q(P1/h) − Q(P0/h)`. `Q` rounds half away from zero. The residual carry
-//!   of the spec is this closed form: nothing is lost between blocks.
+//!   of `docs/impulses.md` §1 is this closed form: nothing is lost between blocks.
 //! * Step sequence of a block from `(a0, b0)` to `(a1, b1)`: the lead axis is
 //!   the one with the larger `|Δ|` (X when equal). For `i = 1 … |Δlead|`,
 //!   event `i` steps the lead axis once and puts the other axis at
@@ -92,17 +93,10 @@
 //! impulse. The model therefore keeps each commanded coordinate as an exact
 //! integer number of half-nanometres (the input granularity; a diameter word
 //! halved), so increments add without drift over any number of blocks, and
-//! converts it to mm in f64 only where the spec's rules are evaluated
+//! converts it to mm in f64 only where the rules are evaluated
 //! (`P/h`, `Q`, the interleaver), which is where the error analysis applies.
 
 use std::fmt;
-
-// Arcs live in `reference_arc`; their types are re-exported here so that the
-// whole reference is reachable from one module.
-pub use crate::reference_arc::{
-    em907_block_text, feed_word_circular, feed_word_linear, Em907Words, RefArc, RefArcError,
-    RefDirect,
-};
 
 /// Unit of the exact commanded coordinate: half-nanometres per mm.
 pub(crate) const HALF_NM_PER_MM: i64 = 2_000_000;
@@ -293,7 +287,7 @@ pub fn seq_crc(bytes: &[u8]) -> u32 {
     crc32fast::hash(bytes)
 }
 
-/// `Q` of SPEC §2 (round half away from zero) applied to an f64 number of
+/// `Q` of `docs/impulses.md` §2.2 (round half away from zero) applied to an f64 number of
 /// impulses. A value within `τ·|v|` of a half-integer (`τ` =
 /// [`TIE_TOLERANCE_REL`]) is an exact tie: it is counted in
 /// `ties.exact_ties` and rounded away from zero; for every other value its
@@ -326,7 +320,7 @@ pub fn quantize(v: f64, ties: &mut TieStats) -> i64 {
 }
 
 /// Step-event bytes of a block from impulse position `from` to `to`, both
-/// given as `(x, z)`, per SPEC §2. Rounding decisions of the interleaver are
+/// given as `(x, z)`, per `docs/impulses.md` §3. Rounding decisions of the interleaver are
 /// recorded in `ties`.
 ///
 /// # Panics
@@ -592,10 +586,10 @@ mod tests {
         RefMachine::new(RefConfig::default())
     }
 
-    /// Exact `Q(n/d)`, `d > 0`, round half away from zero, in integers.
+    /// Exact `Q(n/d)`, round half away from zero, in integers: the exact
+    /// model's.
     fn q_exact(n: i128, d: i128) -> i64 {
-        let m = (2 * n.abs() + d) / (2 * d);
-        (if n < 0 { -m } else { m }) as i64
+        crate::exact::q_div(n, d) as i64
     }
 
     /// A whole number of nanometres written as a decimal word.
