@@ -377,13 +377,7 @@ fn line_at(p: [i64; 2], q: [i64; 2], d: i64) -> i64 {
 /// Cuts the arc `from → to` about `c` (`ccw` in the frame) at its points
 /// of extreme depth (where it crosses `c = centre's c`) into pieces, each
 /// monotone in depth and on one side of the centre.
-fn split_arc(
-    from: [i64; 2],
-    to: [i64; 2],
-    c: [i64; 2],
-    ccw: bool,
-    f: &mut impl FnMut(Piece),
-) {
+fn split_arc(from: [i64; 2], to: [i64; 2], c: [i64; 2], ccw: bool, f: &mut impl FnMut(Piece)) {
     let r2 = {
         let (a, b) = (i128::from(from[0] - c[0]), i128::from(from[1] - c[1]));
         a * a + b * b

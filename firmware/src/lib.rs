@@ -207,6 +207,17 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
         }
     }
 
+    fn user_output(&mut self, n: u8, on: bool) {
+        board::spindle::user_output(n, on);
+    }
+
+    fn wait_input(&mut self, n: u8, level: bool) {
+        // Until the input reads `level` or a reset comes, answering status.
+        while board::user_input(n) != level && !motion::reset_wanted() {
+            self.pause();
+        }
+    }
+
     fn timing(&mut self) -> Option<Timing> {
         self.asked
             .take()

@@ -178,6 +178,11 @@ pub fn stop_ended() -> bool {
     CYCLE_START.load(Ordering::Acquire) || WANTED.load(Ordering::Acquire) & WANT_RESET != 0
 }
 
+/// Whether a reset waits for thread mode.
+pub fn reset_wanted() -> bool {
+    WANTED.load(Ordering::Acquire) & WANT_RESET != 0
+}
+
 /// Whether a real-time request waits for thread mode.
 pub fn wanted() -> bool {
     WANTED.load(Ordering::Acquire) != 0

@@ -185,6 +185,7 @@ fn abort(a: &mut Axes) -> Aborted {
     }
     a.busy = false;
     a.outputs = Outputs::OFF;
+    a.user_outputs = [false; 4];
     a.stepper.set_spindle(0);
     found
 }

@@ -562,8 +562,13 @@ fn run_pass(
             continue;
         }
         let nose = tool.nose(&dev);
-        let mut moves: Vec<core_nostd::comp::Move> =
-            dev.device().session().last_moves().iter().copied().collect();
+        let mut moves: Vec<core_nostd::comp::Move> = dev
+            .device()
+            .session()
+            .last_moves()
+            .iter()
+            .copied()
+            .collect();
         // A request that ran many blocks (a turning cycle): its moves from
         // its DATA lines.
         let data = crate::program::data_moves(

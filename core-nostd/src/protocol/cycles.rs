@@ -153,7 +153,9 @@ impl Session {
         io: &mut I,
     ) -> Result<Block, Refusal<'a>> {
         if self.contour.active() {
-            return Err(Refusal::Busy("a turning cycle with nose compensation on (G40 first)"));
+            return Err(Refusal::Busy(
+                "a turning cycle with nose compensation on (G40 first)",
+            ));
         }
         if b.motion.is_some() || b.x.is_some() || b.z.is_some() || b.tool.is_some() {
             return Err(Refusal::Missing(
@@ -201,14 +203,15 @@ impl Session {
                 return Ok(Block::Run);
             }
             (Some(p), Some(q)) => (p, q),
-            _ => return Err(Refusal::Missing("G71 and G72 need P and Q: the profile's blocks")),
+            _ => {
+                return Err(Refusal::Missing(
+                    "G71 and G72 need P and Q: the profile's blocks",
+                ))
+            }
         };
-        let depth = c
-            .d
-            .or(self.cycles.depth)
-            .ok_or(Refusal::Missing(
-                "no depth of cut: D, or G71 U (G72 W) and R in a block before",
-            ))?;
+        let depth = c.d.or(self.cycles.depth).ok_or(Refusal::Missing(
+            "no depth of cut: D, or G71 U (G72 W) and R in a block before",
+        ))?;
         if depth.as_angstrom() <= 0 {
             return Err(Refusal::Value("D", "the depth of cut must be above 0"));
         }
@@ -217,10 +220,7 @@ impl Session {
                 return Err(Refusal::Value("F", "the roughing feed must be above 0"));
             }
         }
-        let allow = [
-            c.u.map_or(0, radius),
-            c.w.map_or(0, |w| w.as_angstrom()),
-        ];
+        let allow = [c.u.map_or(0, radius), c.w.map_or(0, |w| w.as_angstrom())];
         let retract = c.r.unwrap_or(self.cycles.retract).as_angstrom().max(0);
         let pending = Pending {
             kind: c.kind,
@@ -241,12 +241,18 @@ impl Session {
     }
 
     /// A block that streams in while a profile is held or refused.
-    pub(super) fn profile_line<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Result<(), Refusal<'a>> {
+    pub(super) fn profile_line<'a, I: Io>(
+        &mut self,
+        text: &str,
+        io: &mut I,
+    ) -> Result<(), Refusal<'a>> {
         self.last_moves = crate::comp::Moves::new();
         let pending = match self.cycles.mode {
             Mode::Idle => return Ok(()),
             Mode::Refusing(p, q) => {
-                let n = parse(text, self.dialect, self.modal.units).ok().and_then(|b| b.n);
+                let n = parse(text, self.dialect, self.modal.units)
+                    .ok()
+                    .and_then(|b| b.n);
                 if n == Some(q) {
                     self.cycles.mode = Mode::Idle;
                 }
@@ -292,7 +298,9 @@ impl Session {
                 }
             }
             Err(e) => {
-                let n = parse(text, self.dialect, self.modal.units).ok().and_then(|b| b.n);
+                let n = parse(text, self.dialect, self.modal.units)
+                    .ok()
+                    .and_then(|b| b.n);
                 self.cycles.mode = if n == Some(pending.q) {
                     Mode::Idle
                 } else {
@@ -367,15 +375,23 @@ impl Session {
                 } else {
                     ArcDir::Ccw
                 };
-                let len = |a: i64| Length::from_angstrom(a).ok_or(Refusal::Range("the profile lies beyond 99999.999999 mm"));
+                let len = |a: i64| {
+                    Length::from_angstrom(a)
+                        .ok_or(Refusal::Range("the profile lies beyond 99999.999999 mm"))
+                };
                 let centre = match (b.i.is_some() || b.k.is_some(), b.r) {
                     (true, None) => [
                         at[0] + b.i.map_or(0, |i| i.as_angstrom()),
                         at[1] + b.k.map_or(0, |k| k.as_angstrom()),
                     ],
                     (false, Some(r)) => {
-                        let c = centre_from_radius([len(at[0])?, len(at[1])?], [len(to[0])?, len(to[1])?], r, dir)
-                            .map_err(Refusal::from)?;
+                        let c = centre_from_radius(
+                            [len(at[0])?, len(at[1])?],
+                            [len(to[0])?, len(to[1])?],
+                            r,
+                            dir,
+                        )
+                        .map_err(Refusal::from)?;
                         [c[0].as_angstrom(), c[1].as_angstrom()]
                     }
                     (true, Some(_)) => return Err(Refusal::Missing("give I and K or R, not both")),
@@ -420,7 +436,12 @@ impl Session {
 
     /// The roughing of the held profile: every move checked first, then
     /// run.
-    fn rough<I: Io>(&mut self, pending: Pending, crc: &mut Crc32, io: &mut I) -> Result<(), Refusal<'static>> {
+    fn rough<I: Io>(
+        &mut self,
+        pending: Pending,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<(), Refusal<'static>> {
         let cy = &self.cycles;
         if cy.segments.is_empty() {
             return Err(Refusal::Geometry(CycleError::Empty.as_str()));
@@ -439,8 +460,15 @@ impl Session {
             _ => Along::Z,
         };
         let s = cy.from;
-        let roughing = Roughing::new(along, s, shift(cy.first), &moved, pending.depth, pending.retract)
-            .map_err(|e| Refusal::Geometry(e.as_str()))?;
+        let roughing = Roughing::new(
+            along,
+            s,
+            shift(cy.first),
+            &moved,
+            pending.depth,
+            pending.retract,
+        )
+        .map_err(|e| Refusal::Geometry(e.as_str()))?;
         // The feed: the cycle's F, else the one in force.
         let mut modal = self.modal;
         if pending.feed.is_some() {
@@ -549,7 +577,10 @@ impl Session {
                 "G70 finishes on the profile: its allowances are G71's and G72's U and W",
             ));
         }
-        let (p, q) = (c.p.ok_or(Refusal::Missing("G70 needs P and Q"))?, c.q.ok_or(Refusal::Missing("G70 needs P and Q"))?);
+        let (p, q) = (
+            c.p.ok_or(Refusal::Missing("G70 needs P and Q"))?,
+            c.q.ok_or(Refusal::Missing("G70 needs P and Q"))?,
+        );
         if self.cycles.held != Some((p, q)) {
             return Err(Refusal::Missing(
                 "G70 finishes the profile a G71 or G72 held last: no such P and Q",
@@ -597,7 +628,15 @@ impl Session {
         for to in [[back[0], from[1]], back] {
             let modal = self.modal;
             let spindle = self.aux.spindle;
-            let plan = self.cycle_move(Step::Rapid(to), to, &modal, &spindle, self.cmd, self.pos, io)?;
+            let plan = self.cycle_move(
+                Step::Rapid(to),
+                to,
+                &modal,
+                &spindle,
+                self.cmd,
+                self.pos,
+                io,
+            )?;
             *crc = self.run_planned(&plan, *crc, io);
         }
         self.prog = [

@@ -114,6 +114,30 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
             .bits(0b01)
     });
 
+    // PC8..PC11: the user inputs 1 … 4, pulled down (unwired reads low).
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    gpioc.moder().modify(|_, w| unsafe {
+        w.moder8()
+            .bits(0)
+            .moder9()
+            .bits(0)
+            .moder10()
+            .bits(0)
+            .moder11()
+            .bits(0)
+    });
+    // SAFETY: as above.
+    gpioc.pupdr().modify(|_, w| unsafe {
+        w.pupdr8()
+            .bits(0b10)
+            .pupdr9()
+            .bits(0b10)
+            .pupdr10()
+            .bits(0b10)
+            .pupdr11()
+            .bits(0b10)
+    });
+
     let usart = dp.USART1;
     // Both boards give a divider well below 2^16.
     let brr = ((PCLK2_HZ + BAUD / 2) / BAUD) as u16;
@@ -721,4 +745,17 @@ pub fn step_outputs_low() {
     // SAFETY: a single atomic BSRR write.
     let gpioc = unsafe { &*pac::GPIOC::ptr() };
     gpioc.bsrr().write(|w| w.br0().set_bit().br2().set_bit());
+}
+
+/// User input `n` (1 … 4, PC8 … PC11) reads high; another `n` reads low.
+pub fn user_input(n: u8) -> bool {
+    let Some(pin) = n
+        .checked_sub(1)
+        .filter(|&i| i < 4)
+        .map(|i| 8 + u32::from(i))
+    else {
+        return false;
+    };
+    // SAFETY: a read of GPIOC's input register, which nothing else writes.
+    unsafe { (*pac::GPIOC::ptr()).idr().read().bits() & (1 << pin) != 0 }
 }

@@ -28,6 +28,10 @@ const RUN: u32 = 7;
 const CCW: u32 = 8;
 const FLOOD: u32 = 9;
 const MIST: u32 = 10;
+/// The machine's user outputs 1 … 4 (`MCODE … DO=ON|OFF`): PB12 … PB15.
+const USER_OUT: u32 = 12;
+/// The user outputs' reset bits in BSRR.
+const USER_OUT_LOW: u32 = 0b1111 << (USER_OUT + 16);
 
 /// TIM4's PWM and the GPIOB pins.
 pub struct Spindle {
@@ -53,6 +57,14 @@ impl Spindle {
                 .moder9()
                 .bits(0b01)
                 .moder10()
+                .bits(0b01)
+                .moder12()
+                .bits(0b01)
+                .moder13()
+                .bits(0b01)
+                .moder14()
+                .bits(0b01)
+                .moder15()
                 .bits(0b01)
         });
         // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
@@ -104,12 +116,16 @@ impl Spindle {
         }
     }
 
-    /// Everything low at once (a reset).
+    /// Everything low at once (a reset), the user outputs too.
     pub fn off(&mut self) {
         self.set(&Outputs {
             top: self.now.top,
             ..Outputs::OFF
         });
+        // SAFETY: one atomic BSRR write of this module's pins.
+        unsafe { &*pac::GPIOB::ptr() }
+            .bsrr()
+            .write(|w| unsafe { w.bits(USER_OUT_LOW) });
     }
 
     fn duty(&mut self) {
@@ -119,14 +135,35 @@ impl Spindle {
     }
 }
 
-/// Every spindle and coolant output low, the PWM's duty 0, without the
+/// User output `n` (1 … 4) driven `on`; another `n` drives nothing (the
+/// session accepts 1 … 4 only).
+pub fn user_output(n: u8, on: bool) {
+    let Some(pin) = n
+        .checked_sub(1)
+        .filter(|&i| i < 4)
+        .map(|i| USER_OUT + u32::from(i))
+    else {
+        return;
+    };
+    let bit = if on { 1 << pin } else { 1 << (pin + 16) };
+    // SAFETY: one atomic BSRR write of one of this module's pins.
+    unsafe { (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(bit)) };
+}
+
+/// Every spindle, coolant and user output low, the PWM's duty 0, without the
 /// driver (faults, panics).
 pub fn all_low() {
     // SAFETY: one atomic BSRR write; a write of TIM4's compare register,
     // which nothing runs after a fault.
     unsafe {
         (*pac::GPIOB::ptr()).bsrr().write(|w| {
-            w.bits((1 << (RUN + 16)) | (1 << (CCW + 16)) | (1 << (FLOOD + 16)) | (1 << (MIST + 16)))
+            w.bits(
+                (1 << (RUN + 16))
+                    | (1 << (CCW + 16))
+                    | (1 << (FLOOD + 16))
+                    | (1 << (MIST + 16))
+                    | USER_OUT_LOW,
+            )
         });
         (*pac::TIM4::ptr()).ccr1().write(|w| w.bits(0));
     }
