@@ -415,6 +415,21 @@ pub struct Block {
     pub position_offset: Option<PositionOffset>,
     /// A turning cycle (Fanuc dialect: `G70`, `G71`, `G72`) and its words.
     pub cycle: Option<CycleWords>,
+    /// A single cycle of G-code system A (Fanuc dialect: `G90` turning,
+    /// `G94` facing), modal; its end point in `X`/`U` and `Z`/`W`, its
+    /// taper in `R`.
+    pub single: Option<SingleCycle>,
+}
+
+/// The single cycles of G-code system A: one pass in, along, out and back.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SingleCycle {
+    /// `G90`: in along X at the rapid rate, the cut along Z, out along X,
+    /// back along Z at the rapid rate.
+    Turn,
+    /// `G94`: in along Z, the cut along X, out along Z, back along X.
+    Face,
 }
 
 /// The turning cycles the device runs.
@@ -1198,7 +1213,9 @@ impl Reading {
                     FeedMode::PerRev
                 },
             ),
-            900 | 920 | 940 if fanuc => Err(BlockError::Cycle(tenths)),
+            900 if fanuc => set(&mut b.single, SingleCycle::Turn),
+            940 if fanuc => set(&mut b.single, SingleCycle::Face),
+            920 if fanuc => Err(BlockError::Cycle(tenths)),
             70 | 80 | 910 | 901 | 911 | 950 | 430 | 490 | 281 | 301 | 921 | 922 | 923 if fanuc => {
                 other(Dialect::Iso)
             }
@@ -1660,7 +1677,16 @@ mod tests {
         assert_eq!((b.tool, b.offset), (1, Some(0)));
         assert_eq!(fanuc("M30").unwrap().stop, Some(Stop::End));
         let refused = |line| fanuc(line).unwrap_err().error;
-        assert_eq!(refused("G90 X20 Z-5 F.2"), BlockError::Cycle(900));
+        let b = fanuc("G90 X20 W-5 R-1 F.2").unwrap();
+        assert_eq!((b.single, b.motion), (Some(SingleCycle::Turn), None));
+        assert_eq!(
+            (b.x, b.z, b.incremental_z, b.r),
+            (mm("20"), mm("-5"), true, mm("-1"))
+        );
+        assert_eq!(fanuc("G94 Z-1").unwrap().single, Some(SingleCycle::Face));
+        // In the ISO dialect G90 and G94 keep their meaning.
+        let iso = parse("G90 G94 X20", Dialect::Iso, Units::Mm).unwrap();
+        assert_eq!((iso.single, iso.incremental), (None, Some(false)));
         assert_eq!(refused("G92 X20 Z-5 F1.5"), BlockError::Cycle(920));
         assert_eq!(
             refused("G91 X1"),

@@ -17,7 +17,7 @@ use crate::arc::{centre_from_radius, ArcDir};
 use crate::comp::{Move, MoveKind, Origin};
 use crate::crc32::Crc32;
 use crate::cycle::{Along, CycleError, Roughing, Segment, Step, PROFILE_BLOCKS};
-use crate::gcode::{parse, CycleKind, CycleWords, Motion};
+use crate::gcode::{parse, CycleKind, CycleWords, Motion, SingleCycle};
 use crate::interp::path_feed;
 use crate::length::Length;
 use core::fmt::Write;
@@ -52,6 +52,30 @@ pub struct Cycles {
     motion: Motion,
     /// `P` and `Q` of the profile held whole.
     held: Option<(u32, u32)>,
+    /// The single cycle in force (`G90`, `G94`), modal until a motion code.
+    pub(super) single: Option<Single>,
+}
+
+/// A single cycle in force and its modal words: the end point's X (on the
+/// radius) and Z in work coordinates, once given, and the taper `R`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Single {
+    kind: SingleCycle,
+    x: Option<i64>,
+    z: Option<i64>,
+    taper: i64,
+}
+
+impl Single {
+    /// A cycle selected without its words.
+    pub(super) const fn selected(kind: SingleCycle) -> Single {
+        Single {
+            kind,
+            x: None,
+            z: None,
+            taper: 0,
+        }
+    }
 }
 
 /// Whether blocks are being held.
@@ -97,6 +121,7 @@ impl Cycles {
             from: [0; 2],
             motion: Motion::Rapid,
             held: None,
+            single: None,
         }
     }
 
@@ -109,6 +134,7 @@ impl Cycles {
     /// A reset: a profile being read is dropped (the one held whole
     /// stays).
     pub fn abandon(&mut self) {
+        self.single = None;
         if self.holding() {
             self.mode = Mode::Idle;
             self.held = None;
@@ -644,6 +670,118 @@ impl Session {
             Length::from_angstrom(back[1]).unwrap_or(self.prog[1]),
         ];
         Ok(())
+    }
+}
+
+impl Session {
+    /// A block under a single cycle: `G90`/`G94` with its end point, or a
+    /// block of only `X`/`U`, `Z`/`W`, `R` and `F` while one is in force
+    /// (`kind` None). From the start point S: in at the rapid rate (to the
+    /// taper's start), the cut to the end point, out at the feed, back to S
+    /// at the rapid rate; every move checked before the first one runs.
+    pub(super) fn single_cycle<'a, I: Io>(
+        &mut self,
+        b: &crate::gcode::Block,
+        kind: Option<SingleCycle>,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<Block, Refusal<'a>> {
+        let bare = crate::gcode::Block {
+            kind: b.kind,
+            n: b.n,
+            x: b.x,
+            z: b.z,
+            x_half: b.x_half,
+            incremental_x: b.incremental_x,
+            incremental_z: b.incremental_z,
+            r: b.r,
+            f: b.f,
+            feed_mode: b.feed_mode,
+            single: b.single,
+            deleted: b.deleted,
+            ..Default::default()
+        };
+        if *b != bare {
+            return Err(Refusal::Missing(
+                "a G90/G94 block takes X (U), Z (W), R and F: put other words on their own line",
+            ));
+        }
+        if self.contour.active() {
+            return Err(Refusal::Busy(
+                "a single cycle with nose compensation on (G40 first)",
+            ));
+        }
+        let mut single = match (kind, self.cycles.single) {
+            // The same cycle again: its words stay in force.
+            (Some(k), Some(s)) if s.kind == k => s,
+            (Some(k), _) => Single::selected(k),
+            (None, Some(s)) => s,
+            (None, None) => return Err(Refusal::Missing("no single cycle in force")),
+        };
+        let modal = self.modal.after(b);
+        if let Some(f) = b.f {
+            if f.as_angstrom() <= 0 {
+                return Err(Refusal::Value("F", "the cycle's feed must be above 0"));
+            }
+        }
+        let diam = b.diameter.unwrap_or(self.cfg.diam);
+        let s = [self.prog[0].as_angstrom(), self.prog[1].as_angstrom()];
+        let add = |from: i64, by: i64| {
+            Length::from_angstrom(from.saturating_add(by))
+                .map(Length::as_angstrom)
+                .ok_or(Refusal::Range("the cycle's end beyond 99999.999999 mm"))
+        };
+        if let Some(x) = block_x(b, diam) {
+            single.x = Some(if b.incremental_x {
+                add(s[0], x.as_angstrom())?
+            } else {
+                x.as_angstrom()
+            });
+        }
+        if let Some(z) = b.z {
+            single.z = Some(if b.incremental_z {
+                add(s[1], z.as_angstrom())?
+            } else {
+                z.as_angstrom()
+            });
+        }
+        if let Some(r) = b.r {
+            single.taper = r.as_angstrom();
+        }
+        let e = [single.x.unwrap_or(s[0]), single.z.unwrap_or(s[1])];
+        let steps = match single.kind {
+            SingleCycle::Turn => [
+                Step::Rapid([add(e[0], single.taper)?, s[1]]),
+                Step::Feed(e),
+                Step::Feed([s[0], e[1]]),
+                Step::Rapid(s),
+            ],
+            SingleCycle::Face => [
+                Step::Rapid([s[0], add(e[1], single.taper)?]),
+                Step::Feed(e),
+                Step::Feed([e[0], s[1]]),
+                Step::Rapid(s),
+            ],
+        };
+        self.last_moves = crate::comp::Moves::new();
+        let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
+        // Checked whole before anything moves.
+        let (mut cmd, mut pos) = (self.cmd, self.pos);
+        let mut last = s;
+        for step in steps {
+            let p = self.cycle_move(step, last, &modal, &spindle, cmd, pos, io)?;
+            (cmd, pos) = (p.end(), p.registers());
+            last = step_end(step);
+        }
+        self.modal = modal;
+        self.cycles.single = Some(single);
+        let mut last = s;
+        for step in steps {
+            let p = self.cycle_move(step, last, &modal, &spindle, self.cmd, self.pos, io)?;
+            *crc = self.run_planned(&p, *crc, io);
+            last = step_end(step);
+        }
+        Ok(Block::Run)
     }
 }
 

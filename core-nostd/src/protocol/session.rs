@@ -900,8 +900,42 @@ impl Session {
             return Ok(Block::Skipped);
         }
         if let Some(cycle) = b.cycle {
+            self.cycles.single = None;
             return self.cycle_block(&b, cycle, crc, io);
         }
+        if let Some(kind) = b.single {
+            if b.motion.is_some() {
+                return Err(Refusal::Missing(
+                    "G90/G94 and a motion code in one block: one of them",
+                ));
+            }
+            if b.x.is_some() || b.z.is_some() {
+                return self.single_cycle(&b, Some(kind), crc, io);
+            }
+            // Selected only (a header's `G90`): the block's other words
+            // as any block's; nothing moves.
+            let done = self.gcode_words(b, crc, io)?;
+            self.cycles.single = Some(super::cycles::Single::selected(kind));
+            return Ok(done);
+        }
+        if self.cycles.single.is_some() {
+            if b.motion.is_some() || b.stop == Some(Stop::End) {
+                // A motion code (or the program's end) ends the cycle.
+                self.cycles.single = None;
+            } else if b.x.is_some() || b.z.is_some() {
+                return self.single_cycle(&b, None, crc, io);
+            }
+        }
+        self.gcode_words(b, crc, io)
+    }
+
+    /// A block's words, run (no cycle in it).
+    fn gcode_words<'a, I: Io>(
+        &mut self,
+        b: crate::gcode::Block,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<Block, Refusal<'a>> {
         let modal = self.modal.after(&b);
         // F0 (a header's, before G95) is taken; a feed move then needs a
         // feed above 0.

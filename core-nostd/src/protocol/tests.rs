@@ -1851,3 +1851,98 @@ fn dynamic_compensation_takes_the_nose_from_the_block() {
     assert!(ask1(&mut dev, "G42.1 L2 G01 Z0 F100")
         .starts_with("ERR SYNTAX G41.1 and G42.1 need D: the nose diameter"));
 }
+
+/// `G90` and `G94` of G-code system A (Fanuc dialect) move as the blocks
+/// a programmer writes for them by hand: in at the rapid rate (to the
+/// taper's start, X + 2R on the diameter), the cut, out at the feed, back
+/// to the start at the rapid rate; X, Z and R modal, the cycle repeated by
+/// an axis word alone until a motion code ends it.
+#[test]
+fn single_cycles_move_as_their_blocks_written_out() {
+    let run = |program: &[&str]| {
+        let mut dev = Device::new();
+        assert_eq!(
+            ask1(&mut dev, "OPT DIALECT=fanuc"),
+            "OK BDEL=0 DIALECT=FANUC OPTSTOP=0"
+        );
+        let mut trace = Vec::new();
+        for line in program {
+            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+            trace.push(r.last().unwrap().clone());
+        }
+        (ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"), trace)
+    };
+    let (sync, pos, trace) = run(&[
+        "G21 G18 G98 G90",
+        "G00 X50. Z5.",
+        "G90 X40. W-25. F200.",
+        "X35.",
+        "Z-30. R-1.",
+        "G94 X20. Z0 F100.",
+        "Z-1.",
+        "G00 X60.",
+        "X70. Z10.",
+    ]);
+    let (sync_by_hand, pos_by_hand, _) = run(&[
+        "G21 G18 G98",
+        "G00 X50. Z5.",
+        "G00 X40.",
+        "G01 Z-20. F200.",
+        "X50.",
+        "G00 Z5.",
+        "X35.",
+        "G01 Z-20.",
+        "X50.",
+        "G00 Z5.",
+        "X33.",
+        "G01 X35. Z-30.",
+        "X50.",
+        "G00 Z5.",
+        "Z0",
+        "G01 X20. F100.",
+        "Z5.",
+        "G00 X50.",
+        "Z-1.",
+        "G01 X20.",
+        "Z5.",
+        "G00 X50.",
+        "X60.",
+        "X70. Z10.",
+    ]);
+    assert_eq!(pos, pos_by_hand);
+    assert_eq!(sync, sync_by_hand);
+    // A header's G90 selects the cycle without moving; the cycle blocks
+    // move and come back to where they started.
+    assert!(trace[0].starts_with("OK NX=0 NZ=0"), "{}", trace[0]);
+    assert!(trace[2].starts_with("OK NX=0 NZ=0"), "{}", trace[2]);
+}
+
+/// What a single cycle cannot take is refused before anything moves.
+#[test]
+fn single_cycle_refusals_change_nothing() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    for line in ["G21 G18 G98", "G00 X50. Z5."] {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
+    }
+    ask1(&mut dev, "SYNC");
+    let before = ask1(&mut dev, "POS");
+    for (line, want) in [
+        (
+            "G90 G01 X40. Z-20. F100.",
+            "ERR SYNTAX G90/G94 and a motion code in one block: one of them",
+        ),
+        (
+            "G90 X40. Z-20. F100. M08",
+            "ERR SYNTAX a G90/G94 block takes X (U), Z (W), R and F: put other words on their own line",
+        ),
+        ("G90 X40. Z-20.", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        // No event since: the SYNC since the last one is empty.
+        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
+        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
+    }
+}
