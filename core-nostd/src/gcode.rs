@@ -995,10 +995,10 @@ impl Reading {
                     }
                     return Ok(());
                 }
-                b'F' | b'S' | b'T' | b'N' => {}
+                b'F' | b'N' => {}
                 _ => {
                     return Err(BlockError::Form(
-                        "a cycle block takes P Q U W D R F S T (G71/G72) or P Q F U W (G70)",
+                        "a cycle block takes P Q U W D R F (G71/G72) or P Q F U W (G70): S and T on their own line",
                     ))
                 }
             }

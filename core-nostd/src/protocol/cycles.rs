@@ -179,9 +179,7 @@ impl Session {
         io: &mut I,
     ) -> Result<Block, Refusal<'a>> {
         if self.contour.active() {
-            return Err(Refusal::Busy(
-                "a turning cycle with nose compensation on (G40 first)",
-            ));
+            return Err(Refusal::Busy("a turning cycle"));
         }
         if b.motion.is_some() || b.x.is_some() || b.z.is_some() || b.tool.is_some() {
             return Err(Refusal::Missing(
@@ -208,7 +206,11 @@ impl Session {
                     CycleKind::Face => c.w,
                     _ => c.u,
                 };
-                if c.d.is_some() || (c.kind == CycleKind::Face && c.u.is_some()) {
+                let other = match c.kind {
+                    CycleKind::Face => c.u,
+                    _ => c.w,
+                };
+                if c.d.is_some() || other.is_some() {
                     return Err(Refusal::Missing(
                         "the first of the two blocks takes the depth (G71 U, G72 W) and the retract R",
                     ));
@@ -217,7 +219,11 @@ impl Session {
                     "G71 U (G72 W) and R: the depth of cut and the retract, or P and Q",
                 ))?;
                 if depth.as_angstrom() <= 0 {
-                    return Err(Refusal::Value("U", "the depth of cut must be above 0"));
+                    let word = match c.kind {
+                        CycleKind::Face => "W",
+                        _ => "U",
+                    };
+                    return Err(Refusal::Value(word, "the depth of cut must be above 0"));
                 }
                 if c.r.is_some_and(|r| r.as_angstrom() < 0) {
                     return Err(Refusal::Value("R", "the retract is 0 or more"));
@@ -634,6 +640,28 @@ impl Session {
                 "the profile leaves nose compensation on: end it with G40 before Q",
             ));
         }
+        // Every feed move of the profile needs a feed: known before the
+        // first one moves (a refusal comes before motion).
+        let mut feed =
+            b.f.or(self.modal.feed)
+                .is_some_and(|f| f.as_angstrom() != 0);
+        let mut motion = self.modal.motion;
+        for line in self.cycles.lines() {
+            if let Ok(pb) = parse(line, self.dialect, self.modal.units) {
+                if let Some(f) = pb.f {
+                    feed = f.as_angstrom() != 0;
+                }
+                if let Some(m) = pb.motion {
+                    motion = m;
+                }
+                if !feed && motion != Motion::Rapid && (pb.x.is_some() || pb.z.is_some()) {
+                    return Err(Refusal::Value(
+                        "F",
+                        "not programmed: the profile's feed moves need G70 F or a feed in force",
+                    ));
+                }
+            }
+        }
         if let Some(f) = b.f {
             self.modal.feed = Some(f);
         }
@@ -651,7 +679,13 @@ impl Session {
         // Back to the start point: X first, then Z, at the rapid rate.
         let here = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
         let (from, back) = (here(self.prog), here(back));
+        let mut at = from;
         for to in [[back[0], from[1]], back] {
+            if to == at {
+                // Already there (no move of no length).
+                continue;
+            }
+            at = to;
             let modal = self.modal;
             let spindle = self.aux.spindle;
             let plan = self.cycle_move(
@@ -707,9 +741,7 @@ impl Session {
             ));
         }
         if self.contour.active() {
-            return Err(Refusal::Busy(
-                "a single cycle with nose compensation on (G40 first)",
-            ));
+            return Err(Refusal::Busy("a single cycle"));
         }
         let mut single = match (kind, self.cycles.single) {
             // The same cycle again: its words stay in force.

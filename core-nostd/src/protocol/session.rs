@@ -155,7 +155,7 @@ pub struct Session {
     pub(super) checking: Option<ImpulsePoint>,
     /// The last reset dropped motion answered and not all run.
     pub(super) reset_dropped: bool,
-    /// The top speed of each gear range (`AUX G1=` … `G4=`), rpm.
+    /// The top speed of each gear range (`GEAR N= TOP=`), rpm.
     pub(super) gears: [Option<Length>; 4],
     /// The nose `G41.1`/`G42.1` gave, while its compensation is on.
     pub(super) dynamic_tool: Option<Tool>,
@@ -542,9 +542,10 @@ impl Session {
         } else if command.eq_ignore_ascii_case("RESET") {
             no_args(words, "RESET")?;
             // As the RESET key of a control: the program is abandoned where
-            // it stands. What is queued runs to its end; a waiting element
+            // it stands (a cycle's profile being read with it). What is queued runs to its end; a waiting element
             // is dropped.
             self.machine.flush(&mut Sink::new(io, self.drive));
+            self.cycles.abandon();
             // The programmed feed stays, as on the controls machinists know.
             self.modal = Modal {
                 feed: self.modal.feed,

@@ -1946,3 +1946,137 @@ fn single_cycle_refusals_change_nothing() {
         assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
     }
 }
+
+/// Fanuc's two-block `G71` roughs a stepped shaft as the manual draws it:
+/// passes U deep (on the radius) from the start point, each cut to the
+/// profile moved out by the allowances (U on the diameter, W along Z),
+/// pulled off at 45° by R, back to the start's Z at the rapid rate; then
+/// one pass along the moved profile and back to the start point. `G70`
+/// then runs the profile's own blocks and returns, X first.
+#[test]
+fn g71_roughs_in_passes_and_g70_finishes_on_the_profile() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let r = run_program(
+        &mut dev,
+        &[
+            "G21 G18 G98",
+            "G00 X40. Z2.",
+            "G71 U2. R.5",
+            "G71 P10 Q30 U.4 W.2 F300.",
+            "N10 G00 X20.",
+            "N20 G01 Z-30. F100.",
+            "N30 X40.",
+            "G70 P10 Q30",
+        ],
+    );
+    for reply in &r {
+        assert!(reply.last().unwrap().starts_with("OK"), "{reply:?}");
+    }
+    // The profile's blocks are held, not run, until Q.
+    assert!(r[4].last().unwrap().ends_with("HELD=1"), "{:?}", r[4]);
+    assert!(r[5].last().unwrap().ends_with("HELD=2"), "{:?}", r[5]);
+    let mut want = std::vec!["G00 X40.0000 Z2.0000".to_string()];
+    // Radii 18, 16, 14, 12: each to the shoulder at Z-30 + W.
+    for x in [36, 32, 28, 24] {
+        want.push(std::format!("G00 X{x}.0000 Z2.0000"));
+        want.push(std::format!("G01 X{x}.0000 Z-29.8000"));
+        want.push(std::format!("G01 X{}.0000 Z-29.3000", x + 1));
+        want.push(std::format!("G00 X{}.0000 Z2.0000", x + 1));
+    }
+    // Along the profile moved by the allowances (X20 + U, Z + W), then
+    // back to the start point.
+    for m in [
+        "G00 X20.4000 Z2.0000",
+        "G00 X20.4000 Z2.2000",
+        "G01 X20.4000 Z-29.8000",
+        "G01 X40.4000 Z-29.8000",
+        "G00 X40.0000 Z-29.8000",
+        "G00 X40.0000 Z2.0000",
+        // G70: the profile as written, then back.
+        "G00 X20.0000 Z2.0000",
+        "G01 X20.0000 Z-30.0000",
+        "G01 X40.0000 Z-30.0000",
+        "G00 X40.0000 Z2.0000",
+    ] {
+        want.push(m.to_string());
+    }
+    assert_eq!(data(&r), want);
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=4000 PZ=200 X=40.0000 Z=2.0000"
+    );
+}
+
+/// A profile block the device refuses refuses the cycle: the blocks up to
+/// Q are refused with it, nothing moves, and the program goes on after Q.
+#[test]
+fn a_refused_profile_refuses_its_cycle_and_nothing_moves() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let r = run_program(
+        &mut dev,
+        &[
+            "G21 G18 G98",
+            "G00 X40. Z2.",
+            "G71 U2. R.5",
+            "G71 P10 Q30 U.4 W.2 F300.",
+            "N10 G00 X20.",
+            "N20 G01 Z-30. Q7",
+            "N30 X40.",
+            "G01 X42. F100.",
+        ],
+    );
+    let last = |i: usize| r[i].last().unwrap().clone();
+    assert!(last(5).starts_with("ERR"), "{:?}", r[5]);
+    assert!(last(6).starts_with("ERR"), "{:?}", r[6]);
+    assert!(last(7).starts_with("OK NX=200 NZ=0"), "{:?}", r[7]);
+    assert_eq!(data(&r[2..7]), Vec::<String>::new());
+}
+
+/// G70 knows before its first move that the profile's feed moves have no
+/// feed; a first block's words that belong to the other cycle are refused;
+/// RESET drops a profile being read.
+#[test]
+fn cycle_refusals_come_before_motion() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let r = run_program(
+        &mut dev,
+        &[
+            "G21 G18 G98",
+            "G00 X40. Z2.",
+            "G71 P10 Q30 D2. F300.",
+            "N10 G00 X20.",
+            "N20 G01 Z-30.",
+            "N30 X40.",
+        ],
+    );
+    for reply in &r {
+        assert!(reply.last().unwrap().starts_with("OK"), "{reply:?}");
+    }
+    ask1(&mut dev, "SYNC");
+    assert_eq!(
+        ask1(&mut dev, "G70 P10 Q30"),
+        "ERR VALUE F not programmed: the profile's feed moves need G70 F or a feed in force"
+    );
+    assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "));
+    assert!(ask(&mut dev, b"G70 P10 Q30 F100.\n")
+        .last()
+        .unwrap()
+        .starts_with("OK"));
+    assert_eq!(
+        ask1(&mut dev, "G71 U1. R.5 W1."),
+        "ERR SYNTAX the first of the two blocks takes the depth (G71 U, G72 W) and the retract R"
+    );
+    assert_eq!(
+        ask1(&mut dev, "G72 W0 R.5"),
+        "ERR VALUE W the depth of cut must be above 0"
+    );
+    // A profile being read, dropped by RESET: the next line runs.
+    assert!(ask1(&mut dev, "G71 P1 Q2 D1. F100.").starts_with("OK"));
+    assert!(ask1(&mut dev, "N1 G00 X20.").ends_with("HELD=1"));
+    assert_eq!(ask1(&mut dev, "RESET"), "OK");
+    let r = ask(&mut dev, b"G00 X42.\n");
+    assert!(r.last().unwrap().starts_with("OK NX=200"), "{r:?}");
+}
