@@ -920,8 +920,8 @@ impl Session {
             return Ok(done);
         }
         if self.cycles.single.is_some() {
-            if b.motion.is_some() || b.stop == Some(Stop::End) {
-                // A motion code (or the program's end) ends the cycle.
+            if b.motion.is_some() || b.cancel_cycle || b.stop == Some(Stop::End) {
+                // A motion code, G80 or the program's end ends the cycle.
                 self.cycles.single = None;
             } else if b.x.is_some() || b.z.is_some() {
                 return self.single_cycle(&b, None, crc, io);

@@ -1883,6 +1883,10 @@ fn single_cycles_move_as_their_blocks_written_out() {
         "Z-1.",
         "G00 X60.",
         "X70. Z10.",
+        // G80 ends a cycle as a motion code does.
+        "G90 X40. Z-5. F200.",
+        "G80",
+        "X50.",
     ]);
     let (sync_by_hand, pos_by_hand, _) = run(&[
         "G21 G18 G98",
@@ -1909,6 +1913,12 @@ fn single_cycles_move_as_their_blocks_written_out() {
         "G00 X50.",
         "X60.",
         "X70. Z10.",
+        "X40.",
+        "G01 Z-5. F200.",
+        "X70.",
+        "G00 Z10.",
+        "G80",
+        "G00 X50.",
     ]);
     assert_eq!(pos, pos_by_hand);
     assert_eq!(sync, sync_by_hand);
