@@ -186,6 +186,21 @@ impl Session {
                 "a cycle block takes no motion, axis or tool words: put them on their own line",
             ));
         }
+        // Nothing else either: an M code, a spindle speed or a mode in the
+        // block would otherwise pass unread.
+        let own = crate::gcode::Block {
+            kind: b.kind,
+            deleted: b.deleted,
+            n: b.n,
+            f: b.f,
+            cycle: b.cycle,
+            ..Default::default()
+        };
+        if *b != own {
+            return Err(Refusal::Missing(
+                "a cycle block takes its own words and F only: put M, S and other G codes on their own line",
+            ));
+        }
         let diam = b.diameter.unwrap_or(self.cfg.diam);
         let radius = |l: Length| {
             let a = l.as_angstrom();

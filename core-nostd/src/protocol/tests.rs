@@ -2083,6 +2083,19 @@ fn cycle_refusals_come_before_motion() {
         ask1(&mut dev, "G72 W0 R.5"),
         "ERR VALUE W the depth of cut must be above 0"
     );
+    for line in [
+        "G71 U1. R.5 M08",
+        "G71 P1 Q2 D1. F.2 G99",
+        "G70 P10 Q30 S500",
+    ] {
+        let want = if line.contains('S') {
+            "ERR SYNTAX a cycle block takes P Q U W D R F (G71/G72) or P Q F U W (G70): S and T on their own line"
+        } else {
+            "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line"
+        };
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+    }
+    assert!(ask1(&mut dev, "AUX").contains("COOLANT=OFF"));
     // A profile being read, dropped by RESET: the next line runs.
     assert!(ask1(&mut dev, "G71 P1 Q2 D1. F100.").starts_with("OK"));
     assert!(ask1(&mut dev, "N1 G00 X20.").ends_with("HELD=1"));
