@@ -442,6 +442,18 @@ pub enum CycleKind {
     Turn,
     /// `G72`: stock removal in facing (cuts along X).
     Face,
+    /// `G74`: face grooving and peck drilling (pecks along Z, grooves
+    /// side by side along X).
+    PeckFace,
+    /// `G75`: grooving (pecks along X, grooves side by side along Z).
+    PeckGroove,
+}
+
+impl CycleKind {
+    /// Whether it is `G74` or `G75`, whose axis words are an end point.
+    pub const fn pecks(self) -> bool {
+        matches!(self, CycleKind::PeckFace | CycleKind::PeckGroove)
+    }
 }
 
 /// A cycle block's own words (Fanuc and Haas forms): in a cycle block `U`
@@ -463,8 +475,13 @@ pub struct CycleWords {
     pub w: Option<Length>,
     /// `D`: Haas' depth of cut (a radius).
     pub d: Option<Length>,
-    /// `R`: the retract (Fanuc's first block).
+    /// `R`: the retract (Fanuc's first block); `G74`/`G75`'s second
+    /// block: the relief at the bottom.
     pub r: Option<Length>,
+    /// `G74`/`G75`: the step along X, a radius (Haas `I`, Fanuc `P`).
+    pub i: Option<Length>,
+    /// `G74`/`G75`: the step along Z (Haas `K`, Fanuc `Q`).
+    pub k: Option<Length>,
 }
 
 /// Why a block was refused.
@@ -726,6 +743,8 @@ fn scan(line: &str) -> Scan {
                     Some(700) => found.cycle = Some(CycleKind::Finish),
                     Some(710) => found.cycle = Some(CycleKind::Turn),
                     Some(720) => found.cycle = Some(CycleKind::Face),
+                    Some(740) => found.cycle = Some(CycleKind::PeckFace),
+                    Some(750) => found.cycle = Some(CycleKind::PeckGroove),
                     Some(411 | 421) => found.dynamic = true,
                     _ => {}
                 }
@@ -793,6 +812,8 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
                 w: None,
                 d: None,
                 r: None,
+                i: None,
+                k: None,
             }),
             _ => None,
         },
@@ -972,7 +993,50 @@ impl Reading {
             }
             .map_err(|e| BlockError::Value(letter, e))
         };
-        if let Some(c) = &mut self.cycle {
+        if let Some(c) = self.cycle.as_mut().filter(|c| c.kind.pecks()) {
+            // G74/G75: X, Z, U, W are the end point, read below; P and Q
+            // are steps in the least input increment (0.001 mm, 0.0001
+            // inch), I and K Haas' steps, R the first block's return or the
+            // second's relief, D Haas' relief.
+            match letter {
+                b'X' | b'Z' | b'U' | b'W' | b'F' | b'N' => {}
+                b'I' | b'K' | b'D' | b'R' => {
+                    let v = Some(length()?);
+                    match letter {
+                        b'I' => c.i = v,
+                        b'K' => c.k = v,
+                        b'D' => c.d = v,
+                        _ => c.r = v,
+                    }
+                    return Ok(());
+                }
+                b'P' | b'Q' => {
+                    if number.is_empty() || !number.bytes().all(|b| b.is_ascii_digit()) {
+                        return Err(BlockError::Range(
+                            letter,
+                            "a step in the least increment, without a point (P2500: 2.5 mm)",
+                        ));
+                    }
+                    let n = whole_number(letter, number)?;
+                    let step = Length::from_angstrom(match units {
+                        Units::Mm => i64::from(n) * 10_000,
+                        Units::Inch => i64::from(n) * 25_400,
+                    })
+                    .ok_or(BlockError::Range(letter, "a step beyond 99999.999999 mm"))?;
+                    if letter == b'P' {
+                        c.i = Some(step);
+                    } else {
+                        c.k = Some(step);
+                    }
+                    return Ok(());
+                }
+                _ => {
+                    return Err(BlockError::Form(
+                        "a G74/G75 block takes X (U) Z (W) P Q R (Fanuc) or I K D (Haas), and F",
+                    ))
+                }
+            }
+        } else if let Some(c) = &mut self.cycle {
             // A cycle's own words.
             let slot = match letter {
                 b'U' => Some(&mut c.u),
@@ -1195,7 +1259,7 @@ impl Reading {
                 set(&mut self.once, (tenths, pos))
             }
             540..=590 if tenths % 10 == 0 => set(&mut b.wcs, ((tenths - 540) / 10) as u8),
-            700 | 710 | 720 if fanuc => {
+            700 | 710 | 720 | 740 | 750 if fanuc => {
                 if self.cycle.is_none() {
                     // Two cycles in one block.
                     return repeated;
@@ -1762,8 +1826,8 @@ mod tests {
             "G50 belongs to the FANUC dialect (OPT DIALECT=FANUC)"
         );
         assert_eq!(
-            fanuc("G74 R1").unwrap_err().error.to_string(),
-            "G74 canned cycles not supported"
+            fanuc("G73 U1 R3").unwrap_err().error.to_string(),
+            "G73 canned cycles not supported"
         );
         assert_eq!(
             iso("M98 P1000").unwrap_err().error.to_string(),

@@ -54,6 +54,8 @@ pub struct Cycles {
     held: Option<(u32, u32)>,
     /// The single cycle in force (`G90`, `G94`), modal until a motion code.
     pub(super) single: Option<Single>,
+    /// `G74`/`G75`: the return after each peck (Fanuc's first block `R`).
+    peck_return: Length,
 }
 
 /// A single cycle in force and its modal words: the end point's X (on the
@@ -122,6 +124,7 @@ impl Cycles {
             motion: Motion::Rapid,
             held: None,
             single: None,
+            peck_return: TENTH_MM,
         }
     }
 
@@ -167,7 +170,245 @@ const fn refuse_profile(why: &'static str) -> Refusal<'static> {
     Refusal::Missing(why)
 }
 
+/// The return after each peck until a `G74 R`/`G75 R` sets one: 0.1 mm.
+const TENTH_MM: Length = match Length::from_angstrom(1_000_000) {
+    Some(l) => l,
+    None => Length::ZERO,
+};
+
+/// The most moves one `G74`/`G75` may make (its check runs them all).
+pub const PECK_MOVES: u32 = 20_000;
+
+/// A grooving cycle's geometry in work coordinates (X on the radius):
+/// pecks along axis `u` from S to the end, grooves side by side along
+/// axis `v`.
+#[derive(Clone, Copy)]
+struct Pecks {
+    u: usize,
+    s: [i64; 2],
+    end: [i64; 2],
+    peck: i64,
+    shift: i64,
+    back: i64,
+}
+
+impl Pecks {
+    fn at(&self, u: i64, v: i64) -> [i64; 2] {
+        if self.u == 0 {
+            [u, v]
+        } else {
+            [v, u]
+        }
+    }
+
+    fn v(&self) -> usize {
+        1 - self.u.min(1)
+    }
+
+    /// Pecks per groove and grooves.
+    fn counts(&self) -> (u64, u64) {
+        let (u, v) = (self.u.min(1), self.v());
+        let (du, dv) = (
+            self.end[u].abs_diff(self.s[u]),
+            self.end[v].abs_diff(self.s[v]),
+        );
+        let pecks = du.div_ceil(self.peck.unsigned_abs().max(1));
+        let grooves = 1 + dv.div_ceil(self.shift.unsigned_abs().max(1));
+        (pecks, grooves)
+    }
+
+    /// Every move, in order: each groove pecked to the end (in at the feed
+    /// by the peck, back at the rapid rate by the return), out to S's
+    /// level at the rapid rate, over to the next groove; last, back to S.
+    fn steps<E>(&self, out: &mut impl FnMut(Step) -> Result<(), E>) -> Result<(), E> {
+        let (u, v) = (self.u.min(1), self.v());
+        let (u0, u1) = (self.s[u], self.end[u]);
+        let (v0, v1) = (self.s[v], self.end[v]);
+        let du = (u1 - u0).signum();
+        let dv = (v1 - v0).signum();
+        let mut g = v0;
+        loop {
+            if g != v0 {
+                out(Step::Rapid(self.at(u0, g)))?;
+            }
+            let mut d = u0;
+            loop {
+                let next = if (u1 - d).abs() <= self.peck {
+                    u1
+                } else {
+                    d + du * self.peck
+                };
+                out(Step::Feed(self.at(next, g)))?;
+                if next == u1 {
+                    break;
+                }
+                if self.back > 0 {
+                    let mut back = next - du * self.back;
+                    if (back - u0) * du < 0 {
+                        back = u0;
+                    }
+                    out(Step::Rapid(self.at(back, g)))?;
+                }
+                d = next;
+            }
+            out(Step::Rapid(self.at(u0, g)))?;
+            if g == v1 {
+                break;
+            }
+            g = if (v1 - g).abs() <= self.shift {
+                v1
+            } else {
+                g + dv * self.shift
+            };
+        }
+        if g != v0 {
+            out(Step::Rapid(self.s))?;
+        }
+        Ok(())
+    }
+}
+
 impl Session {
+    /// `G74`/`G75`: Fanuc's first block sets the return after each peck;
+    /// the second (and Haas' one block) pecks each groove to its end point
+    /// and steps over to the next, every move checked before the first.
+    fn peck_cycle<'a, I: Io>(
+        &mut self,
+        b: &crate::gcode::Block,
+        c: CycleWords,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<Block, Refusal<'a>> {
+        let own = crate::gcode::Block {
+            kind: b.kind,
+            deleted: b.deleted,
+            n: b.n,
+            f: b.f,
+            cycle: b.cycle,
+            x: b.x,
+            z: b.z,
+            x_half: b.x_half,
+            incremental_x: b.incremental_x,
+            incremental_z: b.incremental_z,
+            ..Default::default()
+        };
+        if *b != own {
+            return Err(Refusal::Missing(
+                "a cycle block takes its own words and F only: put M, S and other G codes on their own line",
+            ));
+        }
+        let has_end = b.x.is_some() || b.z.is_some();
+        if !has_end && c.i.is_none() && c.k.is_none() && c.d.is_none() && b.f.is_none() {
+            // Fanuc's first block: the return.
+            let e = c.r.ok_or(Refusal::Missing(
+                "G74/G75 R (the return after each peck), or the end point X (U), Z (W)",
+            ))?;
+            if e.as_angstrom() < 0 {
+                return Err(Refusal::Value("R", "the return is 0 or more"));
+            }
+            self.cycles.peck_return = e;
+            return Ok(Block::Run);
+        }
+        if !has_end {
+            return Err(Refusal::Missing(
+                "G74/G75 needs its end point: X (U), Z (W)",
+            ));
+        }
+        if c.r.is_some_and(|r| r.as_angstrom() != 0) || c.d.is_some_and(|d| d.as_angstrom() != 0) {
+            return Err(Refusal::Value(
+                "R",
+                "a relief at the bottom is not supported: R0 (D0) or none",
+            ));
+        }
+        if let Some(f) = b.f {
+            if f.as_angstrom() <= 0 {
+                return Err(Refusal::Value("F", "the cycle's feed must be above 0"));
+            }
+        }
+        let diam = b.diameter.unwrap_or(self.cfg.diam);
+        let s = [self.prog[0].as_angstrom(), self.prog[1].as_angstrom()];
+        let add = |from: i64, by: i64| {
+            Length::from_angstrom(from.saturating_add(by))
+                .map(Length::as_angstrom)
+                .ok_or(Refusal::Range("the cycle's end beyond 99999.999999 mm"))
+        };
+        let mut end = s;
+        if let Some(x) = block_x(b, diam) {
+            end[0] = if b.incremental_x {
+                add(s[0], x.as_angstrom())?
+            } else {
+                x.as_angstrom()
+            };
+        }
+        if let Some(z) = b.z {
+            end[1] = if b.incremental_z {
+                add(s[1], z.as_angstrom())?
+            } else {
+                z.as_angstrom()
+            };
+        }
+        // G74 pecks along Z (the step K, Fanuc Q) and steps over along X
+        // (I, P); G75 the other way round.
+        let (u, peck, shift) = match c.kind {
+            CycleKind::PeckFace => (1, c.k, c.i),
+            _ => (0, c.i, c.k),
+        };
+        let v = 1 - u;
+        if end[u] == s[u] {
+            return Err(Refusal::Missing(match c.kind {
+                CycleKind::PeckFace => "G74 needs a depth: its Z (W) away from the start point",
+                _ => "G75 needs a depth: its X (U) away from the start point",
+            }));
+        }
+        let peck = peck.map_or(end[u].abs_diff(s[u]) as i64, Length::as_angstrom);
+        if peck <= 0 {
+            return Err(Refusal::Value(
+                if u == 1 { "Q" } else { "P" },
+                "the peck must be above 0",
+            ));
+        }
+        let shift = shift.map_or(0, Length::as_angstrom);
+        if end[v] != s[v] && shift <= 0 {
+            return Err(Refusal::Missing(match c.kind {
+                CycleKind::PeckFace => "G74 to another X needs the step between grooves: P (I)",
+                _ => "G75 to another Z needs the step between grooves: Q (K)",
+            }));
+        }
+        let geom = Pecks {
+            u,
+            s,
+            end,
+            peck,
+            shift: shift.max(1),
+            back: self.cycles.peck_return.as_angstrom(),
+        };
+        let (pecks, grooves) = geom.counts();
+        if grooves.saturating_mul(2 * pecks + 2) > u64::from(PECK_MOVES) {
+            return Err(Refusal::Range("a grooving cycle of more than 20000 moves"));
+        }
+        let mut modal = self.modal;
+        if b.f.is_some() {
+            modal.feed = b.f;
+        }
+        let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
+        self.last_moves = crate::comp::Moves::new();
+        // Checked whole before anything moves.
+        let (mut cmd, mut pos, mut last) = (self.cmd, self.pos, s);
+        geom.steps(&mut |step| {
+            let p = self.cycle_move(step, last, &modal, &spindle, cmd, pos, io)?;
+            (cmd, pos, last) = (p.end(), p.registers(), step_end(step));
+            Ok::<(), Refusal<'static>>(())
+        })?;
+        let mut last = s;
+        geom.steps(&mut |step| {
+            let p = self.cycle_move(step, last, &modal, &spindle, self.cmd, self.pos, io)?;
+            *crc = self.run_planned(&p, *crc, io);
+            last = step_end(step);
+            Ok::<(), Refusal<'static>>(())
+        })?;
+        Ok(Block::Run)
+    }
+
     /// A cycle block: `G71`/`G72` reads its profile from the blocks that
     /// follow (Fanuc's first block only sets the depth and the retract);
     /// `G70` finishes along the profile held.
@@ -180,6 +421,9 @@ impl Session {
     ) -> Result<Block, Refusal<'a>> {
         if self.contour.active() {
             return Err(Refusal::Busy("a turning cycle"));
+        }
+        if c.kind.pecks() {
+            return self.peck_cycle(b, c, crc, io);
         }
         if b.motion.is_some() || b.x.is_some() || b.z.is_some() || b.tool.is_some() {
             return Err(Refusal::Missing(

@@ -2103,3 +2103,93 @@ fn cycle_refusals_come_before_motion() {
     let r = ask(&mut dev, b"G00 X42.\n");
     assert!(r.last().unwrap().starts_with("OK NX=200"), "{r:?}");
 }
+
+/// `G75` grooves and `G74` pecks as the blocks written out by hand: each
+/// peck in at the feed, back by the return at the rapid rate, out of the
+/// groove at the rapid rate, over by the step to the next groove, back to
+/// the start point at the end. Fanuc's `P`/`Q` in the least increment,
+/// Haas' `I`/`K` in millimetres, move alike.
+#[test]
+fn g74_and_g75_peck_as_their_blocks_written_out() {
+    let run = |program: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        for line in program {
+            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+        }
+        (ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"))
+    };
+    let fanuc = run(&[
+        "G21 G18 G98",
+        "G00 X42. Z-10.",
+        "G75 R.5",
+        "G75 X30. Z-14. P2500 Q2000 F50.",
+        "G00 X0 Z2.",
+        "G74 R1.",
+        "G74 Z-12. Q5000 F80.",
+    ]);
+    let haas = run(&[
+        "G21 G18 G98",
+        "G00 X42. Z-10.",
+        "G75 R.5",
+        "G75 X30. Z-14. I2.5 K2. F50.",
+        "G00 X0 Z2.",
+        "G74 R1.",
+        "G74 W-14. K5. F80.",
+    ]);
+    let mut by_hand = vec![
+        "G21 G18 G98",
+        "G00 X42. Z-10.",
+        "G01 X37. F50.",
+        "G00 X38.",
+        "G01 X32.",
+        "G00 X33.",
+        "G01 X30.",
+        "G00 X42.",
+    ];
+    for z in ["Z-12.", "Z-14."] {
+        by_hand.extend([
+            z, "G01 X37.", "G00 X38.", "G01 X32.", "G00 X33.", "G01 X30.", "G00 X42.",
+        ]);
+    }
+    by_hand.extend([
+        "Z-10.",
+        "X0 Z2.",
+        "G01 Z-3. F80.",
+        "G00 Z-2.",
+        "G01 Z-8.",
+        "G00 Z-7.",
+        "G01 Z-12.",
+        "G00 Z2.",
+    ]);
+    let by_hand = run(&by_hand);
+    assert_eq!(fanuc, by_hand);
+    assert_eq!(haas, by_hand);
+}
+
+/// What a grooving cycle cannot take is refused before anything moves.
+#[test]
+fn g74_and_g75_refusals_change_nothing() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    for line in ["G21 G18 G98", "G00 X42. Z-10."] {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
+    }
+    ask1(&mut dev, "SYNC");
+    let before = ask1(&mut dev, "POS");
+    for (line, want) in [
+        ("G75 Z-14. Q2000 F50.", "ERR SYNTAX G75 needs a depth: its X (U) away from the start point"),
+        ("G75 X30. Z-14. P2500 F50.", "ERR SYNTAX G75 to another Z needs the step between grooves: Q (K)"),
+        ("G75 X30. P2500 R.2 F50.", "ERR VALUE R a relief at the bottom is not supported: R0 (D0) or none"),
+        ("G75 X30. P2500 F50. M08", "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line"),
+        ("G75 X10. P1 F50.", "ERR RANGE a grooving cycle of more than 20000 moves"),
+        ("G75 X30. P2500", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
+        ("G75 X30. P2.5 F50.", "ERR VALUE P a step in the least increment, without a point (P2500: 2.5 mm)"),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
+        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
+    }
+}
