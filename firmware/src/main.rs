@@ -140,6 +140,11 @@ mod app {
                     }
                 }
                 None if feed => {}
+                // A jog cancel waits for the hold to come to rest: no sleep
+                // meanwhile (the braking is short), so the rest is dropped
+                // as soon as the axes stand, before a status byte can see
+                // the hold.
+                None if device.cancel_pending() => {}
                 // A grbl link quiet for 50 ms: what it queued starts (no
                 // sleep meanwhile; the wait is short).
                 None if device.waiting() => {

@@ -660,3 +660,59 @@ fn a_program_without_m2_runs_to_its_end() {
         assert_eq!(mpos(&end), (0.0, -80.5), "{pace:?}");
     }
 }
+
+/// Lathe programs nobody here wrote (the corpus' ISO programs that run to
+/// their end, `tests/data/SOURCES.md`) streamed by grbl-streamer to the
+/// simulated board: every line `ok`, no error or alarm, and the carriage
+/// at the program's last point.
+#[test]
+fn a_real_grbl_sender_streams_the_corpus_programs() {
+    if !sender_available() {
+        return;
+    }
+    for name in [
+        "nhsd-cnc-lathe/turn_two_diameters.nc",
+        "liblathe/profile.gcode",
+    ] {
+        let path = root().join("tests/data").join(name);
+        let program = std::fs::read_to_string(&path).expect("program");
+        // Both programs end with an absolute move naming X and Z, no
+        // offset in force: the carriage ends there.
+        let word = |line: &str, letter: char| -> Option<f64> {
+            let code = line.split(['(', ';']).next().unwrap_or("");
+            code.split_whitespace()
+                .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
+        };
+        let want = program
+            .lines()
+            .filter_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
+            .last()
+            .expect("a last move");
+        let mut local = LocalDevice::new();
+        local.set_grbl(true);
+        let device = PtyDevice::start_with(local).expect("pty");
+        let json = stream(device.path(), &path);
+        assert!(json.contains("\"errors\": []"), "{name}: {json}");
+        assert!(json.contains("\"alarms\": []"), "{name}: {json}");
+        assert!(json.contains("\"finished\": true"), "{name}: {json}");
+        assert_eq!(
+            number(&json, "processed"),
+            number(&json, "lines"),
+            "{name}: {json}"
+        );
+        let at: Vec<f64> = json
+            .split("\"position\": [")
+            .nth(1)
+            .and_then(|s| s.split(']').next())
+            .map(|s| {
+                s.split(',')
+                    .map(|v| v.trim().parse().expect("number"))
+                    .collect()
+            })
+            .expect("position");
+        assert!(
+            (at[0] - want.0).abs() < 1e-3 && (at[2] - want.1).abs() < 1e-3,
+            "{name}: the sender ends at {at:?}, the program at {want:?}"
+        );
+    }
+}
