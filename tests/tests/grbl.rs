@@ -685,8 +685,8 @@ fn a_real_grbl_sender_streams_the_corpus_programs() {
         };
         let want = program
             .lines()
-            .filter_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
-            .last()
+            .rev()
+            .find_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
             .expect("a last move");
         let mut local = LocalDevice::new();
         local.set_grbl(true);
