@@ -588,9 +588,10 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                 None => Expect::AnyErr,
                 Some(b) if b.compensation.is_some_and(|c| c != 40) => Expect::AnyErr,
                 // A feed of 0.001 … 99 999.999999 mm/min, checked first.
+                // F0 is taken (a header's); a feed move then needs one.
                 Some(b)
                     if b.f
-                        .is_some_and(|f| !(10_000..=999_999_999_990).contains(&f)) =>
+                        .is_some_and(|f| f != 0 && !(10_000..=999_999_999_990).contains(&f)) =>
                 {
                     Expect::Err("VALUE")
                 }
@@ -599,18 +600,16 @@ fn build(req: &Req, m: &Model) -> (Vec<String>, Expect) {
                     let mut next = m.clone();
                     next.motion = b.motion.unwrap_or(m.motion);
                     next.incremental = b.distance.map_or(m.incremental, |d| d == 91);
-                    next.feed |= b.f.is_some();
+                    next.feed = b.f.map_or(m.feed, |f| f != 0);
                     let has_end = v[0].is_some() || v[1].is_some();
                     let arc_words = v[2].is_some() || v[3].is_some() || v[4].is_some();
                     let end = |word: Option<i64>, now: i64| {
                         word.map_or(now, |w| if next.incremental { now + w } else { w })
                     };
-                    let xr = v[0].map(|x| if m.diam { x / 2 } else { x });
+                    // A diameter halved once, half away from zero.
+                    let xr = v[0].map(|x| if m.diam { (x + x.signum()) / 2 } else { x });
                     let target = [end(xr, m.cmd[0]), end(v[1], m.cmd[1])];
-                    if m.diam && v[0].is_some_and(|x| x % 2 != 0) {
-                        // A diameter of 7 decimals whose half is off the grid.
-                        Expect::Err("VALUE")
-                    } else if !within(target[0]) || !within(target[1]) {
+                    if !within(target[0]) || !within(target[1]) {
                         Expect::Err("RANGE")
                     } else if next.motion < 2 && arc_words {
                         Expect::Err("SYNTAX")

@@ -174,7 +174,33 @@ pub enum IdWord {
 pub fn link(line: &[u8]) -> Link {
     let hex = |b: u8| (b as char).to_digit(16);
     let mut body = line;
-    if let Some(star) = line.iter().rposition(|&b| b == b'*') {
+    // The checksum's `*`: the last one when the line ends in `*HH`, else
+    // the last one outside a comment (`( … )` or after `;`): a comment may
+    // hold a `*` of its own.
+    let ends_hh =
+        matches!(line, [.., b'*', h, l] if h.is_ascii_hexdigit() && l.is_ascii_hexdigit());
+    let star = if ends_hh {
+        line.iter().rposition(|&b| b == b'*')
+    } else {
+        let (mut paren, mut rest, mut found) = (false, false, None);
+        for (i, &b) in line.iter().enumerate() {
+            if rest {
+                break;
+            }
+            if paren {
+                paren = b != b')';
+                continue;
+            }
+            match b {
+                b'(' => paren = true,
+                b';' => rest = true,
+                b'*' => found = Some(i),
+                _ => {}
+            }
+        }
+        found
+    };
+    if let Some(star) = star {
         let tail = &line[star + 1..];
         let given = match tail {
             [h, l] => match (hex(*h), hex(*l)) {
