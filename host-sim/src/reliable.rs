@@ -81,7 +81,15 @@ impl LocalLink {
                 .copied()
                 .filter(|&b| Realtime::from_byte(b).is_none())
                 .collect();
-            if !self.intended.contains(content(&ran)) {
+            // Damage that left only a comment (noise after a `;`) is
+            // answered as the empty block it is, and moves nothing: not a
+            // request run.
+            let start = ran.iter().position(|b| !matches!(b, b' ' | b'\t'));
+            let comment = start
+                .and_then(|i| ran.get(i))
+                .is_some_and(|b| matches!(b, b';' | b'('));
+            let still = text.contains("OK NX=0 NZ=0 ") && text.contains(" SEQ=00000000");
+            if !self.intended.contains(content(&ran)) && !(comment && still) {
                 self.executed_corrupted += 1;
             }
         }
