@@ -126,8 +126,10 @@ pub fn act(rt: Realtime, prep: &mut impl Mutex<T = PrepStage>, step: &mut impl M
         }
         Realtime::Reset => {
             let found = reset(prep, step);
-            prep.lock(|p| p.aborted = Some(found));
-            ABORTING.store(true, Ordering::Release);
+            prep.lock(|p| {
+                p.aborted = Some(found);
+                ABORTING.store(true, Ordering::Release);
+            });
         }
     }
 }
@@ -210,8 +212,20 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Shared<P, S> {
             self.step.lock(|s| s.set_drive(drive));
             self.prep.lock(|p| p.drive = *drive);
         }
-        self.prep.lock(|p| p.prep.push(item))?;
-        pend_prep();
+        // Asked again under the lock that pushes: a reset in the real-time
+        // task (which takes the same lock) comes wholly before the push or
+        // wholly after it. Asked only before it, a reset landing between
+        // the two let this block run from the planner's point while the
+        // registers stood where the reset stopped them.
+        let pushed = self.prep.lock(|p| {
+            if ABORTING.load(Ordering::Acquire) {
+                return Ok(false);
+            }
+            p.prep.push(item).map(|()| true)
+        })?;
+        if pushed {
+            pend_prep();
+        }
         Ok(())
     }
 
