@@ -46,6 +46,9 @@
 use crate::length::{gcode_scaled, Length, LengthError};
 use core::fmt;
 
+/// The tool offset registers: `D`, `H` and `T` name 1 … this many.
+pub const TOOL_REGISTERS: usize = 32;
+
 /// Motion modes (group 1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -276,7 +279,7 @@ pub enum Special {
 pub struct PositionOffset {
     /// `G45` +1 (lengthened by one offset), `G46` −1, `G47` +2, `G48` −2.
     pub times: i8,
-    /// The offset register, 1 … [`crate::interp::TOOL_REGISTERS`].
+    /// The offset register, 1 … [`TOOL_REGISTERS`].
     pub register: u8,
 }
 
@@ -1446,7 +1449,7 @@ impl Reading {
                 };
                 let register = d.as_angstrom() / 10_000_000;
                 if d.as_angstrom() % 10_000_000 != 0
-                    || !(1..=crate::interp::TOOL_REGISTERS as i64).contains(&register)
+                    || !(1..=TOOL_REGISTERS as i64).contains(&register)
                 {
                     return Err((
                         BlockError::Form("D (the offset register) must be 1 to 32"),

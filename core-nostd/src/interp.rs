@@ -285,8 +285,8 @@ impl Aux {
     }
 }
 
-/// Offset registers in the tool table (Fanuc's 01 … 32; `T0100` cancels).
-pub const TOOL_REGISTERS: usize = 32;
+pub use crate::gcode::TOOL_REGISTERS;
+
 /// Work coordinate systems: `G54` … `G59`.
 pub const WORK_SYSTEMS: usize = 6;
 

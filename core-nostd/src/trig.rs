@@ -31,6 +31,7 @@
 //! lands within 10⁻¹² mm of its exact place.
 
 use crate::wide::divrem_u128;
+pub use crate::wide::isqrt;
 use core::num::NonZeroU128;
 use fixed::types::I2F62;
 
@@ -285,38 +286,6 @@ fn cordic_octant(big: u128, small: u128) -> u64 {
         i += 1;
     }
     z.clamp(0, 1 << 61) as u64
-}
-
-/// ⌊√n⌋, exact.
-///
-/// ```
-/// use core_nostd::trig::isqrt;
-/// assert_eq!(isqrt(0), 0);
-/// assert_eq!(isqrt(99), 9);
-/// assert_eq!(isqrt(u128::MAX), u64::MAX);
-/// ```
-#[inline(never)]
-pub const fn isqrt(n: u128) -> u64 {
-    // Digit by digit, two bits of `n` per result bit: shifts, compares and
-    // subtractions only (a 128-bit division costs hundreds of instructions
-    // on a Cortex-M4).
-    let mut rest = n;
-    let mut root: u128 = 0;
-    let mut bit: u128 = if n == 0 {
-        0
-    } else {
-        1 << ((127 - n.leading_zeros()) & !1)
-    };
-    while bit != 0 {
-        if rest >= root + bit {
-            rest -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
-    root as u64
 }
 
 #[cfg(test)]

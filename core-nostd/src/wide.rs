@@ -5,9 +5,8 @@
 //! a `u128` saturates at `u128::MAX` (the planner only takes minima of such
 //! values, where a saturated term never wins), and a division by zero gives
 //! `u128::MAX` too. Shifts, compares and subtractions only in the divisions
-//! and roots, as [`crate::trig::isqrt`] (a Cortex-M4 has no 64-bit divide).
+//! and roots, as [`isqrt`] (a Cortex-M4 has no 64-bit divide).
 
-use crate::trig::isqrt;
 use core::cmp::Ordering;
 use core::num::NonZeroU128;
 
@@ -336,6 +335,38 @@ pub(crate) const fn mul_shr(a: u128, b: u128, s: u32) -> u128 {
 /// whole: a Q`2f` square gives a Q`f` root).
 pub(crate) const fn sqrt_shl(n: u128, s: u32) -> u128 {
     U256::shl(n, s).sqrt()
+}
+
+/// ⌊√n⌋, exact.
+///
+/// ```
+/// use core_nostd::trig::isqrt;
+/// assert_eq!(isqrt(0), 0);
+/// assert_eq!(isqrt(99), 9);
+/// assert_eq!(isqrt(u128::MAX), u64::MAX);
+/// ```
+#[inline(never)]
+pub const fn isqrt(n: u128) -> u64 {
+    // Digit by digit, two bits of `n` per result bit: shifts, compares and
+    // subtractions only (a 128-bit division costs hundreds of instructions
+    // on a Cortex-M4).
+    let mut rest = n;
+    let mut root: u128 = 0;
+    let mut bit: u128 = if n == 0 {
+        0
+    } else {
+        1 << ((127 - n.leading_zeros()) & !1)
+    };
+    while bit != 0 {
+        if rest >= root + bit {
+            rest -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root as u64
 }
 
 #[cfg(test)]
