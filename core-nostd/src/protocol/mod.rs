@@ -7,7 +7,6 @@
 
 #[cfg(feature = "calc")]
 mod calc;
-mod cycles;
 pub mod framing;
 pub mod grbl;
 pub mod reply;

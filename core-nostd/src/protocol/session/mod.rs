@@ -1,0 +1,486 @@
+//! The session: configuration, commanded coordinates, position registers, and
+//! the commands that act on them.
+//!
+//! Every command first computes its whole outcome from the current state and
+//! only then commits it, so a refused request changes nothing.
+
+use super::reply::{ReplyLine, REPLY_CAPACITY};
+use super::words::{parse_args, Words};
+use super::{Io, Realtime, StatusView, CHORDS_PER_PAUSE};
+use crate::arc::{centre_from_radius, ArcDir, ArcPoints, ChordPlan, DirectArc};
+use crate::comp::{
+    Contour, Element, Move, MoveKind, Moves, Origin, Shape, TipCode, Tool, MAX_MOVES,
+};
+use crate::cone::{cone, Angle, AngleError};
+use crate::crc32::Crc32;
+use crate::gcode::{
+    is_block, parse, Compensation, Coolant, Dialect, FeedMode, Motion, PathControl, Plane, Special,
+    Spindle, SpindleMode, Stop, ToolOffset, ToolWord, Units,
+};
+use crate::impulse::{quantize, Impulses};
+use crate::interleave::{ImpulsePoint, LinearBlock};
+use crate::interp::{path_feed, Aux, MAction, Modal, Offsets, Selection, TOOL_REGISTERS};
+use crate::length::{div_round_half_away, write_mm4, Length};
+use crate::machine::{Join, Machine};
+use crate::outputs::{milli_rpm, Outputs};
+use crate::plan::{Feed, Limits, LimitsError, WINDOW};
+use crate::stepdir::{DriveTiming, TimingError};
+use crate::stepper::{Aborted, Motion as Axes};
+use core::fmt::{self, Write};
+
+mod auxiliary;
+mod blocks;
+mod configure;
+mod cycle_state;
+mod cycles;
+mod gcode;
+mod moves;
+mod offsets;
+mod realtime;
+mod settings;
+mod wire;
+
+pub(super) use blocks::block_crc;
+pub use settings::{Config, Pass};
+pub use wire::status_line;
+pub(super) use wire::{parse_flag, parse_length, send_data, send_error, send_ok, Outcome, Refusal};
+
+use blocks::*;
+use cycle_state::*;
+use settings::*;
+use wire::*;
+
+/// The device name reported by `VER`.
+pub const NAME: &str = "lathe-retrofit";
+/// The firmware version reported by `VER`.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The protocol state of one device.
+#[derive(Clone, Debug)]
+pub struct Session {
+    pub(super) cfg: Config,
+    /// Exact commanded X (radius) and Z in machine coordinates (since the
+    /// machine zero: power-on or `ZERO`).
+    pub(super) cmd: [Length; 2],
+    /// Position registers; always `Q(cmd / price)` per axis.
+    pub(super) pos: ImpulsePoint,
+    /// Step/dir output timing.
+    pub(super) drive: DriveTiming,
+    /// Modal G-code state.
+    pub(super) modal: Modal,
+    /// The spindle, the coolant, the tool named.
+    pub(super) aux: Aux,
+    /// The dialect G-code lines are read in (`OPT DIALECT=`).
+    pub(super) dialect: Dialect,
+    /// Work offsets and the tool table.
+    pub(super) offsets: Offsets,
+    /// Which of them are in effect.
+    pub(super) sel: Selection,
+    /// The programmed contour point in work coordinates: where the last
+    /// G-code block ended, as written. `cmd` less the offsets in effect,
+    /// except while nose compensation is on or until the next move after an
+    /// offset change.
+    pub(super) prog: [Length; 2],
+    /// Nose radius compensation.
+    pub(super) contour: Contour,
+    /// Feed override, percent (grbl's real-time 0x90–0x94): scales every
+    /// G-code feed read from now on.
+    pub(super) feed_override: u8,
+    /// Spindle override, percent (grbl's 0x99–0x9D): scales the spindle
+    /// speed commanded, and with it feeds per revolution.
+    pub(super) spindle_override: u8,
+    /// The blocks the last G-code request sent.
+    pub(super) last_moves: Moves,
+    /// The host's session token (`SESSION`); 0 after power-on.
+    pub(super) token: u32,
+    /// The block delete switch (`OPT BDEL=`): blocks that begin with `/`
+    /// are skipped while it is on.
+    pub(super) block_delete: bool,
+    /// The optional stop switch: `M01` stops (`OPT OPTSTOP=`).
+    pub(super) optional_stop: bool,
+    /// Changes of the table, the work offsets and the stored positions.
+    pub(super) generation: u32,
+    /// Check mode (grbl's `$C`): the registers where it began, put back
+    /// when it ends.
+    pub(super) checking: Option<ImpulsePoint>,
+    /// The last reset dropped motion answered and not all run.
+    pub(super) reset_dropped: bool,
+    /// The top speed of each gear range (`GEAR N= TOP=`), rpm.
+    pub(super) gears: [Option<Length>; 4],
+    /// The nose `G41.1`/`G42.1` gave, while its compensation is on.
+    pub(super) dynamic_tool: Option<Tool>,
+    /// The turning cycles: a profile held, their modal depth and retract.
+    pub(super) cycles: Cycles,
+    /// The id of the last request that carried one, and its final reply.
+    pub(super) last_id: Option<u32>,
+    pub(super) last_final: heapless::Vec<u8, REPLY_CAPACITY>,
+    /// The planner, the run in progress, what has been issued.
+    pub(super) machine: Machine,
+    /// The feed of the last element given to the contour engine (the one
+    /// it holds while compensation is on); `None` for a rapid.
+    pub(super) element_feed: Option<Feed>,
+    /// The spindle's top speed, rpm (`AUX SMAX`): the speed at full PWM
+    /// duty and a limit of every commanded speed; none when the speed is
+    /// set on the machine by hand.
+    pub(super) top: Option<Length>,
+    /// The wait after the spindle starts or changes speed at rest, µs
+    /// (`AUX SPINUP`).
+    pub(super) spinup_us: u64,
+    /// The spindle and coolant outputs as last switched at rest.
+    pub(super) outputs: Outputs,
+    /// The BCK-5 tape read so far by `TAPE` requests.
+    #[cfg(feature = "calc")]
+    pub(super) tape: crate::calc::tape::Bck5Verifier,
+}
+
+impl Default for Session {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Session {
+    /// Power-on state: defaults, at program zero.
+    pub const fn new() -> Self {
+        Self::with_window(WINDOW)
+    }
+
+    /// As [`Session::new`], its planner looking `window` blocks ahead.
+    pub const fn with_window(window: usize) -> Self {
+        Session {
+            cfg: Config::DEFAULT,
+            cmd: [Length::ZERO; 2],
+            pos: ImpulsePoint {
+                x: Impulses(0),
+                z: Impulses(0),
+            },
+            drive: DriveTiming::DEFAULT,
+            modal: Modal::POWER_ON,
+            aux: Aux::POWER_ON,
+            dialect: Dialect::Iso,
+            offsets: Offsets::ZERO,
+            sel: Selection::POWER_ON,
+            prog: [Length::ZERO; 2],
+            contour: Contour::new(),
+            feed_override: 100,
+            spindle_override: 100,
+            last_moves: Moves::new(),
+            token: 0,
+            block_delete: false,
+            optional_stop: false,
+            generation: 0,
+            checking: None,
+            reset_dropped: false,
+            gears: [None; 4],
+            dynamic_tool: None,
+            cycles: Cycles::new(),
+            last_id: None,
+            last_final: heapless::Vec::new(),
+            machine: Machine::with_window(window),
+            element_feed: None,
+            top: None,
+            spinup_us: 0,
+            outputs: Outputs::OFF,
+            #[cfg(feature = "calc")]
+            tape: crate::calc::tape::Bck5Verifier::new(),
+        }
+    }
+
+    /// The motion pipeline: limits, queue, what has been issued.
+    pub const fn machine(&self) -> &Machine {
+        &self.machine
+    }
+
+    /// The configuration.
+    pub const fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Step/dir output timing.
+    pub const fn drive(&self) -> &DriveTiming {
+        &self.drive
+    }
+
+    /// Position registers in impulses.
+    pub const fn position(&self) -> ImpulsePoint {
+        self.pos
+    }
+
+    /// The theoretical-tool-tip blocks the last G-code request sent, each
+    /// with the programmed block it belongs to (what its `DATA` lines show).
+    pub const fn last_moves(&self) -> &Moves {
+        &self.last_moves
+    }
+
+    /// The contour engine's modal state.
+    pub const fn contour(&self) -> &Contour {
+        &self.contour
+    }
+
+    /// The modal G-code state (motion, distance, units, feed).
+    pub const fn modal(&self) -> &Modal {
+        &self.modal
+    }
+
+    /// The spindle, the coolant and the tool named, as programmed.
+    pub const fn aux(&self) -> &Aux {
+        &self.aux
+    }
+
+    /// Which work system, offset register and tool are in effect.
+    pub const fn selection(&self) -> &Selection {
+        &self.sel
+    }
+
+    /// The dialect G-code lines are read in.
+    pub const fn dialect(&self) -> Dialect {
+        self.dialect
+    }
+
+    /// Exact commanded coordinates `(X radius, Z)` in machine coordinates
+    /// (since power-on or `ZERO`; the offsets in effect included).
+    pub const fn commanded(&self) -> (Length, Length) {
+        (self.cmd[0], self.cmd[1])
+    }
+
+    /// Runs one request line (terminator excluded) and answers it through
+    /// `io`: exactly one final line, `OK …` or `ERR …`.
+    ///
+    /// A request that fails its `*HH` or `~CCCCCCCC` check is answered
+    /// `ERR CHECKSUM` without the id and CRC words (nothing in it can be
+    /// trusted). A request whose `@id` equals the last one's is not run
+    /// again: its remembered final line is sent instead.
+    pub fn handle_line<I: Io>(&mut self, line: &[u8], io: &mut I) {
+        self.share_view(io);
+        let (body, crc) = match check_integrity(line) {
+            Ok(v) => v,
+            Err(refusal) => return send_refusal(io, refusal),
+        };
+        let mut out = Suffixed {
+            inner: io,
+            id: None,
+            crc,
+            last: heapless::Vec::new(),
+        };
+        let body = match split_id(body) {
+            // An id promises a retry; only a CRC-guarded request may be retried
+            // (a line broken by noise must not run as its head).
+            Ok((Some(_), _)) if !crc => {
+                return send_refusal(
+                    &mut out,
+                    Refusal::Missing("a request with @id needs a ~CRC word"),
+                )
+            }
+            Ok((id, rest)) => {
+                out.id = id;
+                rest
+            }
+            Err(refusal) => return send_refusal(&mut out, refusal),
+        };
+        if let Some(id) = out.id {
+            if self.last_id == Some(id) {
+                out.send_body(&self.last_final);
+                return;
+            }
+            // After power-on no session token is set: a numbered request from
+            // a session the device no longer remembers is refused, so the host
+            // learns of the reset before anything runs.
+            let session = Words::new(core::str::from_utf8(body).unwrap_or(""))
+                .next()
+                .is_some_and(|w| w.eq_ignore_ascii_case("SESSION"));
+            if self.token == 0 && !session {
+                return send_refusal(&mut out, Refusal::NoSession);
+            }
+        }
+        if let Err(refusal) = self.run(body, &mut out) {
+            send_refusal(&mut out, refusal);
+        }
+        if let Some(id) = out.id {
+            self.last_id = Some(id);
+            self.last_final = out.last;
+        }
+    }
+
+    /// The calculators' requests (`THREAD`, `WEAR`, `DEFLECT`, `TRI`,
+    /// `TAPE`); `None` for any other command.
+    #[cfg(feature = "calc")]
+    fn calc<'a, I: Io>(
+        &mut self,
+        command: &str,
+        words: Words<'a>,
+        io: &mut I,
+    ) -> Option<Outcome<'a>> {
+        use super::calc;
+        let is = |name: &str| command.eq_ignore_ascii_case(name);
+        Some(if is("THREAD") {
+            calc::thread_command(words, self.machine.limits(), io)
+        } else if is("WEAR") {
+            calc::wear_command(words, io)
+        } else if is("DEFLECT") {
+            calc::deflect_command(words, io)
+        } else if is("TRI") {
+            calc::tri_command(words, io)
+        } else if is("TAPE") {
+            calc::tape_command(words, &mut self.tape, io)
+        } else {
+            return None;
+        })
+    }
+
+    /// Without the calculators, no command is one of theirs.
+    #[cfg(not(feature = "calc"))]
+    fn calc<'a, I: Io>(&mut self, _: &str, _: Words<'a>, _: &mut I) -> Option<Outcome<'a>> {
+        None
+    }
+
+    fn run<'a, I: Io>(&mut self, body: &'a [u8], io: &mut I) -> Outcome<'a> {
+        let printable = |b: u8| b == b'\t' || (0x20..0x7F).contains(&b);
+        if !body.iter().all(|&b| printable(b)) {
+            // A G-code comment may hold any byte (a UTF-8 letter, a tape
+            // control character); it is never read, so the line runs with
+            // them replaced. Anywhere else they are refused.
+            let words_start = body
+                .iter()
+                .position(|&b| printable(b) && b != b' ' && b != b'\t');
+            let gcode = words_start
+                .and_then(|i| body.get(i..))
+                .and_then(|rest| core::str::from_utf8(rest.get(..2).unwrap_or(rest)).ok())
+                .is_some_and(is_block);
+            let only_in_comments = body
+                .iter()
+                .zip(in_comment(body))
+                .all(|(&b, comment)| printable(b) || comment);
+            if !gcode || !only_in_comments {
+                return Err(Refusal::Control);
+            }
+            let mut clean = heapless::Vec::<u8, { super::framing::MAX_LINE }>::new();
+            for &b in body {
+                let _ = clean.push(if printable(b) { b } else { b'?' });
+            }
+            // Printable ASCII now: never fails.
+            let text = core::str::from_utf8(&clean).map_err(|_| Refusal::Control)?;
+            return self.gcode(text, io);
+        }
+        // Printable ASCII only from here on, so this never fails.
+        let text = core::str::from_utf8(body).map_err(|_| Refusal::Control)?;
+        let mut words = Words::new(text);
+        let command = words.next().ok_or(Refusal::Empty)?;
+        if is_block(text) {
+            self.gcode(text, io)
+        } else if command.eq_ignore_ascii_case("VER") {
+            no_args(words, "VER")?;
+            send_ok(
+                io,
+                Some(format_args!("PROTO=1 NAME={NAME} VERSION={VERSION}")),
+            );
+            Ok(())
+        } else if command.eq_ignore_ascii_case("CFG") {
+            self.cfg_command(words, io)
+        } else if command.eq_ignore_ascii_case("ZERO") {
+            self.zero_command(words, io)
+        } else if command.eq_ignore_ascii_case("SESSION") {
+            let [token] = parse_args(words, ["TOKEN"])?;
+            if let Some(v) = token {
+                self.token = match v.parse::<u32>() {
+                    Ok(t) if v.bytes().all(|b| b.is_ascii_digit()) => t,
+                    _ => return Err(Refusal::Value("TOKEN", "must be 0 to 4294967295")),
+                };
+            }
+            send_ok(io, Some(format_args!("TOKEN={}", self.token)));
+            Ok(())
+        } else if command.eq_ignore_ascii_case("MOVE") {
+            self.move_command(words, io)
+        } else if command.eq_ignore_ascii_case("CONE") {
+            self.cone_command(words, io)
+        } else if command.eq_ignore_ascii_case("ARC") {
+            self.arc_command(words, io)
+        } else if let Some(outcome) = self.calc(command, words.clone(), io) {
+            outcome
+        } else if command.eq_ignore_ascii_case("DRIVE") {
+            self.drive_command(words, io)
+        } else if command.eq_ignore_ascii_case("MCODE") {
+            self.mcode_command(words, io)
+        } else if command.eq_ignore_ascii_case("GEAR") {
+            self.gear_command(words, io)
+        } else if command.eq_ignore_ascii_case("OPT") {
+            let [bdel, dialect, optstop] = parse_args(words, ["BDEL", "DIALECT", "OPTSTOP"])?;
+            let block_delete = match bdel {
+                Some(v) => parse_flag("BDEL", v)?,
+                None => self.block_delete,
+            };
+            let optional_stop = match optstop {
+                Some(v) => parse_flag("OPTSTOP", v)?,
+                None => self.optional_stop,
+            };
+            let dialect = match dialect {
+                None => self.dialect,
+                Some(v) if v.eq_ignore_ascii_case("ISO") => Dialect::Iso,
+                Some(v) if v.eq_ignore_ascii_case("FANUC") => Dialect::Fanuc,
+                Some(_) => return Err(Refusal::Value("DIALECT", "must be ISO or FANUC")),
+            };
+            (self.block_delete, self.dialect) = (block_delete, dialect);
+            self.optional_stop = optional_stop;
+            send_ok(
+                io,
+                Some(format_args!(
+                    "BDEL={} DIALECT={} OPTSTOP={}",
+                    u8::from(self.block_delete),
+                    self.dialect.as_str(),
+                    u8::from(self.optional_stop)
+                )),
+            );
+            Ok(())
+        } else if command.eq_ignore_ascii_case("LIMITS") {
+            self.limits_command(words, io)
+        } else if command.eq_ignore_ascii_case("SYNC") {
+            no_args(words, "SYNC")?;
+            let (r, starved) = self.machine.sync(&mut Sink::new(io, self.drive));
+            send_ok(
+                io,
+                Some(format_args!(
+                    "EV={} T={} TSEQ={:08X} STARVED={starved}",
+                    r.events(),
+                    r.run_ticks(),
+                    r.tseq()
+                )),
+            );
+            Ok(())
+        } else if command.eq_ignore_ascii_case("STATUS") {
+            no_args(words, "STATUS")?;
+            self.status_reply(io, "OK");
+            Ok(())
+        } else if command.eq_ignore_ascii_case("RESET") {
+            no_args(words, "RESET")?;
+            // As the RESET key of a control: the program is abandoned where
+            // it stands (a cycle's profile being read with it). What is queued runs to its end; a waiting element
+            // is dropped.
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            self.cycles.abandon();
+            // The programmed feed stays, as on the controls machinists know.
+            self.modal = Modal {
+                feed: self.modal.feed,
+                feed_mode: self.modal.feed_mode,
+                ..Modal::POWER_ON
+            };
+            self.aux = self.aux.stopped();
+            self.switch_outputs(self.outputs_for(&self.aux, Units::Mm), io);
+            self.contour = Contour::new();
+            self.last_moves = Moves::new();
+            self.prog = self.work_point(self.cmd);
+            send_ok(io, None);
+            Ok(())
+        } else if command.eq_ignore_ascii_case("POS") {
+            no_args(words, "POS")?;
+            self.pos_reply(io);
+            Ok(())
+        } else if command.eq_ignore_ascii_case("TOOL") {
+            self.tool_command(words, io)
+        } else if command.eq_ignore_ascii_case("WORK") {
+            self.work_command(words, io)
+        } else if command.eq_ignore_ascii_case("AUX") {
+            self.aux_command(words, io)
+        } else {
+            Err(Refusal::Unknown(command))
+        }
+    }
+}
