@@ -203,7 +203,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
         motion::clear_cycle_start();
         while !motion::stop_ended() {
             self.pause();
-            board::sleep_unless(|| motion::wanted() || motion::stop_ended());
+            motion::sleep_unless(|| motion::wanted() || motion::stop_ended());
         }
     }
 
@@ -240,7 +240,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P
             // Full: status lines meanwhile, then sleep until there is room.
             self.answer_status();
             let motion = &mut self.motion;
-            board::sleep_unless(|| motion::wanted() || motion.has_room());
+            motion::sleep_unless(|| motion::wanted() || motion.has_room());
             supervisor::beat();
         }
     }
@@ -249,7 +249,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P
         while !self.motion.drained() {
             self.answer_status();
             let motion = &mut self.motion;
-            board::sleep_unless(|| motion::wanted() || motion.drained());
+            motion::sleep_unless(|| motion::wanted() || motion.drained());
             supervisor::beat();
         }
     }

@@ -20,8 +20,8 @@
 mod app {
     use core::mem::MaybeUninit;
     use core_nostd::protocol::Device;
-    use firmware::motion::{self, PrepStage};
-    use firmware::serial::{self, RtEvent, RT_EVENTS, RX_BYTES};
+    use firmware::motion::{self, PrepStage, RtEvent};
+    use firmware::serial::{self, RT_EVENTS, RX_BYTES};
     use firmware::step::{self, StepIsr};
     use firmware::supervisor::{self, Supervisor};
     use firmware::{board, storage, Controller};
@@ -157,7 +157,7 @@ mod app {
                     let idle = io.idle();
                     io.storage.save_if_due(device, idle);
                     let Controller { bytes, motion, .. } = &mut io;
-                    board::sleep_unless(|| {
+                    motion::sleep_unless(|| {
                         bytes.pending()
                             || motion::wanted()
                             || (device.can_feed() && motion.hungry())

@@ -15,8 +15,7 @@
 //! the stepper is full: that wait is the flow control a streaming host
 //! sees (its request is answered once the motion is taken).
 
-use crate::board::PACED;
-use crate::serial::RtEvent;
+use crate::board::{self, PACED};
 use crate::step::{self, StepIsr};
 use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
 use core_nostd::interleave::ImpulsePoint;
@@ -67,6 +66,18 @@ impl PrepStage {
 }
 
 use step::pend_prep;
+
+/// A real-time byte: what it asks, whether the link answers it (grbl
+/// answers neither a hold nor a resume), and when it arrived (TIM2 count).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RtEvent {
+    /// What it asks.
+    pub rt: Realtime,
+    /// Whether no `!` line answers it.
+    pub quiet: bool,
+    /// When it arrived.
+    pub at: u32,
+}
 
 /// A reset dropped the motion; what the protocol still hands over is
 /// dropped too until it has handled the reset.
@@ -150,6 +161,19 @@ fn reset(prep: &mut impl Mutex<T = PrepStage>, step: &mut impl Mutex<T = StepIsr
         p.prep.set_spindle(0);
         found
     })
+}
+
+/// Sleeps until an interrupt unless `ready` already holds
+/// ([`board::sleep_unless`]). In the `qemu-paced` build the core does not
+/// sleep while the step interrupt has work: QEMU wakes a sleeping core
+/// only once the host runs its thread again, milliseconds later on a
+/// loaded host, and the protocol must keep the planner fed in real time
+/// (the board wakes in a dozen cycles).
+pub fn sleep_unless(ready: impl FnMut() -> bool) {
+    if cfg!(feature = "qemu-paced") && !step::is_idle() {
+        return;
+    }
+    board::sleep_unless(ready);
 }
 
 /// Takes a wanted status line, if one is wanted: the TIM2 count at which

@@ -8,6 +8,7 @@
 //! | work per byte | under 100 instructions (`host-sim qemu-bench`) |
 
 use crate::board::{self, ticks};
+use crate::motion::RtEvent;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use core_nostd::protocol::grbl::GrblRealtime;
 use core_nostd::protocol::Realtime;
@@ -18,18 +19,6 @@ use stm32f4::stm32f405::Interrupt;
 /// the receive interrupt leaves the next byte in the UART and masks
 /// itself until the protocol has made room: nothing is dropped here.
 pub const RX_BYTES: usize = 512;
-
-/// A real-time byte: what it asks, whether the link answers it (grbl
-/// answers neither a hold nor a resume), and when it arrived (TIM2 count).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RtEvent {
-    /// What it asks.
-    pub rt: Realtime,
-    /// Whether no `!` line answers it.
-    pub quiet: bool,
-    /// When it arrived.
-    pub at: u32,
-}
 
 /// Real-time bytes waiting for their task; a reset that finds it full is
 /// kept here.

@@ -295,6 +295,20 @@ pub fn paths_in(text: &str) -> Vec<PathRef> {
             }
             Tok::Ident(_) => {
                 let after_sep = i > 0 && matches!(toks[i - 1].0, Tok::Sep | Tok::Dollar);
+                // `pub(in a::b)` restricts who sees an item: it names a
+                // module without using anything in it.
+                let visibility = i >= 3
+                    && matches!(&toks[i - 1].0, Tok::Ident(w) if w == "in")
+                    && toks[i - 2].0 == Tok::Other('(')
+                    && matches!(&toks[i - 3].0, Tok::Ident(w) if w == "pub");
+                if visibility {
+                    let mut j = i;
+                    while j < toks.len() && toks[j].0 != Tok::Other(')') {
+                        j += 1;
+                    }
+                    i = j;
+                    continue;
+                }
                 if !after_sep && matches!(toks.get(i + 1), Some((Tok::Sep, _))) {
                     let test = inline.last().is_some_and(|&(_, t)| t);
                     let mut trees = Vec::new();
@@ -632,6 +646,12 @@ mod tests {
         assert_eq!(
             heads("r#\"crate::a\"# ; b\"crate::a\""),
             Vec::<String>::new()
+        );
+        // A visibility names a module without using it; a loop's range is
+        // a use.
+        assert_eq!(
+            heads("pub(in crate::a) fn f() { for x in crate::b::g() {} }"),
+            ["crate::b::g"]
         );
     }
 

@@ -13,8 +13,8 @@ const CRATES: &[(&str, bool)] = &[
     ("host-sim/src", true),
     ("tests/src", true),
     ("fuzz/src", true),
-    ("core-nostd/src", false),
-    ("firmware/src", false),
+    ("core-nostd/src", true),
+    ("firmware/src", true),
 ];
 
 #[test]

@@ -4,9 +4,9 @@
 //! with a fixed number of decimals, rounded half away from zero; nothing
 //! here moves an axis.
 
-use super::session::{parse_flag, parse_length, send_data, send_ok, Outcome, Refusal};
+use super::io::Io;
+use super::session::wire::{parse_flag, parse_length, send_data, send_ok, Outcome, Refusal};
 use super::words::{parse_args, Words};
-use super::Io;
 use crate::calc::deflection::{self, write_fixed, DeflectionError, MAX_SECTIONS};
 use crate::calc::tape::{Bck5Finding, Bck5Frame, Bck5Verifier};
 use crate::calc::thread::{self, ThreadAxis, ThreadError, ThreadMode};

@@ -18,8 +18,9 @@
 //! overrides are not implemented: their bytes are answered with a message
 //! and change nothing.
 
+use super::io::{Io, Realtime, StatusView, Timing};
 use super::reply::ReplyLine;
-use super::{Io, Realtime, Session, Timing, VERSION};
+use super::session::{Session, VERSION};
 use core::fmt::Write;
 
 /// The RX buffer a sender may fill by character counting (`$I`'s `OPT`).
@@ -486,7 +487,7 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         }
         self.inner.background()
     }
-    fn view(&mut self, view: &crate::protocol::StatusView) {
+    fn view(&mut self, view: &StatusView) {
         self.inner.view(view);
     }
     fn pause(&mut self) {

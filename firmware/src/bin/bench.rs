@@ -773,7 +773,8 @@ fn short_blocks() -> impl Iterator<Item = core_nostd::stepper::Item> {
 /// The receive interrupt per byte: a plain byte, a real-time byte, a
 /// grbl real-time byte (the register reads measured apart).
 fn receive(tim: &StepTimer) {
-    use firmware::serial::{Receiver, RtEvent};
+    use firmware::motion::RtEvent;
+    use firmware::serial::Receiver;
     use heapless::spsc::Queue;
     static mut BYTES: Queue<u8, 512> = Queue::new();
     static mut RT: Queue<RtEvent, 16> = Queue::new();

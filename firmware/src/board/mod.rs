@@ -20,6 +20,7 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use stm32f4::stm32f405::{self as pac, Interrupt};
 
+mod clock;
 pub mod spindle;
 
 /// Whether the last reset came from the watchdog (the flags are cleared).
@@ -41,11 +42,7 @@ const PCLK2_HZ: u32 = 84_000_000;
 #[cfg(feature = "qemu")]
 const PCLK2_HZ: u32 = 16_000_000;
 
-/// TIM2's counter clock before its prescaler.
-#[cfg(not(feature = "qemu"))]
-pub const TIM2_CLK_HZ: u32 = 84_000_000;
-#[cfg(feature = "qemu")]
-pub const TIM2_CLK_HZ: u32 = 1_000_000_000;
+pub use clock::TIM2_CLK_HZ;
 
 const BAUD: u32 = 115_200;
 
@@ -321,13 +318,10 @@ pub fn rx_pause() {
 /// In the `qemu-timed` build the core never sleeps: QEMU's virtual time
 /// then advances by the instructions run (`-icount`), and a timer fires
 /// on its tick instead of when the host wakes QEMU up (tens of
-/// microseconds to milliseconds late). In the `qemu-paced` build it does
-/// not sleep while the step interrupt has work: QEMU wakes a sleeping core
-/// only once the host runs its thread again, milliseconds later on a
-/// loaded host, and the protocol must keep the planner fed in real time
-/// (the board wakes in a dozen cycles).
+/// microseconds to milliseconds late). (The `qemu-paced` build's own
+/// rule is [`crate::motion::sleep_unless`].)
 pub fn sleep_unless(mut ready: impl FnMut() -> bool) {
-    if cfg!(feature = "qemu-timed") || (cfg!(feature = "qemu-paced") && !crate::step::is_idle()) {
+    if cfg!(feature = "qemu-timed") {
         return;
     }
     cortex_m::interrupt::free(|_| {

@@ -22,7 +22,7 @@ use stm32f4::stm32f405 as pac;
 /// The PWM's period in counts of TIM4: 5 kHz from 84 MHz.
 const PERIOD: u32 = 16_800;
 /// TIM4's prescaler for about that (QEMU's timer clock is 1 GHz).
-const PSC: u32 = (super::TIM2_CLK_HZ / (5_000 * PERIOD)).saturating_sub(1);
+const PSC: u32 = (super::clock::TIM2_CLK_HZ / (5_000 * PERIOD)).saturating_sub(1);
 
 const RUN: u32 = 7;
 const CCW: u32 = 8;

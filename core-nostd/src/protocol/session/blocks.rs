@@ -10,7 +10,7 @@ use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::length::Length;
 use crate::machine::{Background, StepSink};
 use crate::plan::{q32, Feed, Point};
-use crate::protocol::Io;
+use crate::protocol::io::Io;
 use crate::stepdir::DriveTiming;
 use crate::stepper::Item;
 use core::fmt;

@@ -4,9 +4,9 @@
 //! Every command first computes its whole outcome from the current state and
 //! only then commits it, so a refused request changes nothing.
 
+use super::io::{Io, Realtime, StatusView, CHORDS_PER_PAUSE};
 use super::reply::{ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, Words};
-use super::{Io, Realtime, StatusView, CHORDS_PER_PAUSE};
 use crate::arc::{centre_from_radius, ArcDir, ArcPoints, ChordPlan, DirectArc};
 use crate::comp::{
     Contour, Element, Move, MoveKind, Moves, Origin, Shape, TipCode, Tool, MAX_MOVES,
@@ -38,7 +38,7 @@ mod moves;
 mod offsets;
 mod realtime;
 mod settings;
-mod wire;
+pub(super) mod wire;
 
 pub(super) use blocks::block_crc;
 pub use settings::{Config, Pass};

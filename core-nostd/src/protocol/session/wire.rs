@@ -8,9 +8,9 @@ use crate::gcode::{BlockError, Coolant, Spindle};
 use crate::impulse::ImpulsePrice;
 use crate::interleave::ImpulsePoint;
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
+use crate::protocol::io::{ErrorCode, Io, StatusView};
 use crate::protocol::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use crate::protocol::words::{ArgError, Words};
-use crate::protocol::{ErrorCode, Io, StatusView};
 
 use crate::outputs::write_rpm;
 use crate::plan::Feed;
@@ -209,14 +209,14 @@ impl<I: Io> Io for Suffixed<'_, I> {
         self.inner.stop_status(line);
     }
 
-    fn timing(&mut self) -> Option<crate::protocol::Timing> {
+    fn timing(&mut self) -> Option<crate::protocol::io::Timing> {
         self.inner.timing()
     }
 
     fn stop_holds(&mut self) -> bool {
         self.inner.stop_holds()
     }
-    crate::protocol::forward_io!();
+    crate::protocol::io::forward_io!();
 }
 
 /// Splits off and checks a trailing `*HH`; returns the bytes before it.

@@ -1,0 +1,286 @@
+//! What the protocol shares with the transports around it: the [`Io`] a
+//! device replies and hands its motion through, the real-time commands,
+//! the error codes, the status a transport may answer itself.
+
+use super::reply::ReplyLine;
+use crate::interleave::{LinearBlock, StepEvent};
+use crate::machine::Background;
+use crate::outputs::Outputs;
+use crate::stepdir::DriveTiming;
+use core::fmt;
+
+/// The error codes of the protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ErrorCode {
+    /// A request's `*HH` does not match, or is malformed.
+    Checksum,
+    /// A request longer than 120 bytes.
+    LineTooLong,
+    /// An empty request.
+    Empty,
+    /// An unknown command.
+    Unknown,
+    /// A request that is not of the command's form.
+    Syntax,
+    /// A malformed or out-of-range value; the text names the key.
+    Value,
+    /// A result or a position beyond what the machine can hold.
+    Range,
+    /// Impossible geometry.
+    Geometry,
+    /// A numbered request (`@id`) while no session token is set: the device
+    /// was reset since the host set it (an extension).
+    Session,
+}
+
+impl ErrorCode {
+    /// The code as it appears after `ERR`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            ErrorCode::Checksum => "CHECKSUM",
+            ErrorCode::LineTooLong => "LINE_TOO_LONG",
+            ErrorCode::Empty => "EMPTY",
+            ErrorCode::Unknown => "UNKNOWN",
+            ErrorCode::Syntax => "SYNTAX",
+            ErrorCode::Value => "VALUE",
+            ErrorCode::Range => "RANGE",
+            ErrorCode::Geometry => "GEOMETRY",
+            ErrorCode::Session => "SESSION",
+        }
+    }
+}
+
+impl fmt::Display for ErrorCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// The real-time bytes (`docs/protocol.md`): acted on the moment they
+/// arrive, wherever they fall, and never part of a request. They are
+/// grblHAL's non-printing codes (and grbl's reset): bytes a request can
+/// never hold, where grbl's printable `?`, `!`, `~` would collide with the
+/// CRC word ` ~CCCCCCCC` and with text in comments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Realtime {
+    /// 0x80: one `!STATUS` line at once.
+    Status,
+    /// 0x81: cycle start, resume after a hold.
+    Resume,
+    /// 0x82: feed hold.
+    Hold,
+    /// 0x18 (Ctrl-X): stop at once and drop everything queued.
+    Reset,
+}
+
+impl Realtime {
+    /// The real-time command a byte is, if it is one.
+    pub const fn from_byte(byte: u8) -> Option<Realtime> {
+        match byte {
+            0x80 => Some(Realtime::Status),
+            0x81 => Some(Realtime::Resume),
+            0x82 => Some(Realtime::Hold),
+            0x18 => Some(Realtime::Reset),
+            _ => None,
+        }
+    }
+}
+
+/// What a `!STATUS` line needs that only the session knows, handed to the
+/// transport so that it can answer a status request while it waits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StatusView {
+    /// X's impulse price, Å (on the radius).
+    pub hx: i64,
+    /// Z's impulse price, Å.
+    pub hz: i64,
+    /// X printed as a diameter.
+    pub diam: bool,
+    /// The speed, 10⁻⁴ mm/min.
+    pub speed: i64,
+    /// Starved block starts since the last `SYNC` or `ZERO`.
+    pub starved: u32,
+    /// Waiting for cycle start after `M00` (0), `M01` (1), a gear range
+    /// (41 … 44) or a machine's own M code: ` STOP=M00`.
+    pub stop: Option<u16>,
+    /// The spindle and coolant outputs (` SPINDLE= S= COOLANT=`); a board
+    /// puts in the speed it drives now.
+    pub outputs: Outputs,
+}
+
+/// Where replies and motion go: the transport side of a [`Device`].
+pub trait Io {
+    /// Sends one complete reply line (it ends with `*HH` and CRLF).
+    fn send(&mut self, line: &[u8]);
+
+    /// A run of motion begins: its tick 0 is now.
+    fn run_start(&mut self) {}
+
+    /// A linear block starts: its events follow. (Events of a direct arc
+    /// come without one.)
+    fn block_start(&mut self, block: &LinearBlock) {
+        let _ = block;
+    }
+
+    /// Issues one step event at `tick` of the current run (ticks of the
+    /// device's step clock since the run began), with the drive's pulse
+    /// width and DIR set-up. Events come in order; ticks never decrease
+    /// within a run. The default does nothing (a calculator without motion).
+    fn step(&mut self, event: StepEvent, tick: u64, drive: &DriveTiming) {
+        let _ = (event, tick, drive);
+    }
+
+    /// The run ended `ticks` after it began; the axes are at rest.
+    fn run_end(&mut self, ticks: u64) {
+        let _ = ticks;
+    }
+
+    /// The transport's stepper that runs in time beside the protocol (a
+    /// board's step interrupt), if it has one. Without one, started motion
+    /// is issued at once through [`Io::step`] (the virtual clock).
+    fn background(&mut self) -> Option<&mut dyn Background> {
+        None
+    }
+
+    /// What a status line needs besides the stepper, kept current by the
+    /// session (a board answers a status byte itself while it waits).
+    fn view(&mut self, view: &StatusView) {
+        let _ = view;
+    }
+
+    /// The handler is in the middle of a long computation and between two
+    /// of its steps (every [`CHORDS_PER_PAUSE`] chords of an arc's check):
+    /// a board answers a waiting status byte here and shows it is alive.
+    fn pause(&mut self) {}
+
+    /// A `G04` dwell of `us` microseconds, the axes at rest: a board
+    /// waits (answering status bytes meanwhile); the virtual clock, whose
+    /// runs are timed each from its own start, has nothing to wait for.
+    fn dwell(&mut self, us: u64) {
+        let _ = us;
+    }
+
+    /// A program stop (`M00`, or `M01` with the switch on; `code` 0 or 1),
+    /// the axes at rest: a board waits for cycle start (0x81), answering
+    /// status bytes meanwhile (`STOP=M00`); a reset ends the wait too. A
+    /// transport without an operator presses cycle start at once.
+    fn program_stop(&mut self, code: u16) {
+        let _ = code;
+    }
+
+    /// A machine's M code switches user output `n` (1 … 4), the axes at
+    /// rest: a board drives its pin.
+    fn user_output(&mut self, n: u8, on: bool) {
+        let _ = (n, on);
+    }
+
+    /// A machine's M code waits for user input `n` (1 … 4) to read
+    /// `level`, the axes at rest, answering status bytes meanwhile (a
+    /// reset ends the wait). A transport without inputs goes on at once.
+    fn wait_input(&mut self, n: u8, level: bool) {
+        let _ = (n, level);
+    }
+
+    /// Whether a program stop is a feed hold at rest rather than a wait
+    /// (grbl's `M0`: answered at once, the state `Hold:0`, the lines after
+    /// it received and queued, cycle start going on). Only with a
+    /// background stepper, which holds.
+    fn stop_holds(&mut self) -> bool {
+        false
+    }
+
+    /// Before a program stop on a transport without a background stepper:
+    /// the `!STATUS … STOP=M00` line (complete) that answers a status byte
+    /// while it waits, nothing moving meanwhile.
+    fn stop_status(&mut self, line: &[u8]) {
+        let _ = line;
+    }
+
+    /// The spindle and the coolant switch, the axes at rest (the speed
+    /// also changes at block starts, through the stepper): a board drives
+    /// its outputs.
+    fn outputs(&mut self, outputs: &Outputs) {
+        let _ = outputs;
+    }
+
+    /// For a `!STATUS` line: how the transport keeps time, where it
+    /// measures it (a board); the line then ends with `LAT= LATE=`.
+    fn timing(&mut self) -> Option<Timing> {
+        None
+    }
+}
+
+/// The [`Io`] methods a wrapper hands to its `inner` unchanged: motion,
+/// the background, waits and outputs (a wrapper writes its own `send`,
+/// `stop_status`, `timing` and `stop_holds`).
+macro_rules! forward_io {
+    () => {
+        fn run_start(&mut self) {
+            self.inner.run_start();
+        }
+        fn block_start(&mut self, block: &crate::interleave::LinearBlock) {
+            self.inner.block_start(block);
+        }
+        #[inline(always)]
+        fn step(
+            &mut self,
+            event: crate::interleave::StepEvent,
+            tick: u64,
+            drive: &crate::stepdir::DriveTiming,
+        ) {
+            self.inner.step(event, tick, drive);
+        }
+        fn run_end(&mut self, ticks: u64) {
+            self.inner.run_end(ticks);
+        }
+        fn background(&mut self) -> Option<&mut dyn crate::machine::Background> {
+            self.inner.background()
+        }
+        fn view(&mut self, view: &crate::protocol::io::StatusView) {
+            self.inner.view(view);
+        }
+        fn pause(&mut self) {
+            self.inner.pause();
+        }
+        fn dwell(&mut self, us: u64) {
+            self.inner.dwell(us);
+        }
+        fn program_stop(&mut self, code: u16) {
+            self.inner.program_stop(code);
+        }
+        fn user_output(&mut self, n: u8, on: bool) {
+            self.inner.user_output(n, on);
+        }
+        fn wait_input(&mut self, n: u8, level: bool) {
+            self.inner.wait_input(n, level);
+        }
+        fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
+            self.inner.outputs(outputs);
+        }
+    };
+}
+pub(crate) use forward_io;
+
+/// A board's own timing, at the end of its `!STATUS` lines.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Timing {
+    /// Microseconds from the status byte's arrival to the line (`LAT=`).
+    pub latency_us: u32,
+    /// Step events issued later than their tick since power-on (`LATE=`).
+    pub late_events: u32,
+}
+
+impl Timing {
+    /// Appends ` LAT= LATE=` to a status line.
+    pub fn write_to(&self, line: &mut ReplyLine) {
+        use core::fmt::Write;
+        let _ = write!(line, " LAT={} LATE={}", self.latency_us, self.late_events);
+    }
+}
+
+/// Chords an arc's check takes between two [`Io::pause`] calls (about
+/// 150 000 instructions on a Cortex-M4: 1 ms at 168 MHz).
+pub const CHORDS_PER_PAUSE: u32 = 16;
