@@ -530,6 +530,25 @@ pub enum BlockError {
 }
 
 impl BlockError {
+    /// The address the refusal is about, when it is about one word.
+    pub const fn address(&self) -> Option<u8> {
+        match *self {
+            BlockError::UnknownAddress(a)
+            | BlockError::Repeated(a)
+            | BlockError::Value(a, _)
+            | BlockError::Range(a, _)
+            | BlockError::OtherDialect(a, ..) => Some(a),
+            BlockError::NoYAxis => Some(b'Y'),
+            BlockError::UnsupportedG(_) | BlockError::Cycle(_) => Some(b'G'),
+            BlockError::UnsupportedM(_) => Some(b'M'),
+            BlockError::NotAWord
+            | BlockError::Comment
+            | BlockError::Form(_)
+            | BlockError::ProgramNumber
+            | BlockError::HostLanguage => None,
+        }
+    }
+
     /// Whether the protocol answers it `ERR VALUE` (a number or a code
     /// this control does not take) rather than `ERR SYNTAX`.
     pub const fn is_value(&self) -> bool {

@@ -18,7 +18,7 @@
 //! overrides are not implemented: their bytes are answered with a message
 //! and change nothing.
 
-use super::io::{Io, Realtime, StatusView, Timing};
+use super::io::{ErrorCode, Io, Realtime, Refused, StatusView, Timing};
 use super::reply::ReplyLine;
 use super::session::{Session, VERSION};
 use core::fmt::Write;
@@ -293,31 +293,19 @@ fn mm4(text: &[u8]) -> Option<i64> {
     Some(if neg { -v } else { v })
 }
 
-/// The grbl error code for a pendant refusal `ERR <CODE> …`.
-pub fn error_code(reply: &[u8]) -> u8 {
-    let code = reply
-        .strip_prefix(b"ERR ")
-        .and_then(|r| r.split(|&b| b == b' ').next())
-        .unwrap_or(b"");
-    match code {
-        // Expected command letter / bad number / unsupported command /
-        // invalid target / line too long / travel exceeded.
-        b"SYNTAX" | b"CHECKSUM" => 1,
-        b"VALUE" if names_feed(reply) => 22,
-        b"UNKNOWN" | b"VALUE" => 20,
-        b"GEOMETRY" => 33,
-        b"LINE_TOO_LONG" => 11,
-        b"RANGE" => 15,
-        _ => 20,
+/// The grbl error number of a refusal: expected command letter or bad
+/// number format (1), undefined feed rate (22), unsupported command (20),
+/// invalid target (33), line overflow (11), travel exceeded (15).
+pub fn error_number(why: Refused) -> u8 {
+    use ErrorCode as E;
+    match why.code {
+        E::Syntax | E::Checksum => 1,
+        E::Value if why.about == Some(b'F') => 22,
+        E::Unknown | E::Value | E::Empty | E::Session => 20,
+        E::Geometry => 33,
+        E::LineTooLong => 11,
+        E::Range => 15,
     }
-}
-
-/// Whether a refusal is about the feed word (` F` in its text).
-fn names_feed(reply: &[u8]) -> bool {
-    reply
-        .iter()
-        .zip(reply.iter().skip(1))
-        .any(|(&a, &b)| a == b' ' && b == b'F')
 }
 
 /// The one [`Io`] the session answers through (so that its code exists
@@ -335,6 +323,8 @@ pub struct Translate<'a, I: Io + ?Sized> {
     pub outcome: Option<Result<(), u8>>,
     /// A refusal's text, for its `[MSG:…]` line (a query's final line).
     pub message: ReplyLine,
+    /// What the refusal about to be sent is about.
+    refused: Option<Refused>,
     /// A reset came, with a block running (`OF` > 0).
     pub reset: Option<bool>,
     /// Check mode (`$C`): replies go out; nothing moves, waits or
@@ -364,6 +354,7 @@ impl<'a, I: Io + ?Sized> Translate<'a, I> {
             statuses: true,
             outcome: None,
             message: ReplyLine::new(),
+            refused: None,
             reset: None,
             dry: false,
         }
@@ -415,7 +406,13 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         if body.starts_with(b"OK") {
             self.outcome = Some(Ok(()));
         } else if body.starts_with(b"ERR ") {
-            self.outcome = Some(Err(error_code(body)));
+            // Every `ERR` line is told first (`send_error_about`); one
+            // that was not is no command this control runs.
+            let why = self.refused.take().unwrap_or(Refused {
+                code: ErrorCode::Unknown,
+                about: None,
+            });
+            self.outcome = Some(Err(error_number(why)));
             self.message = ReplyLine::new();
             self.message.push_bytes(body.get(4..).unwrap_or(b""));
         } else if body.starts_with(b"!STATUS") {
@@ -436,6 +433,13 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
             self.inner.send(finish(&mut l));
         }
         // `DATA` lines and the rest: not grbl's.
+    }
+    fn refused(&mut self, why: Refused) {
+        if self.grbl {
+            self.refused = Some(why);
+        } else {
+            self.inner.refused(why);
+        }
     }
     fn stop_status(&mut self, line: &[u8]) {
         if !self.grbl {
@@ -1254,9 +1258,48 @@ mod tests {
     }
 
     #[test]
-    fn refusals_map_to_grbl_codes() {
-        assert_eq!(error_code(b"ERR GEOMETRY arc radii differ"), 33);
-        assert_eq!(error_code(b"ERR VALUE F must come to 0.001"), 22);
-        assert_eq!(error_code(b"ERR SYNTAX not a G-code line"), 1);
+    fn refusals_map_to_grbl_codes_by_what_they_are() {
+        struct Out(std::vec::Vec<u8>);
+        impl Io for Out {
+            fn send(&mut self, line: &[u8]) {
+                self.0.extend_from_slice(line);
+            }
+        }
+        extern crate std;
+        let error = |line: &str| {
+            let mut dev = crate::protocol::Device::new();
+            let mut out = Out(std::vec::Vec::new());
+            dev.set_grbl(true, &mut out);
+            out.0.clear();
+            dev.receive_bytes(line.as_bytes(), &mut out);
+            let text = std::string::String::from_utf8(out.0).expect("text");
+            text.lines()
+                .find_map(|l| l.strip_prefix("error:"))
+                .and_then(|n| n.parse::<u8>().ok())
+        };
+        // Undefined feed rate: a feed move under F0.
+        assert_eq!(error("G01 X1 F0\n"), Some(22));
+        // Invalid target: an arc whose radius cannot reach its end.
+        assert_eq!(error("G02 X10 Z-10 R1\n"), Some(33));
+        // Expected command letter: an address this control does not know.
+        assert_eq!(error("G01 X1 Q3 F100\n"), Some(1));
+        // Unsupported command: a G code it does not run, a word of the
+        // other dialect (whose text names FANUC: not a feed's refusal).
+        assert_eq!(error("G12 X1\n"), Some(20));
+        assert_eq!(error("G01 U1 F100\n"), Some(20));
+        assert_eq!(
+            error_number(Refused {
+                code: ErrorCode::Value,
+                about: None
+            }),
+            20
+        );
+        assert_eq!(
+            error_number(Refused {
+                code: ErrorCode::Value,
+                about: Some(b'F')
+            }),
+            22
+        );
     }
 }

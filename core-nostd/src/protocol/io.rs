@@ -111,10 +111,28 @@ pub struct StatusView {
     pub outputs: Outputs,
 }
 
+/// A refusal as a front numbers it, from the refusal itself (never from
+/// its text): the protocol's code, and the address or key it is about
+/// when that is one letter (`F` for a feed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Refused {
+    /// The code after `ERR`.
+    pub code: ErrorCode,
+    /// The word's letter the refusal is about, if it is about one.
+    pub about: Option<u8>,
+}
+
 /// Where replies and motion go: the transport side of a [`Device`].
 pub trait Io {
     /// Sends one complete reply line (it ends with `*HH` and CRLF).
     fn send(&mut self, line: &[u8]);
+
+    /// The next line sent is a refusal's `ERR` line, and this is what it
+    /// is about.
+    fn refused(&mut self, why: Refused) {
+        let _ = why;
+    }
 
     /// A run of motion begins: its tick 0 is now.
     fn run_start(&mut self) {}
@@ -218,6 +236,9 @@ pub trait Io {
 /// `stop_status`, `timing` and `stop_holds`).
 macro_rules! forward_io {
     () => {
+        fn refused(&mut self, why: crate::protocol::io::Refused) {
+            self.inner.refused(why);
+        }
         fn run_start(&mut self) {
             self.inner.run_start();
         }

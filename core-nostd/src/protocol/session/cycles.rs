@@ -19,7 +19,7 @@ use crate::cycle::{Along, CycleError, Roughing, Segment, Step, PROFILE_BLOCKS};
 use crate::gcode::{parse, CycleKind, CycleWords, Motion, SingleCycle};
 use crate::interp::path_feed;
 use crate::length::Length;
-use core::fmt::Write;
+use crate::protocol::io::ErrorCode;
 
 impl Session {
     /// `G74`/`G75`: Fanuc's first block sets the return after each peck;
@@ -300,12 +300,12 @@ impl Session {
                 if n == Some(q) {
                     self.cycles.mode = Mode::Idle;
                 }
-                let mut line = crate::protocol::reply::ReplyLine::new();
-                let _ = write!(
-                    line,
-                    "ERR VALUE N inside the profile (N{p} to N{q}) of a refused cycle: not run"
+                send_error_about(
+                    io,
+                    ErrorCode::Value,
+                    Some(b'N'),
+                    format_args!("N inside the profile (N{p} to N{q}) of a refused cycle: not run"),
                 );
-                io.send(line.finish());
                 return Ok(());
             }
             Mode::Holding(p) => p,

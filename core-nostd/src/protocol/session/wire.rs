@@ -8,7 +8,7 @@ use crate::gcode::{BlockError, Coolant, Spindle};
 use crate::impulse::ImpulsePrice;
 use crate::interleave::ImpulsePoint;
 use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
-use crate::protocol::io::{ErrorCode, Io, StatusView};
+use crate::protocol::io::{ErrorCode, Io, Refused, StatusView};
 use crate::protocol::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use crate::protocol::words::{ArgError, Words};
 
@@ -442,7 +442,14 @@ pub(super) fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         Refusal::NoArgs(command) => {
             send_error(io, E::Syntax, format_args!("{command} takes no arguments"))
         }
-        Refusal::Value(key, why) => send_error(io, E::Value, format_args!("{key} {why}")),
+        Refusal::Value(key, why) => {
+            // A key of one letter is a word's address.
+            let about = match key.as_bytes() {
+                &[letter] => Some(letter),
+                _ => None,
+            };
+            send_error_about(io, E::Value, about, format_args!("{key} {why}"))
+        }
         Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
         Refusal::Geometry(what) => send_error(io, E::Geometry, format_args!("{what}")),
         Refusal::Missing(what) => send_error(io, E::Syntax, format_args!("{what}")),
@@ -456,7 +463,7 @@ pub(super) fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         Refusal::Frame(e) => send_error(io, E::Value, format_args!("FRAME {e}")),
         Refusal::Block(e) => {
             let code = if e.is_value() { E::Value } else { E::Syntax };
-            send_error(io, code, format_args!("{e}"))
+            send_error_about(io, code, e.address(), format_args!("{e}"))
         }
     }
 }
@@ -546,6 +553,17 @@ pub(crate) fn send_data<I: Io>(io: &mut I, words: fmt::Arguments<'_>) {
 
 /// Sends `ERR <CODE> <text>`.
 pub(crate) fn send_error<I: Io>(io: &mut I, code: ErrorCode, text: fmt::Arguments<'_>) {
+    send_error_about(io, code, None, text);
+}
+
+/// As [`send_error`], the refusal about the word `about` (its letter).
+pub(crate) fn send_error_about<I: Io>(
+    io: &mut I,
+    code: ErrorCode,
+    about: Option<u8>,
+    text: fmt::Arguments<'_>,
+) {
+    io.refused(Refused { code, about });
     let mut line = ReplyLine::new();
     let _ = write!(line, "ERR {} {}", code.as_str(), text);
     io.send(line.finish());
