@@ -39,7 +39,7 @@ pub mod supervisor;
 use board::Serial;
 use core_nostd::interleave::ImpulsePoint;
 use core_nostd::machine::Background;
-use core_nostd::protocol::{status_line, Io, Realtime, StatusView, Timing};
+use core_nostd::protocol::{status_line, Io, Realtime, StatusRecord, StatusView, Timing};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
 use core_nostd::stepper::{Aborted, Item, Motion};
@@ -139,16 +139,20 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Controller<P, S> {
                 outputs: self.motion.outputs(),
                 ..self.view
             };
-            let state = self.motion.motion();
-            let mut line = status_line("!STATUS", state, issued, self.queued, &view);
+            let record = StatusRecord {
+                motion: self.motion.motion(),
+                issued,
+                queued: self.queued,
+                view,
+            };
             match self.grbl.as_ref() {
                 Some(extras) => {
-                    let mut report =
-                        core_nostd::protocol::grbl::status_report(line.as_bytes(), extras);
+                    let mut report = core_nostd::protocol::grbl::status_report(&record, extras);
                     report.push_bytes(b"\r\n");
                     self.serial.send(report.as_bytes());
                 }
                 None => {
+                    let mut line = status_line("!STATUS", &record);
                     self.timing(asked).write_to(&mut line);
                     self.serial.send(line.finish());
                 }

@@ -25,7 +25,7 @@ use core_nostd::interleave::{ImpulsePoint, StepEvent};
 use core_nostd::machine::Background;
 use core_nostd::outputs::Outputs;
 use core_nostd::protocol::grbl::{self, Extras, GrblRealtime};
-use core_nostd::protocol::{status_line, Device, Io, Realtime, StatusView};
+use core_nostd::protocol::{status_line, Device, Io, Realtime, StatusRecord, StatusView};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
 use core_nostd::stepper::{Aborted, Item, Motion, Pulled, Stepper, AHEAD};
@@ -278,7 +278,12 @@ impl<W: Write> Protocol<W> {
             outputs,
             ..self.view
         };
-        let mut line = status_line("!STATUS", motion, issued, self.queued, &view);
+        let record = StatusRecord {
+            motion,
+            issued,
+            queued: self.queued,
+            view,
+        };
         match self.grbl {
             Some(mut extras) => {
                 // Overrides received and not yet acted on, as they will be.
@@ -293,11 +298,12 @@ impl<W: Write> Protocol<W> {
                         extras.overrides = rt.overrides(extras.overrides);
                     }
                 }
-                let mut report = grbl::status_report(line.as_bytes(), &extras);
+                let mut report = grbl::status_report(&record, &extras);
                 report.push_bytes(b"\r\n");
                 self.write(report.as_bytes());
             }
             None => {
+                let mut line = status_line("!STATUS", &record);
                 let bytes = line.finish().to_vec();
                 self.write(&bytes);
             }

@@ -18,7 +18,7 @@
 //! overrides are not implemented: their bytes are answered with a message
 //! and change nothing.
 
-use super::io::{ErrorCode, Io, Realtime, Refused, StatusView, Timing};
+use super::io::{ErrorCode, Io, Realtime, Refused, State, StatusRecord, StatusView, Timing};
 use super::reply::ReplyLine;
 use super::session::{Session, VERSION};
 use core::fmt::Write;
@@ -217,32 +217,27 @@ impl Extras {
 
 /// A pendant status line (`STATUS`/`!STATUS`) as grbl's status report:
 /// `<Run|MPos:X,0.0000,Z|FS:F,S|WCO:…|Ov:…|D:1>`.
-pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
+pub fn status_report(record: &StatusRecord, extras: &Extras) -> ReplyLine {
     let mut line = ReplyLine::new();
-    let state = value(status, b"STATE").unwrap_or(b"IDLE");
-    let speed = value(status, b"V").unwrap_or(b"0");
-    let at_rest = speed.iter().all(|&b| b == b'0' || b == b'.');
-    let state: &[u8] = match (extras.alarm, state, value(status, b"STOP")) {
+    let at_rest = record.speed_mm4() == 0;
+    let state: &[u8] = match (extras.alarm, record.state(), record.view.stop) {
         (Some(_), _, _) => b"Alarm",
         _ if extras.check => b"Check",
         (_, _, Some(_)) => b"Hold:0",
-        (_, b"HOLD", _) if at_rest => b"Hold:0",
-        (_, b"HOLD", _) => b"Hold:1",
-        (_, b"RUN", _) if extras.jogging => b"Jog",
-        (_, b"RUN", _) => b"Run",
-        _ => b"Idle",
+        (_, State::Hold, _) if at_rest => b"Hold:0",
+        (_, State::Hold, _) => b"Hold:1",
+        (_, State::Run, _) if extras.jogging => b"Jog",
+        (_, State::Run, _) => b"Run",
+        (_, State::Idle, _) => b"Idle",
     };
     line.push_bytes(b"<");
     line.push_bytes(state);
-    let (x, z) = (
-        value(status, b"X").unwrap_or(b"0.0000"),
-        value(status, b"Z").unwrap_or(b"0.0000"),
-    );
+    let (x, z) = (record.x_mm4(), record.z_mm4());
     if extras.mpos {
         line.push_bytes(b"|MPos:");
-        line.push_bytes(x);
+        let _ = crate::length::write_mm4(&mut line, x);
         line.push_bytes(b",0.0000,");
-        line.push_bytes(z);
+        let _ = crate::length::write_mm4(&mut line, z);
     } else {
         // Work position: the machine's less the work offset.
         line.push_bytes(b"|WPos:");
@@ -250,16 +245,14 @@ pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
             let v = if diameter { 2 * a } else { a };
             crate::length::div_round_half_away(v, 1_000)
         };
-        let x = mm4(x).unwrap_or(0) - wco(extras.wco[0], extras.diameter);
-        let z = mm4(z).unwrap_or(0) - wco(extras.wco[1], false);
-        let _ = crate::length::write_mm4(&mut line, x);
+        let _ = crate::length::write_mm4(&mut line, x - wco(extras.wco[0], extras.diameter));
         line.push_bytes(b",0.0000,");
-        let _ = crate::length::write_mm4(&mut line, z);
+        let _ = crate::length::write_mm4(&mut line, z - wco(extras.wco[1], false));
     }
     line.push_bytes(b"|FS:");
-    line.push_bytes(speed);
+    let _ = crate::length::write_mm4(&mut line, record.speed_mm4());
     line.push_bytes(b",");
-    line.push_bytes(value(status, b"S").unwrap_or(b"0"));
+    let _ = crate::outputs::write_rpm(&mut line, record.view.outputs.rpm);
     line.push_bytes(b"|WCO:");
     write_mm(&mut line, extras.wco[0], extras.diameter);
     line.push_bytes(b",0.0000,");
@@ -267,30 +260,6 @@ pub fn status_report(status: &[u8], extras: &Extras) -> ReplyLine {
     let [f, r, s] = extras.overrides;
     let _ = write!(line, "|Ov:{f},{r},{s}|D:{}>", u8::from(extras.diameter));
     line
-}
-
-/// A number printed with 4 decimals, in 10⁻⁴ mm.
-fn mm4(text: &[u8]) -> Option<i64> {
-    let (neg, digits) = match text.split_first() {
-        Some((b'-', rest)) => (true, rest),
-        _ => (false, text),
-    };
-    let mut v: i64 = 0;
-    let mut places = None;
-    for &b in digits {
-        match b {
-            b'.' if places.is_none() => places = Some(0),
-            b'0'..=b'9' => {
-                v = v.checked_mul(10)?.checked_add(i64::from(b - b'0'))?;
-                places = places.map(|p| p + 1);
-            }
-            _ => return None,
-        }
-    }
-    for _ in places.unwrap_or(0)..4 {
-        v = v.checked_mul(10)?;
-    }
-    Some(if neg { -v } else { v })
 }
 
 /// The grbl error number of a refusal: expected command letter or bad
@@ -325,6 +294,8 @@ pub struct Translate<'a, I: Io + ?Sized> {
     pub message: ReplyLine,
     /// What the refusal about to be sent is about.
     refused: Option<Refused>,
+    /// What the status line about to be sent says.
+    status: Option<StatusRecord>,
     /// A reset came, with a block running (`OF` > 0).
     pub reset: Option<bool>,
     /// Check mode (`$C`): replies go out; nothing moves, waits or
@@ -355,6 +326,7 @@ impl<'a, I: Io + ?Sized> Translate<'a, I> {
             outcome: None,
             message: ReplyLine::new(),
             refused: None,
+            status: None,
             reset: None,
             dry: false,
         }
@@ -416,13 +388,11 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
             self.message = ReplyLine::new();
             self.message.push_bytes(body.get(4..).unwrap_or(b""));
         } else if body.starts_with(b"!STATUS") {
-            if self.statuses {
-                let mut l = status_report(body, &self.extras);
+            // Every status line is told first (`Io::status`).
+            if let (true, Some(record)) = (self.statuses, self.status.take()) {
+                let mut l = status_report(&record, &self.extras);
                 self.inner.send(finish(&mut l));
             }
-        } else if body.starts_with(b"!RESET") {
-            let running = value(body, b"OF").is_some_and(|v| v != b"0");
-            self.reset = Some(running);
         } else if let Some(text) = body.strip_prefix(b"DATA MSG ") {
             // What the operator must do at a stop (a gear range, the
             // machine's own M code): grbl's feedback message.
@@ -441,17 +411,28 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
             self.inner.refused(why);
         }
     }
+    fn reset_done(&mut self, running: bool) {
+        if self.grbl {
+            self.reset = Some(running);
+        } else {
+            self.inner.reset_done(running);
+        }
+    }
+    fn status(&mut self, record: &StatusRecord) {
+        if self.grbl {
+            self.status = Some(*record);
+        } else {
+            self.inner.status(record);
+        }
+    }
     fn stop_status(&mut self, line: &[u8]) {
         if !self.grbl {
             return self.inner.stop_status(line);
         }
-        let body = line
-            .iter()
-            .rposition(|&b| b == b'*')
-            .and_then(|i| line.get(..i))
-            .unwrap_or(line);
-        let mut l = status_report(body, &self.extras);
-        self.inner.stop_status(finish(&mut l));
+        if let Some(record) = self.status.take() {
+            let mut l = status_report(&record, &self.extras);
+            self.inner.stop_status(finish(&mut l));
+        }
     }
     fn timing(&mut self) -> Option<Timing> {
         self.inner.timing()
@@ -1192,8 +1173,36 @@ pub fn realtime<I: Io + ?Sized>(
 mod tests {
     use super::*;
 
+    /// X 10 mm on the diameter (1000 impulses of 0.005 mm on the radius),
+    /// Z −5 mm (−500 of 0.01 mm), at `speed` (10⁻⁴ mm/min).
+    fn record(motion: crate::stepper::Motion, speed: i64) -> StatusRecord {
+        use crate::interleave::ImpulsePoint;
+        StatusRecord {
+            motion,
+            issued: ImpulsePoint {
+                x: crate::impulse::Impulses(1000),
+                z: crate::impulse::Impulses(-500),
+            },
+            queued: 3,
+            view: StatusView {
+                hx: 50_000,
+                hz: 100_000,
+                diam: true,
+                speed,
+                starved: 0,
+                stop: None,
+                outputs: crate::outputs::Outputs {
+                    spindle: crate::gcode::Spindle::Cw,
+                    rpm: 800_000,
+                    top: 0,
+                    coolant: crate::gcode::Coolant::Off,
+                },
+            },
+        }
+    }
+
     #[test]
-    fn a_status_line_becomes_a_report() {
+    fn a_status_record_becomes_a_report() {
         let extras = Extras {
             wco: [5_000_000, -1_200_000_000],
             diameter: true,
@@ -1203,14 +1212,25 @@ mod tests {
             check: false,
             mpos: true,
         };
-        let r = status_report(
-            b"!STATUS STATE=RUN PX=1 PZ=2 X=10.0000 Z=-5.0000 V=200.0000 Q=3 STARVED=0 SPINDLE=CW S=800.000 COOLANT=OFF",
-            &extras,
-        );
+        let r = status_report(&record(crate::stepper::Motion::Run, 2_000_000), &extras);
         assert_eq!(
             r.as_bytes(),
             b"<Run|MPos:10.0000,0.0000,-5.0000|FS:200.0000,800.000|WCO:1.0000,0.0000,-120.0000|Ov:100,100,100|D:1>"
         );
+        // The pendant's line says the same.
+        let line = crate::protocol::status_line(
+            "!STATUS",
+            &record(crate::stepper::Motion::Run, 2_000_000),
+        );
+        assert_eq!(
+            line.as_bytes(),
+            b"!STATUS STATE=RUN PX=1000 PZ=-500 X=10.0000 Z=-5.0000 V=200.0000 Q=3 STARVED=0 SPINDLE=CW S=800.000 COOLANT=OFF"
+        );
+        // Braking still moves; held is at rest whatever the last speed.
+        let braking = status_report(&record(crate::stepper::Motion::Braking, 5), &extras);
+        assert!(braking.as_bytes().starts_with(b"<Hold:1|"));
+        let held = status_report(&record(crate::stepper::Motion::Held, 5), &extras);
+        assert!(held.as_bytes().starts_with(b"<Hold:0|"));
     }
 
     #[test]
@@ -1224,7 +1244,8 @@ mod tests {
             check: false,
             mpos: false,
         };
-        let r = status_report(b"!STATUS STATE=IDLE X=10.0000 Z=-5.0000 V=0", &extras);
+        let idle = record(crate::stepper::Motion::Idle, 0);
+        let r = status_report(&idle, &extras);
         // X 10 on the diameter less 2·0.5 mm; Z −5 less −120.
         assert!(
             r.as_bytes()
@@ -1236,7 +1257,7 @@ mod tests {
             check: true,
             ..extras
         };
-        assert!(status_report(b"!STATUS STATE=IDLE", &check)
+        assert!(status_report(&idle, &check)
             .as_bytes()
             .starts_with(b"<Check|"));
     }
@@ -1252,9 +1273,6 @@ mod tests {
         assert_eq!(parse_setting(b"65536", false), None);
         assert_eq!(parse_setting(b"", false), None);
         assert_eq!(parse_setting(b"x", true), None);
-        assert_eq!(mm4(b"-12.5"), Some(-125_000));
-        assert_eq!(mm4(b"0.0001"), Some(1));
-        assert_eq!(mm4(b"1.2.3"), None);
     }
 
     #[test]

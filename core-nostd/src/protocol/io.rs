@@ -3,10 +3,12 @@
 //! the error codes, the status a transport may answer itself.
 
 use super::reply::ReplyLine;
-use crate::interleave::{LinearBlock, StepEvent};
+use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
+use crate::length::div_round_half_away;
 use crate::machine::Background;
 use crate::outputs::Outputs;
 use crate::stepdir::DriveTiming;
+use crate::stepper::Motion as Axes;
 use core::fmt;
 
 /// The error codes of the protocol.
@@ -123,6 +125,81 @@ pub struct Refused {
     pub about: Option<u8>,
 }
 
+/// What a status says, before a front writes it: the pendant's
+/// `STATE= PX= …` line ([`crate::protocol::status_line`]) and grbl's
+/// `<Idle|MPos:…>` report ([`crate::protocol::grbl::status_report`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StatusRecord {
+    /// What the axes are doing.
+    pub motion: Axes,
+    /// The registers of the steps issued.
+    pub issued: ImpulsePoint,
+    /// Blocks queued and not started.
+    pub queued: usize,
+    /// The session's part: prices, speed, outputs, a program stop.
+    pub view: StatusView,
+}
+
+impl StatusRecord {
+    /// X as printed, 10⁻⁴ mm: the registers times the price, a diameter
+    /// when the view says so.
+    pub fn x_mm4(&self) -> i64 {
+        let factor = if self.view.diam { 2 } else { 1 };
+        // |registers| ≤ 999 999 999 and prices ≤ 10⁷ Å: within i64.
+        div_round_half_away(
+            i64::from(self.issued.x.get()) * self.view.hx * factor,
+            1_000,
+        )
+    }
+
+    /// Z as printed, 10⁻⁴ mm.
+    pub fn z_mm4(&self) -> i64 {
+        div_round_half_away(i64::from(self.issued.z.get()) * self.view.hz, 1_000)
+    }
+
+    /// The speed as printed, 10⁻⁴ mm/min: 0 once held at rest.
+    pub fn speed_mm4(&self) -> i64 {
+        if self.motion == Axes::Held {
+            0
+        } else {
+            self.view.speed
+        }
+    }
+
+    /// Running, holding (braking or held) or idle.
+    pub const fn state(&self) -> State {
+        match self.motion {
+            Axes::Idle => State::Idle,
+            Axes::Run => State::Run,
+            Axes::Braking | Axes::Held => State::Hold,
+        }
+    }
+}
+
+/// The state a status reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum State {
+    /// At rest, nothing started.
+    Idle,
+    /// Moving.
+    Run,
+    /// A feed hold: braking, or at rest.
+    Hold,
+}
+
+impl State {
+    /// The pendant's word (`STATE=`).
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            State::Idle => "IDLE",
+            State::Run => "RUN",
+            State::Hold => "HOLD",
+        }
+    }
+}
+
 /// Where replies and motion go: the transport side of a [`Device`].
 pub trait Io {
     /// Sends one complete reply line (it ends with `*HH` and CRLF).
@@ -132,6 +209,18 @@ pub trait Io {
     /// is about.
     fn refused(&mut self, why: Refused) {
         let _ = why;
+    }
+
+    /// The next status line sent (a `STATUS` reply, a `!STATUS` line, or
+    /// the line given to [`Io::stop_status`]) says this.
+    fn status(&mut self, record: &StatusRecord) {
+        let _ = record;
+    }
+
+    /// A reset dropped the motion (its `!RESET` line comes next):
+    /// `running` when a block was running then (`OF=` above 0).
+    fn reset_done(&mut self, running: bool) {
+        let _ = running;
     }
 
     /// A run of motion begins: its tick 0 is now.
@@ -238,6 +327,12 @@ macro_rules! forward_io {
     () => {
         fn refused(&mut self, why: crate::protocol::io::Refused) {
             self.inner.refused(why);
+        }
+        fn status(&mut self, record: &crate::protocol::io::StatusRecord) {
+            self.inner.status(record);
+        }
+        fn reset_done(&mut self, running: bool) {
+            self.inner.reset_done(running);
         }
         fn run_start(&mut self) {
             self.inner.run_start();

@@ -16,7 +16,9 @@ mod session;
 mod words;
 
 pub use device::Device;
-pub use io::{ErrorCode, Io, Realtime, Refused, StatusView, Timing, CHORDS_PER_PAUSE};
+pub use io::{
+    ErrorCode, Io, Realtime, Refused, State, StatusRecord, StatusView, Timing, CHORDS_PER_PAUSE,
+};
 pub use session::{status_line, Config, Pass, Session, NAME, VERSION};
 
 #[cfg(test)]

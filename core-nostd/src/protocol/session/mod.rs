@@ -4,7 +4,7 @@
 //! Every command first computes its whole outcome from the current state and
 //! only then commits it, so a refused request changes nothing.
 
-use super::io::{Io, Realtime, StatusView, CHORDS_PER_PAUSE};
+use super::io::{Io, Realtime, StatusRecord, StatusView, CHORDS_PER_PAUSE};
 use super::reply::{ReplyLine, REPLY_CAPACITY};
 use super::words::{parse_args, Words};
 use crate::arc::{centre_from_radius, ArcDir, ArcPoints, ChordPlan, DirectArc};

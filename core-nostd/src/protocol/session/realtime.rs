@@ -14,7 +14,14 @@ impl Session {
         }
         let mut view = self.view(st.speed(self.machine.tick()));
         view.outputs.rpm = st.spindle;
-        let mut line = status_line(prefix, st.motion, st.issued, st.queued, &view);
+        let record = StatusRecord {
+            motion: st.motion,
+            issued: st.issued,
+            queued: st.queued,
+            view,
+        };
+        io.status(&record);
+        let mut line = status_line(prefix, &record);
         if prefix.starts_with('!') {
             if let Some(timing) = io.timing() {
                 timing.write_to(&mut line);
@@ -138,6 +145,7 @@ impl Session {
         self.token = 0;
         self.last_id = None;
         self.last_final.clear();
+        io.reset_done(found.of > 0);
         let mut line = ReplyLine::new();
         let _ = write!(
             line,

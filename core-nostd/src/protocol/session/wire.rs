@@ -6,15 +6,13 @@ use crate::comp::CompError;
 use crate::crc32::Crc32;
 use crate::gcode::{BlockError, Coolant, Spindle};
 use crate::impulse::ImpulsePrice;
-use crate::interleave::ImpulsePoint;
-use crate::length::{div_round_half_away, write_mm4, Length, LengthError};
-use crate::protocol::io::{ErrorCode, Io, Refused, StatusView};
+use crate::length::{write_mm4, Length, LengthError};
+use crate::protocol::io::{ErrorCode, Io, Refused, StatusRecord};
 use crate::protocol::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
 use crate::protocol::words::{ArgError, Words};
 
 use crate::outputs::write_rpm;
 use crate::plan::Feed;
-use crate::stepper::Motion as Axes;
 use core::fmt::{self, Write};
 
 /// Why a request was refused, before it is written out.
@@ -112,37 +110,22 @@ pub(super) fn split_id(body: &[u8]) -> Result<(Option<u32>, &[u8]), Refusal<'sta
 /// A status line: `<prefix> STATE= PX= PZ= X= Z= V= Q= STARVED=` (`docs/protocol.md`),
 /// for `STATUS` and for the real-time status byte, which a transport may
 /// answer itself while it waits for room.
-pub fn status_line(
-    prefix: &str,
-    motion: Axes,
-    issued: ImpulsePoint,
-    queued: usize,
-    view: &StatusView,
-) -> ReplyLine {
-    let state = match motion {
-        Axes::Idle => "IDLE",
-        Axes::Run => "RUN",
-        Axes::Braking | Axes::Held => "HOLD",
-    };
-    let factor = if view.diam { 2 } else { 1 };
-    // |registers| ≤ 999 999 999 and prices ≤ 10⁷ Å: within i64.
-    let x = i64::from(issued.x.get()) * view.hx * factor;
-    let z = i64::from(issued.z.get()) * view.hz;
+pub fn status_line(prefix: &str, record: &StatusRecord) -> ReplyLine {
     let mut line = ReplyLine::new();
     let _ = write!(
         line,
-        "{prefix} STATE={state} PX={} PZ={} X=",
-        issued.x.get(),
-        issued.z.get()
+        "{prefix} STATE={} PX={} PZ={} X=",
+        record.state().as_str(),
+        record.issued.x.get(),
+        record.issued.z.get()
     );
-    let _ = write_mm4(&mut line, div_round_half_away(x, 1_000));
+    let _ = write_mm4(&mut line, record.x_mm4());
     let _ = line.write_str(" Z=");
-    let _ = write_mm4(&mut line, div_round_half_away(z, 1_000));
+    let _ = write_mm4(&mut line, record.z_mm4());
     let _ = line.write_str(" V=");
-    let speed = if motion == Axes::Held { 0 } else { view.speed };
-    let _ = write_mm4(&mut line, speed);
-    let _ = write!(line, " Q={queued} STARVED={}", view.starved);
-    let o = &view.outputs;
+    let _ = write_mm4(&mut line, record.speed_mm4());
+    let _ = write!(line, " Q={} STARVED={}", record.queued, record.view.starved);
+    let o = &record.view.outputs;
     let spindle = match o.spindle {
         Spindle::Cw => "CW",
         Spindle::Ccw => "CCW",
@@ -156,7 +139,7 @@ pub fn status_line(
         Coolant::Off => "OFF",
     };
     let _ = write!(line, " COOLANT={coolant}");
-    if let Some(code) = view.stop {
+    if let Some(code) = record.view.stop {
         // Waiting for cycle start after M00 or M01.
         let _ = write!(line, " STOP=M{code:02}");
     }
