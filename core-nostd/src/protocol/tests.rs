@@ -2193,3 +2193,48 @@ fn g74_and_g75_refusals_change_nothing() {
         assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
     }
 }
+
+#[test]
+fn refusals_map_to_grbl_codes_by_what_they_are() {
+    struct Out(Vec<u8>);
+    impl Io for Out {
+        fn send(&mut self, line: &[u8]) {
+            self.0.extend_from_slice(line);
+        }
+    }
+    let error = |line: &str| {
+        let mut dev = Device::new();
+        let mut out = Out(Vec::new());
+        dev.set_grbl(true, &mut out);
+        out.0.clear();
+        dev.receive_bytes(line.as_bytes(), &mut out);
+        let text = String::from_utf8(out.0).expect("text");
+        text.lines()
+            .find_map(|l| l.strip_prefix("error:"))
+            .and_then(|n| n.parse::<u8>().ok())
+    };
+    // Undefined feed rate: a feed move under F0.
+    assert_eq!(error("G01 X1 F0\n"), Some(22));
+    // Invalid target: an arc whose radius cannot reach its end.
+    assert_eq!(error("G02 X10 Z-10 R1\n"), Some(33));
+    // Expected command letter: an address this control does not know.
+    assert_eq!(error("G01 X1 Q3 F100\n"), Some(1));
+    // Unsupported command: a G code it does not run, a word of the
+    // other dialect (whose text names FANUC: not a feed's refusal).
+    assert_eq!(error("G12 X1\n"), Some(20));
+    assert_eq!(error("G01 U1 F100\n"), Some(20));
+    assert_eq!(
+        super::grbl::error_number(super::Refused {
+            code: ErrorCode::Value,
+            about: None
+        }),
+        20
+    );
+    assert_eq!(
+        super::grbl::error_number(super::Refused {
+            code: ErrorCode::Value,
+            about: Some(b'F')
+        }),
+        22
+    );
+}

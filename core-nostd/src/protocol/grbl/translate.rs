@@ -1,0 +1,250 @@
+//! The one [`Io`] the session answers through: on a pendant link every
+//! call passes through; on a grbl link replies turn into grbl's.
+
+use super::report::*;
+use crate::protocol::io::{ErrorCode, Io, Refused, StatusRecord, StatusView, Timing};
+use crate::protocol::reply::ReplyLine;
+use crate::protocol::session::Session;
+use core::fmt::Write;
+
+/// The one [`Io`] the session answers through (so that its code exists
+/// once on the board): on a pendant link every call passes through; on a
+/// grbl link motion passes through and reply lines turn into grbl's.
+pub struct Translate<'a, I: Io + ?Sized> {
+    pub(super) inner: &'a mut I,
+    pub(super) grbl: bool,
+    /// A query of the front's own: the final line is kept, nothing sent.
+    pub(super) capture: bool,
+    pub(super) extras: Extras,
+    /// Status lines pass (a `?`), or are dropped (the answer to `!`, `~`).
+    pub statuses: bool,
+    /// The final line of the request: `None` before it came.
+    pub outcome: Option<Result<(), u8>>,
+    /// A refusal's text, for its `[MSG:…]` line (a query's final line).
+    pub message: ReplyLine,
+    /// What the refusal about to be sent is about.
+    pub(super) refused: Option<Refused>,
+    /// What the status line about to be sent says.
+    pub(super) status: Option<StatusRecord>,
+    /// A reset came, with a block running (`OF` > 0).
+    pub reset: Option<bool>,
+    /// Check mode (`$C`): replies go out; nothing moves, waits or
+    /// switches (a flag, not a second transport type, so that the
+    /// session's code exists once on the board).
+    pub dry: bool,
+}
+
+impl<'a, I: Io + ?Sized> Translate<'a, I> {
+    /// Every call through to `inner` unchanged: the pendant protocol.
+    pub fn pendant(inner: &'a mut I) -> Self {
+        Self::grbl(inner, Extras::NONE).plain()
+    }
+
+    fn plain(mut self) -> Self {
+        self.grbl = false;
+        self
+    }
+
+    /// Around `inner`, speaking grbl.
+    pub fn grbl(inner: &'a mut I, extras: Extras) -> Self {
+        Translate {
+            inner,
+            grbl: true,
+            capture: false,
+            extras,
+            statuses: true,
+            outcome: None,
+            message: ReplyLine::new(),
+            refused: None,
+            status: None,
+            reset: None,
+            dry: false,
+        }
+    }
+
+    /// Sends a plain grbl line.
+    pub fn line(&mut self, text: &[u8]) {
+        let mut l = ReplyLine::new();
+        l.push_bytes(text);
+        self.inner.send(finish(&mut l));
+    }
+
+    /// Sends `ok`, or `[MSG:…]` and `error:N`, for the request's outcome.
+    pub fn answer(&mut self) {
+        match self.outcome {
+            Some(Err(code)) => {
+                let mut m = ReplyLine::new();
+                m.push_bytes(b"[MSG:");
+                m.push_bytes(self.message.as_bytes());
+                m.push_bytes(b"]");
+                self.inner.send(finish(&mut m));
+                let mut e = ReplyLine::new();
+                let _ = write!(e, "error:{code}");
+                self.inner.send(finish(&mut e));
+            }
+            _ => self.inner.send(b"ok\r\n"),
+        }
+    }
+}
+
+impl<I: Io + ?Sized> Io for Translate<'_, I> {
+    fn send(&mut self, line: &[u8]) {
+        if !self.grbl {
+            return self.inner.send(line);
+        }
+        if self.capture {
+            if line.starts_with(b"OK") || line.starts_with(b"ERR") {
+                self.message = ReplyLine::new();
+                self.message.push_bytes(line);
+            }
+            return;
+        }
+        // Without the `*HH` and CRLF.
+        let body = line
+            .iter()
+            .rposition(|&b| b == b'*')
+            .and_then(|i| line.get(..i))
+            .unwrap_or(line);
+        if body.starts_with(b"OK") {
+            self.outcome = Some(Ok(()));
+        } else if body.starts_with(b"ERR ") {
+            // Every `ERR` line is told first (`send_error_about`); one
+            // that was not is no command this control runs.
+            let why = self.refused.take().unwrap_or(Refused {
+                code: ErrorCode::Unknown,
+                about: None,
+            });
+            self.outcome = Some(Err(error_number(why)));
+            self.message = ReplyLine::new();
+            self.message.push_bytes(body.get(4..).unwrap_or(b""));
+        } else if body.starts_with(b"!STATUS") {
+            // Every status line is told first (`Io::status`).
+            if let (true, Some(record)) = (self.statuses, self.status.take()) {
+                let mut l = status_report(&record, &self.extras);
+                self.inner.send(finish(&mut l));
+            }
+        } else if let Some(text) = body.strip_prefix(b"DATA MSG ") {
+            // What the operator must do at a stop (a gear range, the
+            // machine's own M code): grbl's feedback message.
+            let mut l = ReplyLine::new();
+            l.push_bytes(b"[MSG:");
+            l.push_bytes(text);
+            l.push_bytes(b"]");
+            self.inner.send(finish(&mut l));
+        }
+        // `DATA` lines and the rest: not grbl's.
+    }
+    fn refused(&mut self, why: Refused) {
+        if self.grbl {
+            self.refused = Some(why);
+        } else {
+            self.inner.refused(why);
+        }
+    }
+    fn reset_done(&mut self, running: bool) {
+        if self.grbl {
+            self.reset = Some(running);
+        } else {
+            self.inner.reset_done(running);
+        }
+    }
+    fn status(&mut self, record: &StatusRecord) {
+        if self.grbl {
+            self.status = Some(*record);
+        } else {
+            self.inner.status(record);
+        }
+    }
+    fn stop_status(&mut self, line: &[u8]) {
+        if !self.grbl {
+            return self.inner.stop_status(line);
+        }
+        if let Some(record) = self.status.take() {
+            let mut l = status_report(&record, &self.extras);
+            self.inner.stop_status(finish(&mut l));
+        }
+    }
+    fn timing(&mut self) -> Option<Timing> {
+        self.inner.timing()
+    }
+    fn stop_holds(&mut self) -> bool {
+        !self.dry && self.grbl && self.inner.background().is_some()
+    }
+    fn run_start(&mut self) {
+        if !self.dry {
+            self.inner.run_start();
+        }
+    }
+    fn block_start(&mut self, block: &crate::interleave::LinearBlock) {
+        if !self.dry {
+            self.inner.block_start(block);
+        }
+    }
+    #[inline(always)]
+    fn step(
+        &mut self,
+        event: crate::interleave::StepEvent,
+        tick: u64,
+        drive: &crate::stepdir::DriveTiming,
+    ) {
+        if !self.dry {
+            self.inner.step(event, tick, drive);
+        }
+    }
+    fn run_end(&mut self, ticks: u64) {
+        if !self.dry {
+            self.inner.run_end(ticks);
+        }
+    }
+    fn background(&mut self) -> Option<&mut dyn crate::machine::Background> {
+        if self.dry {
+            return None;
+        }
+        self.inner.background()
+    }
+    fn view(&mut self, view: &StatusView) {
+        self.inner.view(view);
+    }
+    fn pause(&mut self) {
+        self.inner.pause();
+    }
+    fn dwell(&mut self, us: u64) {
+        if !self.dry {
+            self.inner.dwell(us);
+        }
+    }
+    fn program_stop(&mut self, code: u16) {
+        if !self.dry {
+            self.inner.program_stop(code);
+        }
+    }
+    fn user_output(&mut self, n: u8, on: bool) {
+        if !self.dry {
+            self.inner.user_output(n, on);
+        }
+    }
+    fn wait_input(&mut self, n: u8, level: bool) {
+        if !self.dry {
+            self.inner.wait_input(n, level);
+        }
+    }
+    fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
+        if !self.dry {
+            self.inner.outputs(outputs);
+        }
+    }
+}
+
+/// Runs a pendant request that moves nothing and returns its final line.
+pub(super) fn query<I: Io + ?Sized>(
+    session: &mut Session,
+    t: &mut Translate<'_, I>,
+    request: &[u8],
+) -> ReplyLine {
+    let saved = (t.capture, t.outcome);
+    t.capture = true;
+    session.handle_line(request, t);
+    let line = core::mem::take(&mut t.message);
+    (t.capture, t.outcome) = saved;
+    line
+}
