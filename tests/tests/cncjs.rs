@@ -57,6 +57,11 @@ impl Link {
 /// `serve --pty --grbl`: a fresh simulated board speaking grbl 1.1 on a
 /// new pty, its motion in real time.
 fn serve() -> Link {
+    serve_at(1.0)
+}
+
+/// As [`serve`], the step clock `speed` times the wall clock's.
+fn serve_at(speed: f64) -> Link {
     struct Nowhere;
     impl core_nostd::protocol::Io for Nowhere {
         fn send(&mut self, _: &[u8]) {}
@@ -64,7 +69,7 @@ fn serve() -> Link {
     let mut device = core_nostd::protocol::Device::new();
     device.set_grbl(true, &mut Nowhere);
     let (path, board) =
-        host_sim::board::serve_pty(device, host_sim::board::Pace::Wall(1.0)).expect("pty");
+        host_sim::board::serve_pty(device, host_sim::board::Pace::Wall(speed)).expect("pty");
     Link {
         path,
         _board: Some(board),
@@ -258,6 +263,60 @@ fn cncjs_streams_a_lathe_program_to_serve() {
         "{s}"
     );
     assert_eq!(numbers(&json["ov"]), [100.0, 100.0, 100.0], "{s}");
+}
+
+/// CNCjs streams lathe programs nobody here wrote (two corpus programs,
+/// one ending with `M2`, one with no end at all) to `serve`, its clock 20
+/// times the wall's (23 and 27 minutes of motion): every line answered
+/// `ok`, the job ended by CNCjs itself, `Idle`, and the carriage where the
+/// program's last move ends.
+#[test]
+fn cncjs_streams_corpus_programs_to_serve() {
+    if !cncjs_available() {
+        return;
+    }
+    for name in [
+        "nhsd-cnc-lathe/turn_two_diameters.nc",
+        "liblathe/profile.gcode",
+    ] {
+        let program = root().join("tests/data").join(name);
+        let text = std::fs::read_to_string(&program).expect("program");
+        // Both end with an absolute move naming X and Z, no offset in
+        // force: the carriage ends there.
+        let word = |line: &str, letter: char| -> Option<f64> {
+            let code = line.split(['(', ';']).next().unwrap_or("");
+            code.split_whitespace()
+                .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
+        };
+        let want = text
+            .lines()
+            .rev()
+            .find_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
+            .expect("a last move");
+        let device = serve_at(20.0);
+        let json = cncjs(device.path(), &program, &[]);
+        let s = summary(&json);
+        assert_eq!(json["errors"], Value::Array(vec![]), "{name}: {s}");
+        assert_eq!(json["alarms"], Value::Array(vec![]), "{name}: {s}");
+        assert!(
+            !strings(&json, "read")
+                .iter()
+                .any(|l| l.starts_with("error:")),
+            "{name}: {s}"
+        );
+        assert_eq!(json["finished"], true, "{name}: {s}");
+        assert_eq!(json["timed_out"], false, "{name}: {s}");
+        assert_eq!(json["not_done"], Value::Array(vec![]), "{name}: {s}");
+        let total = json["sender"]["total"].as_u64().expect("total");
+        assert_eq!(total as usize, program_lines(&program) + 1, "{name}: {s}");
+        assert_eq!(json["sender"]["received"], total, "{name}: {s}");
+        assert_eq!(json["state"], "Idle", "{name}: {s}");
+        let at = numbers(&json["mpos"]);
+        assert!(
+            at.len() == 3 && (at[0] - want.0).abs() < 1e-3 && (at[2] - want.1).abs() < 1e-3,
+            "{name}: CNCjs sees the carriage at {at:?}, the program ends at {want:?}: {s}"
+        );
+    }
 }
 
 #[test]
