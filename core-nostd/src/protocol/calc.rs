@@ -5,8 +5,8 @@
 //! here moves an axis.
 
 use super::io::Io;
+use super::request::*;
 use super::session::wire::{parse_flag, parse_length, send_data, send_ok, Outcome, Refusal};
-use super::words::{parse_args, Words};
 use crate::calc::deflection::{self, write_fixed, DeflectionError, MAX_SECTIONS};
 use crate::calc::tape::{Bck5Finding, Bck5Frame, Bck5Verifier};
 use crate::calc::thread::{self, ThreadAxis, ThreadError, ThreadMode};
@@ -140,11 +140,11 @@ fn trihedral_refusal(e: TrihedralError) -> Refusal<'static> {
 /// `THREAD P= [MODE=G06…G09] [CROSS=0|1]`: the ЭМ-907's speed limit for
 /// the pitch and this controller's for the axis' rapid rate (`LIMITS`).
 pub(super) fn thread_command<'a, I: Io>(
-    words: Words<'a>,
+    args: &Args<'a>,
     limits: &Limits,
     io: &mut I,
 ) -> Outcome<'a> {
-    let [p, mode, cross] = parse_args(words, ["P", "MODE", "CROSS"])?;
+    let [p, mode, cross] = args.values();
     let pitch = required("P", p, "THREAD needs P= (the pitch, mm)")?;
     let cross = flag("CROSS", cross)?;
     let axis = if cross {
@@ -185,13 +185,8 @@ pub(super) fn thread_command<'a, I: Io>(
 }
 
 /// `WEAR (D= L= S= | KM=) UR= [U0=] [Q=] [ALLOW= TOL=] [FULL=] [H= ALPHA=]`.
-pub(super) fn wear_command<'a, I: Io>(words: Words<'a>, io: &mut I) -> Outcome<'a> {
-    let [d, l, s, km, u0, ur, q, allow, tol, full, h, alpha] = parse_args(
-        words,
-        [
-            "D", "L", "S", "KM", "U0", "UR", "Q", "ALLOW", "TOL", "FULL", "H", "ALPHA",
-        ],
-    )?;
+pub(super) fn wear_command<'a, I: Io>(args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+    let [d, l, s, km, u0, ur, q, allow, tol, full, h, alpha] = args.values();
     let path = match km {
         Some(km) => wear::CuttingPath::from_km(number("KM", km)?).map_err(wear_refusal)?,
         None => {
@@ -301,13 +296,8 @@ impl<I: Io> fmt::Write for DataLines<'_, I> {
 
 /// `DEFLECT D= L= J=JH,JT,JS T= [S=] [HB=] [PHI=] [RN=] [C= X=] [E=]
 /// [RED=LEN|VOL] [DX=] [G=0|1]`.
-pub(super) fn deflect_command<'a, I: Io>(words: Words<'a>, io: &mut I) -> Outcome<'a> {
-    let [d, l, j, t, s, hb, phi, rn, c, x, e, red, dx, g] = parse_args(
-        words,
-        [
-            "D", "L", "J", "T", "S", "HB", "PHI", "RN", "C", "X", "E", "RED", "DX", "G",
-        ],
-    )?;
+pub(super) fn deflect_command<'a, I: Io>(args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+    let [d, l, j, t, s, hb, phi, rn, c, x, e, red, dx, g] = args.values();
     let parts = sections(d, l)?;
     let reduction = match red {
         None => deflection::Reduction::LengthWeighted,
@@ -385,13 +375,8 @@ pub(super) fn deflect_command<'a, I: Io>(words: Words<'a>, io: &mut I) -> Outcom
 /// `TRI [AOB=] [BOC=] [COA=] [OA=] [OB=] [OC=] [H=] [ROWS=] [LEN=] [RF=]
 /// [TABLE=L,M] [EA=] [KV=] [V=X,Y,Z] [PROP=0|1] [G=0|1]`: three of the
 /// six angles (degrees) fix the corner.
-pub(super) fn tri_command<'a, I: Io>(words: Words<'a>, io: &mut I) -> Outcome<'a> {
-    let keys = [
-        "AOB", "BOC", "COA", "OA", "OB", "OC", "H", "ROWS", "LEN", "RF", "TABLE", "EA", "KV", "V",
-        "PROP", "G",
-    ];
-    let [aob, boc, coa, oa, ob, oc, h, rows, len, rf, table, ea, kv, v, prop, g] =
-        parse_args(words, keys)?;
+pub(super) fn tri_command<'a, I: Io>(args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+    let [aob, boc, coa, oa, ob, oc, h, rows, len, rf, table, ea, kv, v, prop, g] = args.values();
     let angle = |key, v: Option<&str>| v.map(|v| number(key, v)).transpose();
     let given = trihedral::CornerAngles {
         aob_deg: angle("AOB", aob)?,
@@ -543,16 +528,11 @@ pub(super) fn tri_command<'a, I: Io>(words: Words<'a>, io: &mut I) -> Outcome<'a
 /// tool and starts a new tape. Each finding is a `DATA` line; a frame that
 /// cannot be read is refused (`ERR VALUE FRAME column …`).
 pub(super) fn tape_command<'a, I: Io>(
-    mut words: Words<'a>,
+    args: &Args<'a>,
     tape: &mut Bck5Verifier,
     io: &mut I,
 ) -> Outcome<'a> {
-    let first = words.clone().next();
-    if first.is_some_and(|w| w.eq_ignore_ascii_case("END")) {
-        words.next();
-        if words.next().is_some() {
-            return Err(Refusal::NoArgs("TAPE END"));
-        }
+    if args.bare {
         let summary =
             core::mem::take(tape).finish(|f: Bck5Finding| send_data(io, format_args!("{f}")));
         send_ok(
@@ -564,7 +544,7 @@ pub(super) fn tape_command<'a, I: Io>(
         );
         return Ok(());
     }
-    let [frame] = parse_args(words, ["FRAME"])?;
+    let [frame] = args.values();
     let frame = frame.ok_or(Refusal::Missing("TAPE needs FRAME=<frame> or END"))?;
     // A frame that cannot be read is refused and not counted: the tape so
     // far is unchanged.

@@ -12,6 +12,7 @@ pub mod framing;
 pub mod grbl;
 mod io;
 pub mod reply;
+pub mod request;
 mod session;
 mod words;
 

@@ -15,14 +15,15 @@ impl<'a> Words<'a> {
 impl<'a> Iterator for Words<'a> {
     type Item = &'a str;
     fn next(&mut self) -> Option<&'a str> {
-        let s = self.rest.trim_start_matches([' ', '\t']);
-        if s.is_empty() {
-            self.rest = s;
+        let blank = |b: &u8| *b == b' ' || *b == b'\t';
+        let Some(start) = self.rest.bytes().position(|b| !blank(&b)) else {
+            self.rest = "";
             return None;
-        }
-        let end = s.find([' ', '\t']).unwrap_or(s.len());
-        // `end` is at an ASCII byte or the end: always a char boundary.
-        let (word, rest) = s.split_at_checked(end).unwrap_or((s, ""));
+        };
+        // `start` and `end` are at ASCII bytes or the end: char boundaries.
+        let s = self.rest.get(start..)?;
+        let end = s.bytes().position(|b| blank(&b)).unwrap_or(s.len());
+        let (word, rest) = s.split_at_checked(end)?;
         self.rest = rest;
         Some(word)
     }
@@ -30,7 +31,7 @@ impl<'a> Iterator for Words<'a> {
 
 /// Why the arguments of a command were refused (all `ERR SYNTAX`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum ArgError<'a> {
+pub enum ArgError<'a> {
     /// A word that is not `KEY=VALUE`.
     NotKeyValue(&'a str),
     /// A key the command does not take.
@@ -40,22 +41,12 @@ pub(crate) enum ArgError<'a> {
 }
 
 /// Matches `KEY=VALUE` words against the keys a command takes (case-
-/// insensitive). Slot `i` of the result holds the value of `keys[i]`.
-pub(crate) fn parse_args<'a, const N: usize>(
-    words: Words<'a>,
-    keys: [&'static str; N],
-) -> Result<[Option<&'a str>; N], ArgError<'a>> {
-    let mut out = [None; N];
-    match_args(words, &keys, &mut out)?;
-    Ok(out)
-}
-
-/// [`parse_args`] for any number of keys (`out` as long as `keys`): one
+/// insensitive): slot `i` of `out` gets the value of the `i`th key. One
 /// copy of the matching, whatever the command.
 #[inline(never)]
-fn match_args<'a>(
+pub(crate) fn match_args<'a>(
     words: Words<'a>,
-    keys: &[&'static str],
+    keys: impl Iterator<Item = &'static str> + Clone,
     out: &mut [Option<&'a str>],
 ) -> Result<(), ArgError<'a>> {
     for word in words {
@@ -63,13 +54,15 @@ fn match_args<'a>(
             Some((k, v)) if !k.is_empty() && !v.is_empty() => (k, v),
             _ => return Err(ArgError::NotKeyValue(word)),
         };
-        let slot = keys
-            .iter()
-            .position(|k| k.eq_ignore_ascii_case(key))
+        // `zip(0..)`, not `enumerate`: no overflow check on the board.
+        let (name, slot) = keys
+            .clone()
+            .zip(0usize..)
+            .find(|(k, _)| k.eq_ignore_ascii_case(key))
             .ok_or(ArgError::UnknownKey(key))?;
         match out.get_mut(slot) {
             Some(s @ None) => *s = Some(value),
-            _ => return Err(ArgError::Duplicate(keys.get(slot).copied().unwrap_or(""))),
+            _ => return Err(ArgError::Duplicate(name)),
         }
     }
     Ok(())
@@ -86,27 +79,5 @@ mod tests {
         assert_eq!(w.next(), Some("X=1"));
         assert_eq!(w.next(), Some("Z=2"));
         assert_eq!(w.next(), None);
-    }
-
-    #[test]
-    fn matches_keys() {
-        let r = parse_args(Words::new("z=2 X=1"), ["X", "Z", "INC"]);
-        assert_eq!(r, Ok([Some("1"), Some("2"), None]));
-        assert_eq!(
-            parse_args(Words::new("X=1 x=2"), ["X"]),
-            Err(ArgError::Duplicate("X"))
-        );
-        assert_eq!(
-            parse_args(Words::new("Y=1"), ["X"]),
-            Err(ArgError::UnknownKey("Y"))
-        );
-        assert_eq!(
-            parse_args(Words::new("X="), ["X"]),
-            Err(ArgError::NotKeyValue("X="))
-        );
-        assert_eq!(
-            parse_args(Words::new("=1"), ["X"]),
-            Err(ArgError::NotKeyValue("=1"))
-        );
     }
 }

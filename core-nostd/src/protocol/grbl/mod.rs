@@ -20,6 +20,7 @@
 
 use super::io::{Io, Realtime};
 use super::reply::ReplyLine;
+use super::request::{Command, Request};
 use super::session::{Session, VERSION};
 use core::fmt::Write;
 
@@ -183,22 +184,36 @@ fn jog_line<I: Io + ?Sized>(
         [0, 0]
     };
     let diameter = session.config().diam;
-    let mut req = ReplyLine::new();
-    req.push_bytes(b"MOVE");
     let shifts = [if diameter { 2 * wco[0] } else { wco[0] }, wco[1]];
-    for ((a, name), shift) in axes.iter().zip([b" X=", b" Z="]).zip(shifts) {
-        if let Some(v) = a {
-            req.push_bytes(name);
-            let _ = crate::length::write_exact_mm(&mut req, v.as_angstrom() + shift);
+    // The values as a request line would give them, exact in mm.
+    let mut text = [ReplyLine::new(), ReplyLine::new(), ReplyLine::new()];
+    let values = [
+        axes[0].map(|v| v.as_angstrom() + shifts[0]),
+        axes[1].map(|v| v.as_angstrom() + shifts[1]),
+        Some(f.as_angstrom()),
+    ];
+    for (t, v) in text.iter_mut().zip(values) {
+        if let Some(v) = v {
+            let _ = crate::length::write_exact_mm(t, v);
+        }
+    }
+    let [x, z, feed] = text
+        .each_ref()
+        .map(|t| core::str::from_utf8(t.as_bytes()).unwrap_or(""));
+    let mut args: heapless::Vec<(&'static str, &str), 4> = heapless::Vec::new();
+    for (key, (given, value)) in ["X", "Z"].into_iter().zip(axes.iter().zip([x, z])) {
+        if given.is_some() {
+            let _ = args.push((key, value));
         }
     }
     if inc {
-        req.push_bytes(b" INC=1");
+        let _ = args.push(("INC", "1"));
     }
-    req.push_bytes(b" F=");
-    let _ = crate::length::write_exact_mm(&mut req, f.as_angstrom());
-    let request = ReplyLine::clone(&req);
-    session.handle_line(request.as_bytes(), io);
+    let _ = args.push(("F", feed));
+    match Request::command(Command::Move, &args) {
+        Ok(request) => session.request(&request, io),
+        Err(_) => return refuse(io, 3, b"not a MOVE"),
+    }
     io.outcome == Some(Ok(()))
 }
 

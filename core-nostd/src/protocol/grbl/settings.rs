@@ -3,24 +3,24 @@
 use super::front::*;
 use super::report::*;
 use super::translate::*;
+use crate::length::Length;
 use crate::protocol::io::Io;
 use crate::protocol::reply::ReplyLine;
+use crate::protocol::request::{Command, Request};
 use crate::protocol::session::Session;
 use core::fmt::Write;
 
-/// The value of `KEY=` in a pendant reply line.
-pub(super) fn value<'a>(line: &'a [u8], key: &[u8]) -> Option<&'a [u8]> {
-    let mut words = line.split(|&b| b == b' ' || b == b'*');
-    words.find_map(|w| w.strip_prefix(key).and_then(|rest| rest.strip_prefix(b"=")))
-}
+/// How `$$` writes a setting the session holds.
+pub(super) type Show = fn(&Session, &mut ReplyLine);
 
 /// Where a `$n` setting lives on this controller.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy)]
 pub(super) enum Place {
-    /// A key of a pendant request: `$110` is `LIMITS VX`.
-    Request(&'static [u8], &'static [u8]),
+    /// A key of a pendant request, and how the session's value of it is
+    /// written: `$110` is `LIMITS VX`.
+    Request(Command, &'static str, Show),
     /// Steps per mm of an axis: one over the impulse price of `CFG`'s key.
-    StepsPerMm(&'static [u8]),
+    StepsPerMm(&'static str),
     /// Kept by the front for senders that write and read it back; it
     /// changes nothing on this machine (`Front::kept`, by index). A decimal
     /// when `decimal`, else a whole number up to 65535.
@@ -34,7 +34,7 @@ pub(super) enum Place {
 }
 
 /// One grbl setting: its number and where it lives.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy)]
 pub(super) struct Setting {
     pub(super) n: u16,
     pub(super) place: Place,
@@ -50,7 +50,12 @@ pub(super) const fn setting(n: u16, place: Place) -> Setting {
 /// only the value that leaves the machine as it is; the rest of grbl's
 /// list is kept and read back.
 pub(super) const SETTINGS: [Setting; 30] = [
-    setting(0, Place::Request(b"DRIVE", b"PULSE")),
+    setting(
+        0,
+        Place::Request(Command::Drive, "PULSE", |s, l| {
+            let _ = write!(l, "{}", s.drive().pulse_us());
+        }),
+    ),
     setting(1, Place::Kept(0, false)),
     setting(
         2,
@@ -70,8 +75,18 @@ pub(super) const SETTINGS: [Setting; 30] = [
     ),
     setting(6, Place::Fixed(b"0", 3, "this board has no probe input")),
     setting(10, Place::ReportMask),
-    setting(11, Place::Request(b"LIMITS", b"JD")),
-    setting(12, Place::Request(b"CFG", b"TOL")),
+    setting(
+        11,
+        Place::Request(Command::Limits, "JD", |s, l| {
+            let _ = write!(l, "{}", s.machine().limits().junction());
+        }),
+    ),
+    setting(
+        12,
+        Place::Request(Command::Cfg, "TOL", |s, l| {
+            let _ = write!(l, "{}", s.config().tol);
+        }),
+    ),
     setting(13, Place::Fixed(b"0", 3, "reports are in mm")),
     setting(
         20,
@@ -94,7 +109,12 @@ pub(super) const SETTINGS: [Setting; 30] = [
     setting(25, Place::Kept(4, true)),
     setting(26, Place::Kept(5, false)),
     setting(27, Place::Kept(6, true)),
-    setting(30, Place::Request(b"AUX", b"SMAX")),
+    setting(
+        30,
+        Place::Request(Command::Aux, "SMAX", |s, l| {
+            let _ = write!(l, "{}", s.spindle_top().unwrap_or(Length::ZERO));
+        }),
+    ),
     setting(
         31,
         Place::Fixed(b"0", 3, "the spindle output starts from 0 rpm"),
@@ -103,12 +123,32 @@ pub(super) const SETTINGS: [Setting; 30] = [
         32,
         Place::Fixed(b"2", 3, "this is a lathe: grblHAL's lathe mode 2"),
     ),
-    setting(100, Place::StepsPerMm(b"HX")),
-    setting(102, Place::StepsPerMm(b"HZ")),
-    setting(110, Place::Request(b"LIMITS", b"VX")),
-    setting(112, Place::Request(b"LIMITS", b"VZ")),
-    setting(120, Place::Request(b"LIMITS", b"AX")),
-    setting(122, Place::Request(b"LIMITS", b"AZ")),
+    setting(100, Place::StepsPerMm("HX")),
+    setting(102, Place::StepsPerMm("HZ")),
+    setting(
+        110,
+        Place::Request(Command::Limits, "VX", |s, l| {
+            let _ = write!(l, "{}", s.machine().limits().rate(0));
+        }),
+    ),
+    setting(
+        112,
+        Place::Request(Command::Limits, "VZ", |s, l| {
+            let _ = write!(l, "{}", s.machine().limits().rate(1));
+        }),
+    ),
+    setting(
+        120,
+        Place::Request(Command::Limits, "AX", |s, l| {
+            let _ = write!(l, "{}", s.machine().limits().accel(0));
+        }),
+    ),
+    setting(
+        122,
+        Place::Request(Command::Limits, "AZ", |s, l| {
+            let _ = write!(l, "{}", s.machine().limits().accel(1));
+        }),
+    ),
     setting(130, Place::Kept(7, true)),
     setting(132, Place::Kept(8, true)),
 ];
@@ -123,12 +163,9 @@ pub(super) fn settings<I: Io + ?Sized>(
         let mut l = ReplyLine::new();
         let _ = write!(l, "${}=", s.n);
         match s.place {
-            Place::Request(command, key) => {
-                let reply = query(session, io, command);
-                l.push_bytes(value(reply.as_bytes(), key).unwrap_or(b"0"));
-            }
+            Place::Request(_, _, show) => show(session, &mut l),
             Place::StepsPerMm(key) => {
-                let h = if key == b"HX" { cfg.hx } else { cfg.hz }.as_angstrom();
+                let h = if key == "HX" { cfg.hx } else { cfg.hz }.as_angstrom();
                 // 10⁷/h steps per mm, to 3 decimals.
                 let milli = crate::length::div_round_half_away(10_000_000_000, h.max(1));
                 let _ = write!(l, "{}.{:03}", milli / 1000, milli % 1000);
@@ -213,21 +250,24 @@ pub(super) fn set<I: Io + ?Sized>(
         return refuse_setting(io, 4, s.n, b"a negative value");
     }
     match s.place {
-        Place::Request(command, key) => {
-            let mut req = ReplyLine::new();
-            req.push_bytes(command);
-            req.push_bytes(b" ");
-            req.push_bytes(key);
-            req.push_bytes(b"=");
-            req.push_bytes(v);
-            let request = ReplyLine::clone(&req);
-            session.handle_line(request.as_bytes(), io);
+        Place::Request(command, key, _) => {
+            // One word of printable ASCII, as in a request line.
+            let word = core::str::from_utf8(v)
+                .ok()
+                .filter(|w| w.bytes().all(|b| b.is_ascii_graphic()));
+            let Some(word) = word else {
+                return refuse_setting(io, 2, s.n, b"a number");
+            };
+            match Request::command(command, &[(key, word)]) {
+                Ok(request) => session.request(&request, io),
+                Err(_) => refuse_setting(io, 3, s.n, b"not a key of its request"),
+            }
         }
         Place::StepsPerMm(key) => {
             // One over the steps: a price on the 10⁻⁷ mm grid.
             let steps = core::str::from_utf8(v)
                 .ok()
-                .and_then(|t| crate::length::Length::from_gcode_mm(t).ok())
+                .and_then(|t| Length::from_gcode_mm(t).ok())
                 .map(|l| l.as_angstrom())
                 .filter(|&l| l > 0);
             let Some(steps) = steps else {
@@ -245,13 +285,13 @@ pub(super) fn set<I: Io + ?Sized>(
                     b"one step must be a whole number of 0.0000001 mm",
                 );
             };
-            let mut req = ReplyLine::new();
-            req.push_bytes(b"CFG ");
-            req.push_bytes(key);
-            req.push_bytes(b"=");
-            let _ = crate::length::write_exact_mm(&mut req, price as i64);
-            let request = ReplyLine::clone(&req);
-            session.handle_line(request.as_bytes(), io);
+            let mut price_mm = ReplyLine::new();
+            let _ = crate::length::write_exact_mm(&mut price_mm, price as i64);
+            let price_mm = core::str::from_utf8(price_mm.as_bytes()).unwrap_or("");
+            match Request::command(Command::Cfg, &[(key, price_mm)]) {
+                Ok(request) => session.request(&request, io),
+                Err(_) => refuse_setting(io, 3, s.n, b"not a key of CFG"),
+            }
         }
         Place::Kept(i, decimal) => match (parse_setting(v, decimal), front.kept.get_mut(i)) {
             (Some(value), Some(slot)) => {

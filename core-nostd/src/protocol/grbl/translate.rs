@@ -4,7 +4,6 @@
 use super::report::*;
 use crate::protocol::io::{ErrorCode, Io, Refused, StatusRecord, StatusView, Timing};
 use crate::protocol::reply::ReplyLine;
-use crate::protocol::session::Session;
 use core::fmt::Write;
 
 /// The one [`Io`] the session answers through (so that its code exists
@@ -13,8 +12,6 @@ use core::fmt::Write;
 pub struct Translate<'a, I: Io + ?Sized> {
     pub(super) inner: &'a mut I,
     pub(super) grbl: bool,
-    /// A query of the front's own: the final line is kept, nothing sent.
-    pub(super) capture: bool,
     pub(super) extras: Extras,
     /// Status lines pass (a `?`), or are dropped (the answer to `!`, `~`).
     pub statuses: bool,
@@ -50,7 +47,6 @@ impl<'a, I: Io + ?Sized> Translate<'a, I> {
         Translate {
             inner,
             grbl: true,
-            capture: false,
             extras,
             statuses: true,
             outcome: None,
@@ -91,13 +87,6 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
     fn send(&mut self, line: &[u8]) {
         if !self.grbl {
             return self.inner.send(line);
-        }
-        if self.capture {
-            if line.starts_with(b"OK") || line.starts_with(b"ERR") {
-                self.message = ReplyLine::new();
-                self.message.push_bytes(line);
-            }
-            return;
         }
         // Without the `*HH` and CRLF.
         let body = line
@@ -233,18 +222,4 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
             self.inner.outputs(outputs);
         }
     }
-}
-
-/// Runs a pendant request that moves nothing and returns its final line.
-pub(super) fn query<I: Io + ?Sized>(
-    session: &mut Session,
-    t: &mut Translate<'_, I>,
-    request: &[u8],
-) -> ReplyLine {
-    let saved = (t.capture, t.outcome);
-    t.capture = true;
-    session.handle_line(request, t);
-    let line = core::mem::take(&mut t.message);
-    (t.capture, t.outcome) = saved;
-    line
 }

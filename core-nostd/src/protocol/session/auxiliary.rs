@@ -101,8 +101,8 @@ impl Session {
     /// `AUX [SMAX=] [SPINUP=]`: the spindle's top speed (rpm at full PWM
     /// duty, 0 for none) and the wait after it starts or changes speed
     /// (seconds); with the auxiliary functions as programmed.
-    pub(super) fn aux_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [smax, spinup] = parse_args(words, ["SMAX", "SPINUP"])?;
+    pub(super) fn aux_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [smax, spinup] = args.values();
         let mut top = self.top;
         if let Some(v) = smax {
             let l = parse_amount("SMAX", v, 99_999_999, "must be 0 to 99999.999 rpm")?;
@@ -138,8 +138,8 @@ impl Session {
     /// off, or wait for user input `N` to read high or low. Alone: the
     /// table, a `DATA` line per code set. Kept with the tool table.
     #[inline(never)]
-    pub(super) fn mcode_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [m, action, n] = parse_args(words, ["M", "DO", "N"])?;
+    pub(super) fn mcode_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [m, action, n] = args.values();
         if let Some(m) = m {
             let code = match m.parse::<u16>() {
                 Ok(c @ 0..=999) if m.bytes().all(|b| b.is_ascii_digit()) => c,
@@ -220,8 +220,8 @@ impl Session {
     /// `M44`; 0: the range adds no limit). Answered with the range in
     /// effect and every range's top.
     #[inline(never)]
-    pub(super) fn gear_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [n, top] = parse_args(words, ["N", "TOP"])?;
+    pub(super) fn gear_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [n, top] = args.values();
         match (n, top) {
             (Some(n), Some(top)) => {
                 let slot = match n.parse::<usize>() {

@@ -4,9 +4,8 @@ use super::*;
 
 impl Session {
     #[inline(never)]
-    pub(super) fn cfg_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [hx, hz, diam, rn, tip, tol, pass] =
-            parse_args(words, ["HX", "HZ", "DIAM", "RN", "TIP", "TOL", "PASS"])?;
+    pub(super) fn cfg_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [hx, hz, diam, rn, tip, tol, pass] = args.values();
         let mut cfg = self.cfg;
         if let Some(v) = hx {
             cfg.hx = parse_price("HX", v)?;
@@ -78,8 +77,8 @@ impl Session {
     }
 
     #[inline(never)]
-    pub(super) fn drive_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [rate, pulse, setup] = parse_args(words, ["RATE", "PULSE", "SETUP"])?;
+    pub(super) fn drive_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [rate, pulse, setup] = args.values();
         let d = self.drive;
         let rate = parse_count("RATE", rate, d.rate_hz())?;
         let pulse = parse_count("PULSE", pulse, d.pulse_us())?;
@@ -120,13 +119,9 @@ impl Session {
     /// `LIMITS [VX=] [VZ=] [AX=] [AZ=] [JD=]`: the motion limits, applied
     /// whole at rest, or reported.
     #[inline(never)]
-    pub(super) fn limits_command<'a, I: Io>(
-        &mut self,
-        words: Words<'a>,
-        io: &mut I,
-    ) -> Outcome<'a> {
+    pub(super) fn limits_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
         let keys = ["VX", "VZ", "AX", "AZ", "JD"];
-        let values = parse_args(words, keys)?;
+        let values: [_; 5] = args.values();
         let now = *self.machine.limits();
         let old = [
             now.rate(0),

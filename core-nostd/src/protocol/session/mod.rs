@@ -6,7 +6,8 @@
 
 use super::io::{Io, Realtime, StatusRecord, StatusView, CHORDS_PER_PAUSE};
 use super::reply::{ReplyLine, REPLY_CAPACITY};
-use super::words::{parse_args, Words};
+use super::request::*;
+use super::words::Words;
 use crate::arc::{centre_from_radius, ArcDir, ArcPoints, ChordPlan, DirectArc};
 use crate::comp::{
     Contour, Element, Move, MoveKind, Moves, Origin, Shape, TipCode, Tool, MAX_MOVES,
@@ -232,6 +233,12 @@ impl Session {
         &self.sel
     }
 
+    /// The spindle's top speed, rpm (`AUX SMAX`); none when the speed is
+    /// set on the machine by hand.
+    pub const fn spindle_top(&self) -> Option<Length> {
+        self.top
+    }
+
     /// The dialect G-code lines are read in.
     pub const fn dialect(&self) -> Dialect {
         self.dialect
@@ -301,38 +308,6 @@ impl Session {
         }
     }
 
-    /// The calculators' requests (`THREAD`, `WEAR`, `DEFLECT`, `TRI`,
-    /// `TAPE`); `None` for any other command.
-    #[cfg(feature = "calc")]
-    fn calc<'a, I: Io>(
-        &mut self,
-        command: &str,
-        words: Words<'a>,
-        io: &mut I,
-    ) -> Option<Outcome<'a>> {
-        use super::calc;
-        let is = |name: &str| command.eq_ignore_ascii_case(name);
-        Some(if is("THREAD") {
-            calc::thread_command(words, self.machine.limits(), io)
-        } else if is("WEAR") {
-            calc::wear_command(words, io)
-        } else if is("DEFLECT") {
-            calc::deflect_command(words, io)
-        } else if is("TRI") {
-            calc::tri_command(words, io)
-        } else if is("TAPE") {
-            calc::tape_command(words, &mut self.tape, io)
-        } else {
-            return None;
-        })
-    }
-
-    /// Without the calculators, no command is one of theirs.
-    #[cfg(not(feature = "calc"))]
-    fn calc<'a, I: Io>(&mut self, _: &str, _: Words<'a>, _: &mut I) -> Option<Outcome<'a>> {
-        None
-    }
-
     fn run<'a, I: Io>(&mut self, body: &'a [u8], io: &mut I) -> Outcome<'a> {
         let printable = |b: u8| b == b'\t' || (0x20..0x7F).contains(&b);
         if !body.iter().all(|&b| printable(b)) {
@@ -363,124 +338,166 @@ impl Session {
         }
         // Printable ASCII only from here on, so this never fails.
         let text = core::str::from_utf8(body).map_err(|_| Refusal::Control)?;
-        let mut words = Words::new(text);
-        let command = words.next().ok_or(Refusal::Empty)?;
-        if is_block(text) {
-            self.gcode(text, io)
-        } else if command.eq_ignore_ascii_case("VER") {
-            no_args(words, "VER")?;
-            send_ok(
-                io,
-                Some(format_args!("PROTO=1 NAME={NAME} VERSION={VERSION}")),
-            );
-            Ok(())
-        } else if command.eq_ignore_ascii_case("CFG") {
-            self.cfg_command(words, io)
-        } else if command.eq_ignore_ascii_case("ZERO") {
-            self.zero_command(words, io)
-        } else if command.eq_ignore_ascii_case("SESSION") {
-            let [token] = parse_args(words, ["TOKEN"])?;
-            if let Some(v) = token {
-                self.token = match v.parse::<u32>() {
-                    Ok(t) if v.bytes().all(|b| b.is_ascii_digit()) => t,
-                    _ => return Err(Refusal::Value("TOKEN", "must be 0 to 4294967295")),
-                };
-            }
-            send_ok(io, Some(format_args!("TOKEN={}", self.token)));
-            Ok(())
-        } else if command.eq_ignore_ascii_case("MOVE") {
-            self.move_command(words, io)
-        } else if command.eq_ignore_ascii_case("CONE") {
-            self.cone_command(words, io)
-        } else if command.eq_ignore_ascii_case("ARC") {
-            self.arc_command(words, io)
-        } else if let Some(outcome) = self.calc(command, words.clone(), io) {
-            outcome
-        } else if command.eq_ignore_ascii_case("DRIVE") {
-            self.drive_command(words, io)
-        } else if command.eq_ignore_ascii_case("MCODE") {
-            self.mcode_command(words, io)
-        } else if command.eq_ignore_ascii_case("GEAR") {
-            self.gear_command(words, io)
-        } else if command.eq_ignore_ascii_case("OPT") {
-            let [bdel, dialect, optstop] = parse_args(words, ["BDEL", "DIALECT", "OPTSTOP"])?;
-            let block_delete = match bdel {
-                Some(v) => parse_flag("BDEL", v)?,
-                None => self.block_delete,
-            };
-            let optional_stop = match optstop {
-                Some(v) => parse_flag("OPTSTOP", v)?,
-                None => self.optional_stop,
-            };
-            let dialect = match dialect {
-                None => self.dialect,
-                Some(v) if v.eq_ignore_ascii_case("ISO") => Dialect::Iso,
-                Some(v) if v.eq_ignore_ascii_case("FANUC") => Dialect::Fanuc,
-                Some(_) => return Err(Refusal::Value("DIALECT", "must be ISO or FANUC")),
-            };
-            (self.block_delete, self.dialect) = (block_delete, dialect);
-            self.optional_stop = optional_stop;
-            send_ok(
-                io,
-                Some(format_args!(
-                    "BDEL={} DIALECT={} OPTSTOP={}",
-                    u8::from(self.block_delete),
-                    self.dialect.as_str(),
-                    u8::from(self.optional_stop)
-                )),
-            );
-            Ok(())
-        } else if command.eq_ignore_ascii_case("LIMITS") {
-            self.limits_command(words, io)
-        } else if command.eq_ignore_ascii_case("SYNC") {
-            no_args(words, "SYNC")?;
-            let (r, starved) = self.machine.sync(&mut Sink::new(io, self.drive));
-            send_ok(
-                io,
-                Some(format_args!(
-                    "EV={} T={} TSEQ={:08X} STARVED={starved}",
-                    r.events(),
-                    r.run_ticks(),
-                    r.tseq()
-                )),
-            );
-            Ok(())
-        } else if command.eq_ignore_ascii_case("STATUS") {
-            no_args(words, "STATUS")?;
-            self.status_reply(io, "OK");
-            Ok(())
-        } else if command.eq_ignore_ascii_case("RESET") {
-            no_args(words, "RESET")?;
-            // As the RESET key of a control: the program is abandoned where
-            // it stands (a cycle's profile being read with it). What is queued runs to its end; a waiting element
-            // is dropped.
-            self.machine.flush(&mut Sink::new(io, self.drive));
-            self.cycles.abandon();
-            // The programmed feed stays, as on the controls machinists know.
-            self.modal = Modal {
-                feed: self.modal.feed,
-                feed_mode: self.modal.feed_mode,
-                ..Modal::POWER_ON
-            };
-            self.aux = self.aux.stopped();
-            self.switch_outputs(self.outputs_for(&self.aux, Units::Mm), io);
-            self.contour = Contour::new();
-            self.last_moves = Moves::new();
-            self.prog = self.work_point(self.cmd);
-            send_ok(io, None);
-            Ok(())
-        } else if command.eq_ignore_ascii_case("POS") {
-            no_args(words, "POS")?;
-            self.pos_reply(io);
-            Ok(())
-        } else if command.eq_ignore_ascii_case("TOOL") {
-            self.tool_command(words, io)
-        } else if command.eq_ignore_ascii_case("WORK") {
-            self.work_command(words, io)
-        } else if command.eq_ignore_ascii_case("AUX") {
-            self.aux_command(words, io)
-        } else {
-            Err(Refusal::Unknown(command))
+        let request = Request::parse(text)?;
+        self.execute(&request, io)
+    }
+
+    /// Runs a request already parsed: a line's, or a front's own (grbl's
+    /// `$n=` and `$J=`). Its refusal is answered here.
+    pub fn request<I: Io>(&mut self, request: &Request<'_>, io: &mut I) {
+        self.share_view(io);
+        // Through the same wrapper as a line's (no id, no CRC word): one
+        // copy of the session's code in the image, whichever way it runs.
+        let mut out = Suffixed {
+            inner: io,
+            id: None,
+            crc: false,
+            last: heapless::Vec::new(),
+        };
+        if let Err(refusal) = self.execute(request, &mut out) {
+            send_refusal(&mut out, refusal);
         }
+    }
+
+    /// Runs a request: one handler per command of the table.
+    fn execute<'a, I: Io>(&mut self, request: &Request<'a>, io: &mut I) -> Outcome<'a> {
+        let (command, args) = match request {
+            Request::Block(text) => return self.gcode(text, io),
+            Request::Command(command, args) => (*command, args),
+        };
+        match command {
+            Command::Ver => {
+                send_ok(
+                    io,
+                    Some(format_args!("PROTO=1 NAME={NAME} VERSION={VERSION}")),
+                );
+                Ok(())
+            }
+            Command::Cfg => self.cfg_command(args, io),
+            Command::Zero => self.zero_command(args, io),
+            Command::Session => self.session_command(args, io),
+            Command::Move => self.move_command(args, io),
+            Command::Cone => self.cone_command(args, io),
+            Command::Arc => self.arc_command(args, io),
+            Command::Drive => self.drive_command(args, io),
+            Command::Mcode => self.mcode_command(args, io),
+            Command::Gear => self.gear_command(args, io),
+            Command::Opt => self.opt_command(args, io),
+            Command::Limits => self.limits_command(args, io),
+            Command::Sync => {
+                let (r, starved) = self.machine.sync(&mut Sink::new(io, self.drive));
+                send_ok(
+                    io,
+                    Some(format_args!(
+                        "EV={} T={} TSEQ={:08X} STARVED={starved}",
+                        r.events(),
+                        r.run_ticks(),
+                        r.tseq()
+                    )),
+                );
+                Ok(())
+            }
+            Command::Status => {
+                self.status_reply(io, "OK");
+                Ok(())
+            }
+            Command::Reset => self.reset_command(io),
+            Command::Pos => {
+                self.pos_reply(io);
+                Ok(())
+            }
+            Command::Tool => self.tool_command(args, io),
+            Command::Work => self.work_command(args, io),
+            Command::Aux => self.aux_command(args, io),
+            Command::Thread | Command::Wear | Command::Deflect | Command::Tri | Command::Tape => {
+                self.calc(command, args, io)
+            }
+        }
+    }
+
+    /// The calculators' requests (`THREAD`, `WEAR`, `DEFLECT`, `TRI`,
+    /// `TAPE`).
+    #[cfg(feature = "calc")]
+    fn calc<'a, I: Io>(&mut self, command: Command, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        use super::calc;
+        match command {
+            Command::Thread => calc::thread_command(args, self.machine.limits(), io),
+            Command::Wear => calc::wear_command(args, io),
+            Command::Deflect => calc::deflect_command(args, io),
+            Command::Tri => calc::tri_command(args, io),
+            _ => calc::tape_command(args, &mut self.tape, io),
+        }
+    }
+
+    /// Without the calculators no request is one of theirs (the parse
+    /// refuses their names).
+    #[cfg(not(feature = "calc"))]
+    fn calc<'a, I: Io>(&mut self, command: Command, _: &Args<'a>, _: &mut I) -> Outcome<'a> {
+        Err(Refusal::Unknown(command.spec().name()))
+    }
+
+    /// `SESSION [TOKEN=n]`: sets or reports the host's session token.
+    fn session_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [token] = args.values();
+        if let Some(v) = token {
+            self.token = match v.parse::<u32>() {
+                Ok(t) if v.bytes().all(|b| b.is_ascii_digit()) => t,
+                _ => return Err(Refusal::Value("TOKEN", "must be 0 to 4294967295")),
+            };
+        }
+        send_ok(io, Some(format_args!("TOKEN={}", self.token)));
+        Ok(())
+    }
+
+    /// `OPT [BDEL=0|1] [DIALECT=ISO|FANUC] [OPTSTOP=0|1]`.
+    fn opt_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [bdel, dialect, optstop] = args.values();
+        let block_delete = match bdel {
+            Some(v) => parse_flag("BDEL", v)?,
+            None => self.block_delete,
+        };
+        let optional_stop = match optstop {
+            Some(v) => parse_flag("OPTSTOP", v)?,
+            None => self.optional_stop,
+        };
+        let dialect = match dialect {
+            None => self.dialect,
+            Some(v) if v.eq_ignore_ascii_case("ISO") => Dialect::Iso,
+            Some(v) if v.eq_ignore_ascii_case("FANUC") => Dialect::Fanuc,
+            Some(_) => return Err(Refusal::Value("DIALECT", "must be ISO or FANUC")),
+        };
+        (self.block_delete, self.dialect) = (block_delete, dialect);
+        self.optional_stop = optional_stop;
+        send_ok(
+            io,
+            Some(format_args!(
+                "BDEL={} DIALECT={} OPTSTOP={}",
+                u8::from(self.block_delete),
+                self.dialect.as_str(),
+                u8::from(self.optional_stop)
+            )),
+        );
+        Ok(())
+    }
+
+    /// `RESET`: as the RESET key of a control, the program is abandoned
+    /// where it stands (a cycle's profile being read with it). What is
+    /// queued runs to its end; a waiting element is dropped.
+    fn reset_command<'a, I: Io>(&mut self, io: &mut I) -> Outcome<'a> {
+        self.machine.flush(&mut Sink::new(io, self.drive));
+        self.cycles.abandon();
+        // The programmed feed stays, as on the controls machinists know.
+        self.modal = Modal {
+            feed: self.modal.feed,
+            feed_mode: self.modal.feed_mode,
+            ..Modal::POWER_ON
+        };
+        self.aux = self.aux.stopped();
+        self.switch_outputs(self.outputs_for(&self.aux, Units::Mm), io);
+        self.contour = Contour::new();
+        self.last_moves = Moves::new();
+        self.prog = self.work_point(self.cmd);
+        send_ok(io, None);
+        Ok(())
     }
 }

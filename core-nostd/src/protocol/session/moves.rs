@@ -7,8 +7,8 @@ impl Session {
     /// `CONE A= [RN=]`: Krylenko's Xc, Zc, Xc on the diameter and Nomura's
     /// A, B, C; `NEAR=` names any value within 10⁻⁹ mm of a printing tie.
     #[inline(never)]
-    pub(super) fn cone_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [a, rn] = parse_args(words, ["A", "RN"])?;
+    pub(super) fn cone_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [a, rn] = args.values();
         let a = a.ok_or(Refusal::Missing("CONE needs A"))?;
         let alpha = Angle::from_degrees_str(a).map_err(|e| {
             Refusal::Value(
@@ -51,11 +51,8 @@ impl Session {
     }
 
     #[inline(never)]
-    pub(super) fn arc_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [x, z, i, k, dir, tol, pass, mode, feed] = parse_args(
-            words,
-            ["X", "Z", "I", "K", "DIR", "TOL", "PASS", "MODE", "F"],
-        )?;
+    pub(super) fn arc_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [x, z, i, k, dir, tol, pass, mode, feed] = args.values();
         self.not_compensating("ARC")?;
         let (Some(x), Some(z), Some(i), Some(k), Some(dir)) = (x, z, i, k, dir) else {
             return Err(Refusal::Missing("ARC needs X, Z, I, K and DIR"));
@@ -389,8 +386,8 @@ impl Session {
     }
 
     #[inline(never)]
-    pub(super) fn move_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [x, z, inc, feed] = parse_args(words, ["X", "Z", "INC", "F"])?;
+    pub(super) fn move_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [x, z, inc, feed] = args.values();
         self.not_compensating("MOVE")?;
         let feed = match feed {
             Some(v) => Some(parse_feed(v)?),

@@ -7,8 +7,8 @@ impl Session {
     /// `ZERO [X=] [Z=]`: the current point becomes X, Z (0 when omitted) in
     /// program coordinates; nothing moves.
     #[inline(never)]
-    pub(super) fn zero_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [x, z] = parse_args(words, ["X", "Z"])?;
+    pub(super) fn zero_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [x, z] = args.values();
         self.not_compensating("ZERO")?;
         let work = [
             match x {
@@ -247,8 +247,8 @@ impl Session {
     /// tool table, set or reported: geometry and wear (X a diameter when
     /// `DIAM=1`), nose radius and tip code (`R=- T=-` until set).
     #[inline(never)]
-    pub(super) fn tool_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [n, x, z, wx, wz, r, t] = parse_args(words, ["N", "X", "Z", "WX", "WZ", "R", "T"])?;
+    pub(super) fn tool_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [n, x, z, wx, wz, r, t] = args.values();
         if n.is_none() {
             return Err(Refusal::Missing("TOOL needs N, the register: 1 to 32"));
         }
@@ -315,8 +315,8 @@ impl Session {
     /// that system's zero lies in machine coordinates (X a diameter when
     /// `DIAM=1`).
     #[inline(never)]
-    pub(super) fn work_command<'a, I: Io>(&mut self, words: Words<'a>, io: &mut I) -> Outcome<'a> {
-        let [g, x, z] = parse_args(words, ["G", "X", "Z"])?;
+    pub(super) fn work_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
+        let [g, x, z] = args.values();
         if g.is_none() {
             return Err(Refusal::Missing("WORK needs G, the system: 54 to 59"));
         }

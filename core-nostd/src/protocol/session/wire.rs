@@ -9,7 +9,8 @@ use crate::impulse::ImpulsePrice;
 use crate::length::{write_mm4, Length, LengthError};
 use crate::protocol::io::{ErrorCode, Io, Refused, StatusRecord};
 use crate::protocol::reply::{checksum, hex_digits, ReplyLine, REPLY_CAPACITY};
-use crate::protocol::words::{ArgError, Words};
+use crate::protocol::request::RequestError;
+use crate::protocol::words::ArgError;
 
 use crate::outputs::write_rpm;
 use crate::plan::Feed;
@@ -50,6 +51,17 @@ impl From<ArcError> for Refusal<'_> {
 impl<'a> From<ArgError<'a>> for Refusal<'a> {
     fn from(e: ArgError<'a>) -> Self {
         Refusal::Args(e)
+    }
+}
+
+impl<'a> From<RequestError<'a>> for Refusal<'a> {
+    fn from(e: RequestError<'a>) -> Self {
+        match e {
+            RequestError::Empty => Refusal::Empty,
+            RequestError::Unknown(word) => Refusal::Unknown(word),
+            RequestError::Args(e) => Refusal::Args(e),
+            RequestError::NoArgs(form) => Refusal::NoArgs(form),
+        }
     }
 }
 
@@ -268,13 +280,6 @@ pub(super) fn hex_value(b: u8) -> Option<u8> {
         b'A'..=b'F' => Some(b - b'A' + 10),
         b'a'..=b'f' => Some(b - b'a' + 10),
         _ => None,
-    }
-}
-
-pub(super) fn no_args<'a>(mut words: Words<'a>, command: &'static str) -> Outcome<'a> {
-    match words.next() {
-        None => Ok(()),
-        Some(_) => Err(Refusal::NoArgs(command)),
     }
 }
 
