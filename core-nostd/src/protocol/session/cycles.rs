@@ -11,13 +11,12 @@
 //! The profile stays held for `G70 P Q`, which runs its blocks as written
 //! (feeds, nose compensation) and returns to its start point.
 
+use super::cycle_moves::add;
 use super::*;
 use crate::arc::{centre_from_radius, ArcDir};
-use crate::comp::{Move, MoveKind, Origin};
 use crate::crc32::Crc32;
 use crate::cycle::{Along, CycleError, Roughing, Segment, Step, PROFILE_BLOCKS};
 use crate::gcode::{parse, CycleKind, CycleWords, Motion, SingleCycle};
-use crate::interp::path_feed;
 use crate::length::Length;
 use crate::protocol::io::ErrorCode;
 
@@ -78,28 +77,9 @@ impl Session {
                 return Err(Refusal::Value("F", "the cycle's feed must be above 0"));
             }
         }
-        let diam = b.diameter.unwrap_or(self.cfg.diam);
         let s = [self.prog[0].as_angstrom(), self.prog[1].as_angstrom()];
-        let add = |from: i64, by: i64| {
-            Length::from_angstrom(from.saturating_add(by))
-                .map(Length::as_angstrom)
-                .ok_or(Refusal::Range("the cycle's end beyond 99999.999999 mm"))
-        };
-        let mut end = s;
-        if let Some(x) = block_x(b, diam) {
-            end[0] = if b.incremental_x {
-                add(s[0], x.as_angstrom())?
-            } else {
-                x.as_angstrom()
-            };
-        }
-        if let Some(z) = b.z {
-            end[1] = if b.incremental_z {
-                add(s[1], z.as_angstrom())?
-            } else {
-                z.as_angstrom()
-            };
-        }
+        let [x, z] = self.end_words(b, s)?;
+        let end = [x.unwrap_or(s[0]), z.unwrap_or(s[1])];
         // G74 pecks along Z (the step K, Fanuc Q) and steps over along X
         // (I, P); G75 the other way round.
         let (u, peck, shift) = match c.kind {
@@ -145,20 +125,8 @@ impl Session {
         }
         let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
         self.last_moves = crate::comp::Moves::new();
-        // Checked whole before anything moves.
-        let (mut cmd, mut pos, mut last) = (self.cmd, self.pos, s);
-        geom.steps(&mut |step| {
-            let p = self.cycle_move(step, last, &modal, &spindle, cmd, pos, io)?;
-            (cmd, pos, last) = (p.end(), p.registers(), step_end(step));
-            Ok::<(), Refusal<'static>>(())
-        })?;
-        let mut last = s;
-        geom.steps(&mut |step| {
-            let p = self.cycle_move(step, last, &modal, &spindle, self.cmd, self.pos, io)?;
-            *crc = self.run_planned(&p, *crc, io);
-            last = step_end(step);
-            Ok::<(), Refusal<'static>>(())
-        })?;
+        self.check_steps(&geom, s, &modal, &spindle, io)?;
+        self.run_steps(&geom, s, &modal, &spindle, crc, io)?;
         Ok(Block::Run)
     }
 
@@ -519,89 +487,13 @@ impl Session {
             modal.feed = pending.feed;
         }
         let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
-        // Checked whole before anything moves.
-        let mut check = Ok(());
-        let (mut cmd, mut pos) = (self.cmd, self.pos);
-        let mut last = s;
-        roughing.steps(&mut |step| {
-            if check.is_err() {
-                return;
-            }
-            check = self
-                .cycle_move(step, last, &modal, &spindle, cmd, pos, io)
-                .map(|p| {
-                    (cmd, pos) = (p.end(), p.registers());
-                });
-            last = step_end(step);
-        });
-        check?;
-        let mut last = s;
-        let mut out = Ok(());
-        // Each move again, planned from where the one before left the
-        // machine, and run.
-        roughing.steps(&mut |step| {
-            if out.is_err() {
-                return;
-            }
-            match self.cycle_move(step, last, &modal, &spindle, self.cmd, self.pos, io) {
-                Ok(p) => *crc = self.run_planned(&p, *crc, io),
-                Err(e) => out = Err(e),
-            }
-            last = step_end(step);
-        });
-        out?;
+        self.check_steps(&roughing, s, &modal, &spindle, io)?;
+        self.run_steps(&roughing, s, &modal, &spindle, crc, io)?;
         self.prog = [
             Length::from_angstrom(s[0]).unwrap_or(self.prog[0]),
             Length::from_angstrom(s[1]).unwrap_or(self.prog[1]),
         ];
         Ok(())
-    }
-
-    /// Plans one roughing move (work coordinates, from `from`) from the
-    /// machine's `cmd` and registers `pos`.
-    #[allow(clippy::too_many_arguments)]
-    fn cycle_move<I: Io>(
-        &self,
-        step: Step,
-        from: [i64; 2],
-        modal: &crate::interp::Modal,
-        spindle: &crate::interp::SpindleState,
-        cmd: [Length; 2],
-        pos: crate::interleave::ImpulsePoint,
-        io: &mut I,
-    ) -> Result<Planned, Refusal<'static>> {
-        let off = self.offsets.vector(&self.sel).ok_or(Refusal::Range(
-            "the offsets in effect add beyond 99999.999999 mm",
-        ))?;
-        let (to, kind, feeds) = match step {
-            Step::Rapid(p) => (p, MoveKind::Line { rapid: true }, false),
-            Step::Feed(p) => (p, MoveKind::Line { rapid: false }, true),
-            Step::Arc(p, c, dir) => (
-                p,
-                MoveKind::Arc {
-                    centre: shifted(c, off)?,
-                    dir,
-                },
-                true,
-            ),
-        };
-        let feed = if feeds {
-            let x = Length::from_angstrom(from[0]).unwrap_or(Length::ZERO);
-            let f = path_feed(modal, spindle, x).map_err(|e| Refusal::Value("F", e.as_str()))?;
-            let f = f.ok_or(Refusal::Value(
-                "F",
-                "not programmed: a feed move needs F (mm/min)",
-            ))?;
-            Some(self.overridden(f, modal.feed_mode))
-        } else {
-            None
-        };
-        let m = Move {
-            to: shifted(to, off)?,
-            kind,
-            origin: Origin::Current,
-        };
-        self.plan_move(cmd, pos, &m, feed, io)
     }
 
     /// `G70 P Q [F]`: the held profile's blocks run as written, from where
@@ -635,9 +527,16 @@ impl Session {
                 return Err(Refusal::Value("F", "the finishing feed must be above 0"));
             }
         }
-        // The profile must end with nose compensation off: the return to
-        // the start point is not a compensated move.
+        // Known before the first block moves (a refusal comes before
+        // motion), from one reading of the held blocks: the profile must end
+        // with nose compensation off (the return to the start point is not a
+        // compensated move), and every feed move of it needs a feed.
         let mut compensating = self.contour.active();
+        let mut feed =
+            b.f.or(self.modal.feed)
+                .is_some_and(|f| f.as_angstrom() != 0);
+        let mut motion = self.modal.motion;
+        let mut unfed = false;
         for line in self.cycles.lines() {
             if let Ok(pb) = parse(line, self.dialect, self.modal.units) {
                 match pb.compensation {
@@ -645,6 +544,13 @@ impl Session {
                     Some(_) => compensating = true,
                     None => {}
                 }
+                if let Some(f) = pb.f {
+                    feed = f.as_angstrom() != 0;
+                }
+                if let Some(m) = pb.motion {
+                    motion = m;
+                }
+                unfed |= !feed && motion != Motion::Rapid && (pb.x.is_some() || pb.z.is_some());
             }
         }
         if compensating {
@@ -652,27 +558,11 @@ impl Session {
                 "the profile leaves nose compensation on: end it with G40 before Q",
             ));
         }
-        // Every feed move of the profile needs a feed: known before the
-        // first one moves (a refusal comes before motion).
-        let mut feed =
-            b.f.or(self.modal.feed)
-                .is_some_and(|f| f.as_angstrom() != 0);
-        let mut motion = self.modal.motion;
-        for line in self.cycles.lines() {
-            if let Ok(pb) = parse(line, self.dialect, self.modal.units) {
-                if let Some(f) = pb.f {
-                    feed = f.as_angstrom() != 0;
-                }
-                if let Some(m) = pb.motion {
-                    motion = m;
-                }
-                if !feed && motion != Motion::Rapid && (pb.x.is_some() || pb.z.is_some()) {
-                    return Err(Refusal::Value(
-                        "F",
-                        "not programmed: the profile's feed moves need G70 F or a feed in force",
-                    ));
-                }
-            }
+        if unfed {
+            return Err(Refusal::Value(
+                "F",
+                "not programmed: the profile's feed moves need G70 F or a feed in force",
+            ));
         }
         if let Some(f) = b.f {
             self.modal.feed = Some(f);
@@ -768,27 +658,10 @@ impl Session {
                 return Err(Refusal::Value("F", "the cycle's feed must be above 0"));
             }
         }
-        let diam = b.diameter.unwrap_or(self.cfg.diam);
         let s = [self.prog[0].as_angstrom(), self.prog[1].as_angstrom()];
-        let add = |from: i64, by: i64| {
-            Length::from_angstrom(from.saturating_add(by))
-                .map(Length::as_angstrom)
-                .ok_or(Refusal::Range("the cycle's end beyond 99999.999999 mm"))
-        };
-        if let Some(x) = block_x(b, diam) {
-            single.x = Some(if b.incremental_x {
-                add(s[0], x.as_angstrom())?
-            } else {
-                x.as_angstrom()
-            });
-        }
-        if let Some(z) = b.z {
-            single.z = Some(if b.incremental_z {
-                add(s[1], z.as_angstrom())?
-            } else {
-                z.as_angstrom()
-            });
-        }
+        let [x, z] = self.end_words(b, s)?;
+        single.x = x.or(single.x);
+        single.z = z.or(single.z);
         if let Some(r) = b.r {
             single.taper = r.as_angstrom();
         }
@@ -809,29 +682,10 @@ impl Session {
         };
         self.last_moves = crate::comp::Moves::new();
         let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
-        // Checked whole before anything moves.
-        let (mut cmd, mut pos) = (self.cmd, self.pos);
-        let mut last = s;
-        for step in steps {
-            let p = self.cycle_move(step, last, &modal, &spindle, cmd, pos, io)?;
-            (cmd, pos) = (p.end(), p.registers());
-            last = step_end(step);
-        }
+        self.check_steps(&steps, s, &modal, &spindle, io)?;
         self.modal = modal;
         self.cycles.single = Some(single);
-        let mut last = s;
-        for step in steps {
-            let p = self.cycle_move(step, last, &modal, &spindle, self.cmd, self.pos, io)?;
-            *crc = self.run_planned(&p, *crc, io);
-            last = step_end(step);
-        }
+        self.run_steps(&steps, s, &modal, &spindle, crc, io)?;
         Ok(Block::Run)
-    }
-}
-
-/// Where a step ends.
-fn step_end(step: Step) -> [i64; 2] {
-    match step {
-        Step::Rapid(p) | Step::Feed(p) | Step::Arc(p, _, _) => p,
     }
 }

@@ -32,6 +32,7 @@ use core::fmt::{self, Write};
 mod auxiliary;
 mod blocks;
 mod configure;
+mod cycle_moves;
 mod cycle_state;
 mod cycles;
 mod gcode;
