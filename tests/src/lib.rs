@@ -1,8 +1,26 @@
-//! Cross-crate tests live in `tests/`; this library holds what they share
-//! about the repository itself.
+//! Cross-crate tests live in `tests/`; this library holds what several of
+//! them share.
 //!
 //! - [`modules`]: the module-level import graph of a crate and its cycles
 //!   (`tests/tests/module_cycles.rs`, `cargo run -p tests --bin
 //!   module-graph -- <crate>/src`).
+//! - [`last_x_z`]: where a program's last move naming X and Z ends (the
+//!   tests that stream corpus programs through real senders).
 
 pub mod modules;
+
+/// Where a program's last move naming both X and Z ends, as written (the
+/// last line whose code, comments left out, has an `X` and a `Z` word):
+/// where the carriage stands after a program that ends with such an
+/// absolute move and no offset in force.
+pub fn last_x_z(program: &str) -> Option<(f64, f64)> {
+    let word = |line: &str, letter: char| -> Option<f64> {
+        let code = line.split(['(', ';']).next().unwrap_or("");
+        code.split_whitespace()
+            .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
+    };
+    program
+        .lines()
+        .rev()
+        .find_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
+}

@@ -283,16 +283,7 @@ fn cncjs_streams_corpus_programs_to_serve() {
         let text = std::fs::read_to_string(&program).expect("program");
         // Both end with an absolute move naming X and Z, no offset in
         // force: the carriage ends there.
-        let word = |line: &str, letter: char| -> Option<f64> {
-            let code = line.split(['(', ';']).next().unwrap_or("");
-            code.split_whitespace()
-                .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
-        };
-        let want = text
-            .lines()
-            .rev()
-            .find_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
-            .expect("a last move");
+        let want = tests::last_x_z(&text).expect("a last move");
         let device = serve_at(20.0);
         let json = cncjs(device.path(), &program, &[]);
         let s = summary(&json);

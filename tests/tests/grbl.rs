@@ -678,16 +678,7 @@ fn a_real_grbl_sender_streams_the_corpus_programs() {
         let program = std::fs::read_to_string(&path).expect("program");
         // Both programs end with an absolute move naming X and Z, no
         // offset in force: the carriage ends there.
-        let word = |line: &str, letter: char| -> Option<f64> {
-            let code = line.split(['(', ';']).next().unwrap_or("");
-            code.split_whitespace()
-                .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
-        };
-        let want = program
-            .lines()
-            .rev()
-            .find_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
-            .expect("a last move");
+        let want = tests::last_x_z(&program).expect("a last move");
         let mut local = LocalDevice::new();
         local.set_grbl(true);
         let device = PtyDevice::start_with(local).expect("pty");

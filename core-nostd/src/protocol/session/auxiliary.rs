@@ -23,12 +23,7 @@ impl Session {
                 let st = self.machine.status(&mut Sink::new(io, self.drive));
                 let mut view = self.view(0);
                 (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
-                let record = StatusRecord {
-                    motion: st.motion,
-                    issued: st.issued,
-                    queued: st.queued,
-                    view,
-                };
+                let record = super::realtime::record(&st, view);
                 io.status(&record);
                 let mut line = status_line("!STATUS", &record);
                 io.stop_status(line.finish());

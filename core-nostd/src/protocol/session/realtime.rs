@@ -14,12 +14,7 @@ impl Session {
         }
         let mut view = self.view(st.speed(self.machine.tick()));
         view.outputs.rpm = st.spindle;
-        let record = StatusRecord {
-            motion: st.motion,
-            issued: st.issued,
-            queued: st.queued,
-            view,
-        };
+        let record = record(&st, view);
         io.status(&record);
         let mut line = status_line(prefix, &record);
         if prefix.starts_with('!') {
@@ -227,5 +222,15 @@ impl Session {
         } else {
             self.switch_outputs(outputs, io);
         }
+    }
+}
+
+/// A status record of what the machine reports, with the session's view.
+pub(super) fn record(st: &crate::machine::Status, view: StatusView) -> StatusRecord {
+    StatusRecord {
+        motion: st.motion,
+        issued: st.issued,
+        queued: st.queued,
+        view,
     }
 }
