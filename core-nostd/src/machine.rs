@@ -14,7 +14,7 @@ use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::plan::{Block, Feed, Limits, Planner, Point, Rates, WINDOW};
 use crate::step::{FixedRate, Record, TickRate};
 use crate::stepdir::DriveTiming;
-use crate::stepper::{Aborted, FixedRun, Item, Motion, Pulled, Stepper, AHEAD};
+use crate::stepper::{Aborted, AxesState, FixedRun, Item, Pulled, Stepper, AHEAD};
 use crate::wide::{mul_div, sqrt_shl};
 
 /// Blocks the queue holds.
@@ -45,7 +45,7 @@ pub trait Background {
     /// Reset: drops everything at once, outputs low; what was running.
     fn abort(&mut self) -> Aborted;
     /// What the axes are doing.
-    fn motion(&mut self) -> Motion;
+    fn motion(&mut self) -> AxesState;
     /// Whether it has issued every block started in an open run: block
     /// `k − 1` has ended and block `k` should start now.
     fn hungry(&mut self) -> bool;
@@ -101,7 +101,7 @@ pub struct Status {
     /// The speed now, Q64 (Å/tick)² (squared).
     pub speed2: u128,
     /// Running, holding or idle.
-    pub motion: Motion,
+    pub motion: AxesState,
     /// The spindle speed commanded now (that of the block running, or set
     /// at rest since), 10⁻³ rpm.
     pub spindle: u32,
@@ -372,10 +372,14 @@ impl Machine {
                 b.issued(),
                 b.spindle().unwrap_or(self.stepper.spindle()),
             ),
-            None => (Motion::Idle, self.stepper.issued(), self.stepper.spindle()),
+            None => (
+                AxesState::Idle,
+                self.stepper.issued(),
+                self.stepper.spindle(),
+            ),
         };
         let motion = match motion {
-            Motion::Idle if queued > 0 => Motion::Run,
+            AxesState::Idle if queued > 0 => AxesState::Run,
             m => m,
         };
         Status {

@@ -25,7 +25,7 @@
 use crate::crc32::Crc32;
 use crate::interleave::{ImpulsePoint, StepEvent};
 use crate::step::Record;
-use crate::stepper::{Aborted, Item, Motion, Pulled, Stepper, AHEAD};
+use crate::stepper::{Aborted, AxesState, Item, Pulled, Stepper, AHEAD};
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// Slots of the ready queue, a power of two; it holds one fewer entry.
@@ -538,7 +538,7 @@ impl Prep {
 
     /// What the axes are doing, as far as the prep knows: the step
     /// interrupt may still be issuing what it prepared.
-    pub fn motion(&self) -> Motion {
+    pub fn motion(&self) -> AxesState {
         self.stepper.motion()
     }
 
@@ -857,7 +857,7 @@ mod tests {
         alone.extend(core::iter::from_fn(|| s.pull()));
         b.prep.hold();
         while b.issue().is_some() {}
-        assert_eq!(b.prep.motion(), Motion::Held);
+        assert_eq!(b.prep.motion(), AxesState::Held);
         assert_eq!(steps(&b.taken), pulled_steps(&alone));
         assert_eq!(b.taken.last(), Some(&Ready::RunEnd));
         assert_eq!(b.issued().registers(), s.issued());
@@ -868,7 +868,7 @@ mod tests {
         while b.issue().is_some() {}
         assert_eq!(b.issued().registers().z, Impulses(-2000));
         assert_eq!(steps(&b.taken).len(), 2000);
-        assert_eq!(b.prep.motion(), Motion::Idle);
+        assert_eq!(b.prep.motion(), AxesState::Idle);
     }
 
     #[test]
@@ -877,11 +877,11 @@ mod tests {
         let mut b = bench(&q, 31, run(&[0, -1_000], None).into_iter());
         b.prep.hold();
         assert_eq!(b.issue(), None);
-        assert_eq!(b.prep.motion(), Motion::Held);
+        assert_eq!(b.prep.motion(), AxesState::Held);
         assert!(b.prep.resume(&mut b.tx));
         while b.issue().is_some() {}
         assert_eq!(b.issued().registers().z, Impulses(-100));
-        assert_eq!(b.prep.motion(), Motion::Idle);
+        assert_eq!(b.prep.motion(), AxesState::Idle);
     }
 
     #[test]

@@ -65,7 +65,7 @@ pub enum Pulled {
 /// What the axes are doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Motion {
+pub enum AxesState {
     /// Nothing started waits or runs.
     Idle,
     /// Started motion runs or waits.
@@ -210,12 +210,12 @@ impl<const R: usize> Stepper<R> {
     }
 
     /// What the axes are doing.
-    pub fn motion(&self) -> Motion {
+    pub fn motion(&self) -> AxesState {
         match self.hold {
-            Hold::Braking(..) => Motion::Braking,
-            Hold::Held(_) => Motion::Held,
-            Hold::Off if self.is_idle() => Motion::Idle,
-            Hold::Off => Motion::Run,
+            Hold::Braking(..) => AxesState::Braking,
+            Hold::Held(_) => AxesState::Held,
+            Hold::Off if self.is_idle() => AxesState::Idle,
+            Hold::Off => AxesState::Run,
         }
     }
 
@@ -574,7 +574,7 @@ mod tests {
     use crate::impulse::{quantize, ImpulsePrice};
     use crate::length::Length;
     use crate::plan::{q32, Block, Planner, Rates, WINDOW};
-    use crate::stepper::Motion;
+    use crate::stepper::AxesState;
     use std::vec::Vec;
 
     /// A block along Z from `from_um` to `to_um` (µm), rapid or at a feed
@@ -722,9 +722,9 @@ mod tests {
         }
         assert_eq!(before[..], planned[..1000]);
         s.hold();
-        assert_eq!(s.motion(), Motion::Braking);
+        assert_eq!(s.motion(), AxesState::Braking);
         let braking = steps(&mut s);
-        assert_eq!(s.motion(), Motion::Held);
+        assert_eq!(s.motion(), AxesState::Held);
         // 20 mm/s at 150 mm/s² stops in 4/3 mm: 133 events of 0.01 mm.
         assert_eq!(braking.len(), 133);
         assert_eq!(s.issued().z, Impulses(-1133));
@@ -762,7 +762,7 @@ mod tests {
         let want: Vec<u8> = planned.iter().map(|e| e.0).collect();
         assert_eq!(all, want);
         assert!(after.windows(2).all(|w| w[0].1 < w[1].1));
-        assert_eq!(s.motion(), Motion::Idle);
+        assert_eq!(s.motion(), AxesState::Idle);
         // From rest where the hold stopped (4/3 mm after event 1000's
         // boundary): the next boundary after √(2s/a).
         let ds = 1133.5 * 0.01 - (999.5 * 0.01 + v * v / (2.0 * a));
@@ -788,11 +788,11 @@ mod tests {
             }
         }
         s.hold();
-        assert_eq!(s.motion(), Motion::Braking);
+        assert_eq!(s.motion(), AxesState::Braking);
         assert_eq!(s.resume(), None);
-        assert_eq!(s.motion(), Motion::Braking);
+        assert_eq!(s.motion(), AxesState::Braking);
         let braking = steps(&mut s);
-        assert_eq!(s.motion(), Motion::Held);
+        assert_eq!(s.motion(), AxesState::Held);
         assert_eq!(s.resume(), Some(Pulled::RunStart));
         let after = steps(&mut s);
         // Every event of the block, none lost.

@@ -42,7 +42,7 @@ use core_nostd::machine::Background;
 use core_nostd::protocol::{status_line, Io, Realtime, StatusRecord, StatusView, Timing};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
-use core_nostd::stepper::{Aborted, Item, Motion};
+use core_nostd::stepper::{Aborted, AxesState, Item};
 use motion::{PrepStage, Shared};
 use rtic::Mutex;
 use step::StepIsr;
@@ -282,7 +282,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P
         self.motion.abort()
     }
 
-    fn motion(&mut self) -> Motion {
+    fn motion(&mut self) -> AxesState {
         self.motion.motion()
     }
 

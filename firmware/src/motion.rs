@@ -24,7 +24,7 @@ use core_nostd::prep::{Prep, ReadyTx};
 use core_nostd::protocol::Realtime;
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
-use core_nostd::stepper::{Aborted, Item, Motion};
+use core_nostd::stepper::{Aborted, AxesState, Item};
 use rtic::Mutex;
 
 /// The prep stage: the stepper with what it has prepared, and the ready
@@ -282,14 +282,14 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Shared<P, S> {
 
     /// What the axes are doing: the prep's view, and whether the step
     /// interrupt still issues what it prepared.
-    pub fn motion(&mut self) -> Motion {
+    pub fn motion(&mut self) -> AxesState {
         let step = &mut self.step;
         let (m, busy) = self
             .prep
             .lock(|p| (p.prep.motion(), step.lock(|s| s.busy())));
         match m {
-            Motion::Idle if busy => Motion::Run,
-            Motion::Held if busy => Motion::Braking,
+            AxesState::Idle if busy => AxesState::Run,
+            AxesState::Held if busy => AxesState::Braking,
             m => m,
         }
     }

@@ -28,7 +28,7 @@ use core_nostd::protocol::grbl::{self, Extras, GrblRealtime};
 use core_nostd::protocol::{status_line, Device, Io, Realtime, StatusRecord, StatusView};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
-use core_nostd::stepper::{Aborted, Item, Motion, Pulled, Stepper, AHEAD};
+use core_nostd::stepper::{Aborted, AxesState, Item, Pulled, Stepper, AHEAD};
 use std::io::{Read, Write};
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
@@ -332,9 +332,9 @@ impl<W: Write> Protocol<W> {
 }
 
 /// What the axes are doing (an event waiting for its tick is running).
-fn motion_of(a: &Axes) -> Motion {
+fn motion_of(a: &Axes) -> AxesState {
     match a.stepper.motion() {
-        Motion::Idle if a.next.is_some() => Motion::Run,
+        AxesState::Idle if a.next.is_some() => AxesState::Run,
         m => m,
     }
 }
@@ -457,7 +457,7 @@ impl<W: Write> Background for Protocol<W> {
         found
     }
 
-    fn motion(&mut self) -> Motion {
+    fn motion(&mut self) -> AxesState {
         motion_of(&self.shared.axes())
     }
 
@@ -620,7 +620,7 @@ fn protocol_loop<W: Write>(
             // The link ended (stdin closed): what was started runs to its
             // end, or to a hold, then the serve ends.
             device.quiet(io);
-            io.wait_for(|s| s.drained() || motion_of(&s.axes()) == Motion::Held);
+            io.wait_for(|s| s.drained() || motion_of(&s.axes()) == AxesState::Held);
             return device;
         }
         let wait = if feed {

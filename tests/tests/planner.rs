@@ -1112,7 +1112,7 @@ fn status_reports_the_steps_issued_and_the_queue() {
         queued: planner.queued(),
         issued,
         speed2: planner.exit2(),
-        motion: core_nostd::stepper::Motion::Run,
+        motion: core_nostd::stepper::AxesState::Run,
         spindle: 0,
     }
     .speed(TickRate::TIMER);

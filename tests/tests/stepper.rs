@@ -10,7 +10,7 @@ use core_nostd::machine::Background;
 use core_nostd::protocol::{Device, Io};
 use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
-use core_nostd::stepper::{Aborted, Item, Motion, Pulled, Stepper, AHEAD};
+use core_nostd::stepper::{Aborted, AxesState, Item, Pulled, Stepper, AHEAD};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -101,7 +101,7 @@ impl Background for Later {
     fn abort(&mut self) -> Aborted {
         self.stepper.abort()
     }
-    fn motion(&mut self) -> Motion {
+    fn motion(&mut self) -> AxesState {
         self.stepper.motion()
     }
     fn hungry(&mut self) -> bool {

@@ -25,7 +25,7 @@
 //!   Д (the cross slide, 0.005 mm impulses), and Т (a third axis, read but
 //!   not used on this lathe): a code digit, 1 plus, 2 minus, 4 added on the
 //!   leading axis (the one with more impulses), then five impulse digits
-//!   ([`Motion`]).
+//!   ([`MotionWord`]).
 //! - **П feed** ([`Feed`]): `П75` rapid over 10 mm, `П54` up to 10 mm, else a
 //!   code `ab` whose pulse frequency is `F_b·2^(a−3)` Hz (`F_1…F_4` = 43.4,
 //!   50, 73, 122.5 Hz; `a` 0–7, `b` 1–4), the one nearest `n·S/0.6` Hz for
@@ -436,50 +436,50 @@ pub const BCK5_MAX_FRAME: u16 = 999;
 /// A BCK-5 motion word (Е, Д or Т): direction, leading flag and impulses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Motion {
+pub struct MotionWord {
     /// 0 (no motion), 1, 2, 5 or 6.
     code: u8,
     /// At most [`BCK5_MAX_IMPULSES`]; 0 when `code` is 0.
     count: u32,
 }
 
-impl Motion {
+impl MotionWord {
     /// No motion: the word `000000`.
-    pub const NONE: Motion = Motion { code: 0, count: 0 };
+    pub const NONE: MotionWord = MotionWord { code: 0, count: 0 };
 
     /// A motion of `impulses` (signed, plus away from the chuck face and
     /// the spindle axis), marked leading or not; `None` beyond
-    /// [`BCK5_MAX_IMPULSES`]. Zero impulses give [`Motion::NONE`].
+    /// [`BCK5_MAX_IMPULSES`]. Zero impulses give [`MotionWord::NONE`].
     ///
     /// ```
-    /// use core_nostd::calc::tape::Motion;
-    /// let m = Motion::new(-30_000, true).unwrap();
+    /// use core_nostd::calc::tape::MotionWord;
+    /// let m = MotionWord::new(-30_000, true).unwrap();
     /// assert_eq!((m.code(), m.count()), (6, 30_000)); // 2 minus + 4 leading
-    /// assert_eq!(Motion::new(121, false).unwrap().code(), 1);
-    /// assert_eq!(Motion::new(0, true), Some(Motion::NONE));
-    /// assert_eq!(Motion::new(100_000, false), None);
+    /// assert_eq!(MotionWord::new(121, false).unwrap().code(), 1);
+    /// assert_eq!(MotionWord::new(0, true), Some(MotionWord::NONE));
+    /// assert_eq!(MotionWord::new(100_000, false), None);
     /// ```
-    pub const fn new(impulses: i32, leading: bool) -> Option<Motion> {
+    pub const fn new(impulses: i32, leading: bool) -> Option<MotionWord> {
         let count = impulses.unsigned_abs();
         if count > BCK5_MAX_IMPULSES {
             return None;
         }
         if count == 0 {
-            return Some(Motion::NONE);
+            return Some(MotionWord::NONE);
         }
         let direction = if impulses > 0 { 1 } else { 2 };
         let code = if leading { direction + 4 } else { direction };
-        Some(Motion { code, count })
+        Some(MotionWord { code, count })
     }
 
     /// The word's six digits read as a number (code digit first); `None`
     /// for a code digit not 0, 1, 2, 5, 6 or a code 0 with impulses.
-    const fn from_word(word: u32) -> Option<Motion> {
+    const fn from_word(word: u32) -> Option<MotionWord> {
         let code = word / 100_000;
         let count = word % 100_000;
         match code {
-            0 if count == 0 => Some(Motion::NONE),
-            1 | 2 | 5 | 6 => Some(Motion {
+            0 if count == 0 => Some(MotionWord::NONE),
+            1 | 2 | 5 | 6 => Some(MotionWord {
                 code: code as u8,
                 count,
             }),
@@ -500,8 +500,8 @@ impl Motion {
     /// The signed number of impulses (plus for codes 1 and 5).
     ///
     /// ```
-    /// use core_nostd::calc::tape::Motion;
-    /// assert_eq!(Motion::new(-221, true).unwrap().impulses(), -221);
+    /// use core_nostd::calc::tape::MotionWord;
+    /// assert_eq!(MotionWord::new(-221, true).unwrap().impulses(), -221);
     /// ```
     pub const fn impulses(self) -> i32 {
         // count ≤ 99 999, so the conversion is exact.
@@ -707,9 +707,9 @@ pub enum FrameEnd {
 pub struct Bck5Frame {
     check: u8,
     number: u16,
-    carriage: Option<Motion>,
-    cross: Option<Motion>,
-    third: Option<Motion>,
+    carriage: Option<MotionWord>,
+    cross: Option<MotionWord>,
+    third: Option<MotionWord>,
     feed: Option<Feed>,
     spindle: Option<u8>,
     tool: Option<u8>,
@@ -817,7 +817,7 @@ impl Bck5Frame {
                 return Err(short_word(&mut cur, column, bck5_known));
             }
             if motion {
-                let m = Motion::from_word(digits.value)
+                let m = MotionWord::from_word(digits.value)
                     .ok_or(ParseError::at(TapeError::MotionCode, column))?;
                 match letter {
                     Bck5Letter::Carriage => frame.carriage = Some(m),
@@ -852,17 +852,17 @@ impl Bck5Frame {
     }
 
     /// The Е word: carriage motion, 0.01 mm impulses.
-    pub const fn carriage(&self) -> Option<Motion> {
+    pub const fn carriage(&self) -> Option<MotionWord> {
         self.carriage
     }
 
     /// The Д word: cross-slide motion, 0.005 mm impulses.
-    pub const fn cross(&self) -> Option<Motion> {
+    pub const fn cross(&self) -> Option<MotionWord> {
         self.cross
     }
 
     /// The Т word: third-axis motion.
-    pub const fn third(&self) -> Option<Motion> {
+    pub const fn third(&self) -> Option<MotionWord> {
         self.third
     }
 
@@ -1174,7 +1174,7 @@ struct Balance {
 }
 
 impl Balance {
-    fn add(&mut self, motion: Option<Motion>) {
+    fn add(&mut self, motion: Option<MotionWord>) {
         if let Some(m) = motion {
             let n = u64::from(m.count);
             if m.impulses() > 0 {
@@ -1600,10 +1600,10 @@ impl Bck5Encoder {
 }
 
 /// The motion word of `n` impulses.
-fn bck5_motion(n: i64, leading: bool) -> Result<Motion, TapeError> {
+fn bck5_motion(n: i64, leading: bool) -> Result<MotionWord, TapeError> {
     i32::try_from(n)
         .ok()
-        .and_then(|n| Motion::new(n, leading))
+        .and_then(|n| MotionWord::new(n, leading))
         .ok_or(TapeError::WordRange)
 }
 
@@ -2423,8 +2423,8 @@ mod tests {
         assert_eq!(f.digit_sum(), 58);
         assert_eq!(f.expected_check(), 2);
         assert!(f.check_ok());
-        assert_eq!(f.carriage(), Motion::new(-12_400, false));
-        assert_eq!(f.cross(), Motion::new(-30_000, true));
+        assert_eq!(f.carriage(), MotionWord::new(-12_400, false));
+        assert_eq!(f.cross(), MotionWord::new(-30_000, true));
         assert_eq!(f.feed(), Some(Feed::Rapid));
         assert_eq!((f.spindle(), f.tool(), f.coolant()), (Some(26), None, None));
         assert_eq!(f.end(), FrameEnd::Frame);
@@ -2794,7 +2794,8 @@ mod tests {
             let block = if f.end() == FrameEnd::Program {
                 Bck5Block::End
             } else {
-                let imp = |m: Option<Motion>| Travel::Impulses(m.map_or(0, Motion::impulses));
+                let imp =
+                    |m: Option<MotionWord>| Travel::Impulses(m.map_or(0, MotionWord::impulses));
                 let feed = match f.feed() {
                     None => Bck5Feed::Keep,
                     Some(Feed::Off) => Bck5Feed::Off,
@@ -3110,10 +3111,10 @@ mod tests {
         let f =
             Bck5Frame::parse(" 9 k 12 e 500121 d 100564 t 200007 p 31 w 62 c 42 b 01 r ").unwrap();
         assert_eq!(f.number(), 12);
-        assert_eq!(f.carriage().map(Motion::impulses), Some(121));
+        assert_eq!(f.carriage().map(MotionWord::impulses), Some(121));
         assert!(f.carriage().unwrap().is_leading());
-        assert_eq!(f.cross().map(Motion::impulses), Some(564));
-        assert_eq!(f.third().map(Motion::impulses), Some(-7));
+        assert_eq!(f.cross().map(MotionWord::impulses), Some(564));
+        assert_eq!(f.third().map(MotionWord::impulses), Some(-7));
         assert_eq!(f.feed(), Some(Feed::Code(FeedCode::new(3, 1).unwrap())));
         assert_eq!(
             (f.spindle(), f.tool(), f.coolant()),
@@ -3738,8 +3739,8 @@ mod tests {
             let f = Bck5Encoder::new(5).frame(&Bck5Block::Move(m)).unwrap();
             proptest::prop_assert!(f.check_ok());
             proptest::prop_assert_eq!(Bck5Frame::parse(&text(f)), Ok(f));
-            proptest::prop_assert_eq!(f.carriage().map(Motion::impulses), Some(e));
-            proptest::prop_assert_eq!(f.cross().map(Motion::impulses), Some(d));
+            proptest::prop_assert_eq!(f.carriage().map(MotionWord::impulses), Some(e));
+            proptest::prop_assert_eq!(f.cross().map(MotionWord::impulses), Some(d));
         }
     }
 }

@@ -8,7 +8,7 @@ use crate::length::div_round_half_away;
 use crate::machine::Background;
 use crate::outputs::Outputs;
 use crate::stepdir::DriveTiming;
-use crate::stepper::Motion as Axes;
+use crate::stepper::AxesState as Axes;
 use core::fmt;
 
 /// The error codes of the protocol.

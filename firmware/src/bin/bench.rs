@@ -604,7 +604,7 @@ fn run_isr(
             let _ = qtx.enqueue(r);
         }
         if !isr.busy() && rx.is_empty() {
-            if phase == 1 && prep.motion() == core_nostd::stepper::Motion::Held {
+            if phase == 1 && prep.motion() == core_nostd::stepper::AxesState::Held {
                 // At rest: resume.
                 phase = 2;
                 let _ = prep.resume(tx);

@@ -417,7 +417,7 @@ mod tests {
 
     /// X 10 mm on the diameter (1000 impulses of 0.005 mm on the radius),
     /// Z −5 mm (−500 of 0.01 mm), at `speed` (10⁻⁴ mm/min).
-    fn record(motion: crate::stepper::Motion, speed: i64) -> StatusRecord {
+    fn record(motion: crate::stepper::AxesState, speed: i64) -> StatusRecord {
         use crate::interleave::ImpulsePoint;
         StatusRecord {
             motion,
@@ -454,7 +454,7 @@ mod tests {
             check: false,
             mpos: true,
         };
-        let r = status_report(&record(crate::stepper::Motion::Run, 2_000_000), &extras);
+        let r = status_report(&record(crate::stepper::AxesState::Run, 2_000_000), &extras);
         assert_eq!(
             r.as_bytes(),
             b"<Run|MPos:10.0000,0.0000,-5.0000|FS:200.0000,800.000|WCO:1.0000,0.0000,-120.0000|Ov:100,100,100|D:1>"
@@ -462,16 +462,16 @@ mod tests {
         // The pendant's line says the same.
         let line = crate::protocol::session::status_line(
             "!STATUS",
-            &record(crate::stepper::Motion::Run, 2_000_000),
+            &record(crate::stepper::AxesState::Run, 2_000_000),
         );
         assert_eq!(
             line.as_bytes(),
             b"!STATUS STATE=RUN PX=1000 PZ=-500 X=10.0000 Z=-5.0000 V=200.0000 Q=3 STARVED=0 SPINDLE=CW S=800.000 COOLANT=OFF"
         );
         // Braking still moves; held is at rest whatever the last speed.
-        let braking = status_report(&record(crate::stepper::Motion::Braking, 5), &extras);
+        let braking = status_report(&record(crate::stepper::AxesState::Braking, 5), &extras);
         assert!(braking.as_bytes().starts_with(b"<Hold:1|"));
-        let held = status_report(&record(crate::stepper::Motion::Held, 5), &extras);
+        let held = status_report(&record(crate::stepper::AxesState::Held, 5), &extras);
         assert!(held.as_bytes().starts_with(b"<Hold:0|"));
     }
 
@@ -486,7 +486,7 @@ mod tests {
             check: false,
             mpos: false,
         };
-        let idle = record(crate::stepper::Motion::Idle, 0);
+        let idle = record(crate::stepper::AxesState::Idle, 0);
         let r = status_report(&idle, &extras);
         // X 10 on the diameter less 2·0.5 mm; Z −5 less −120.
         assert!(

@@ -26,7 +26,7 @@ use crate::machine::{Join, Machine};
 use crate::outputs::{milli_rpm, Outputs};
 use crate::plan::{Feed, Limits, LimitsError, WINDOW};
 use crate::stepdir::{DriveTiming, TimingError};
-use crate::stepper::{Aborted, Motion as Axes};
+use crate::stepper::{Aborted, AxesState as Axes};
 use core::fmt::{self, Write};
 
 mod auxiliary;
