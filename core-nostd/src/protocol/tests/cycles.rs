@@ -1,0 +1,346 @@
+//! The turning cycles through the protocol: G90/G94, G71/G72 with G70,
+//! G74/G75, and the refusals that come before their motion.
+
+use super::*;
+
+/// `G90` and `G94` of G-code system A (Fanuc dialect) move as the blocks
+/// a programmer writes for them by hand: in at the rapid rate (to the
+/// taper's start, X + 2R on the diameter), the cut, out at the feed, back
+/// to the start at the rapid rate; X, Z and R modal, the cycle repeated by
+/// an axis word alone until a motion code ends it.
+#[test]
+fn single_cycles_move_as_their_blocks_written_out() {
+    let run = |program: &[&str]| {
+        let mut dev = Device::new();
+        assert_eq!(
+            ask1(&mut dev, "OPT DIALECT=fanuc"),
+            "OK BDEL=0 DIALECT=FANUC OPTSTOP=0"
+        );
+        let mut trace = Vec::new();
+        for line in program {
+            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+            trace.push(r.last().unwrap().clone());
+        }
+        (ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"), trace)
+    };
+    let (sync, pos, trace) = run(&[
+        "G21 G18 G98 G90",
+        "G00 X50. Z5.",
+        "G90 X40. W-25. F200.",
+        "X35.",
+        "Z-30. R-1.",
+        "G94 X20. Z0 F100.",
+        "Z-1.",
+        "G00 X60.",
+        "X70. Z10.",
+        // G80 ends a cycle as a motion code does.
+        "G90 X40. Z-5. F200.",
+        "G80",
+        "X50.",
+    ]);
+    let (sync_by_hand, pos_by_hand, _) = run(&[
+        "G21 G18 G98",
+        "G00 X50. Z5.",
+        "G00 X40.",
+        "G01 Z-20. F200.",
+        "X50.",
+        "G00 Z5.",
+        "X35.",
+        "G01 Z-20.",
+        "X50.",
+        "G00 Z5.",
+        "X33.",
+        "G01 X35. Z-30.",
+        "X50.",
+        "G00 Z5.",
+        "Z0",
+        "G01 X20. F100.",
+        "Z5.",
+        "G00 X50.",
+        "Z-1.",
+        "G01 X20.",
+        "Z5.",
+        "G00 X50.",
+        "X60.",
+        "X70. Z10.",
+        "X40.",
+        "G01 Z-5. F200.",
+        "X70.",
+        "G00 Z10.",
+        "G80",
+        "G00 X50.",
+    ]);
+    assert_eq!(pos, pos_by_hand);
+    assert_eq!(sync, sync_by_hand);
+    // A header's G90 selects the cycle without moving; the cycle blocks
+    // move and come back to where they started.
+    assert!(trace[0].starts_with("OK NX=0 NZ=0"), "{}", trace[0]);
+    assert!(trace[2].starts_with("OK NX=0 NZ=0"), "{}", trace[2]);
+}
+
+/// What a single cycle cannot take is refused before anything moves.
+#[test]
+fn single_cycle_refusals_change_nothing() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    for line in ["G21 G18 G98", "G00 X50. Z5."] {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
+    }
+    ask1(&mut dev, "SYNC");
+    let before = ask1(&mut dev, "POS");
+    for (line, want) in [
+        (
+            "G90 G01 X40. Z-20. F100.",
+            "ERR SYNTAX G90/G94 and a motion code in one block: one of them",
+        ),
+        (
+            "G90 X40. Z-20. F100. M08",
+            "ERR SYNTAX a G90/G94 block takes X (U), Z (W), R and F: put other words on their own line",
+        ),
+        ("G90 X40. Z-20.", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        // No event since: the SYNC since the last one is empty.
+        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
+        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
+    }
+}
+
+/// Fanuc's two-block `G71` roughs a stepped shaft as the manual draws it:
+/// passes U deep (on the radius) from the start point, each cut to the
+/// profile moved out by the allowances (U on the diameter, W along Z),
+/// pulled off at 45° by R, back to the start's Z at the rapid rate; then
+/// one pass along the moved profile and back to the start point. `G70`
+/// then runs the profile's own blocks and returns, X first.
+#[test]
+fn g71_roughs_in_passes_and_g70_finishes_on_the_profile() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let r = run_program(
+        &mut dev,
+        &[
+            "G21 G18 G98",
+            "G00 X40. Z2.",
+            "G71 U2. R.5",
+            "G71 P10 Q30 U.4 W.2 F300.",
+            "N10 G00 X20.",
+            "N20 G01 Z-30. F100.",
+            "N30 X40.",
+            "G70 P10 Q30",
+        ],
+    );
+    for reply in &r {
+        assert!(reply.last().unwrap().starts_with("OK"), "{reply:?}");
+    }
+    // The profile's blocks are held, not run, until Q.
+    assert!(r[4].last().unwrap().ends_with("HELD=1"), "{:?}", r[4]);
+    assert!(r[5].last().unwrap().ends_with("HELD=2"), "{:?}", r[5]);
+    let mut want = std::vec!["G00 X40.0000 Z2.0000".to_string()];
+    // Radii 18, 16, 14, 12: each to the shoulder at Z-30 + W.
+    for x in [36, 32, 28, 24] {
+        want.push(std::format!("G00 X{x}.0000 Z2.0000"));
+        want.push(std::format!("G01 X{x}.0000 Z-29.8000"));
+        want.push(std::format!("G01 X{}.0000 Z-29.3000", x + 1));
+        want.push(std::format!("G00 X{}.0000 Z2.0000", x + 1));
+    }
+    // Along the profile moved by the allowances (X20 + U, Z + W), then
+    // back to the start point.
+    for m in [
+        "G00 X20.4000 Z2.0000",
+        "G00 X20.4000 Z2.2000",
+        "G01 X20.4000 Z-29.8000",
+        "G01 X40.4000 Z-29.8000",
+        "G00 X40.0000 Z-29.8000",
+        "G00 X40.0000 Z2.0000",
+        // G70: the profile as written, then back.
+        "G00 X20.0000 Z2.0000",
+        "G01 X20.0000 Z-30.0000",
+        "G01 X40.0000 Z-30.0000",
+        "G00 X40.0000 Z2.0000",
+    ] {
+        want.push(m.to_string());
+    }
+    assert_eq!(data(&r), want);
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=4000 PZ=200 X=40.0000 Z=2.0000"
+    );
+}
+
+/// A profile block the device refuses refuses the cycle: the blocks up to
+/// Q are refused with it, nothing moves, and the program goes on after Q.
+#[test]
+fn a_refused_profile_refuses_its_cycle_and_nothing_moves() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let r = run_program(
+        &mut dev,
+        &[
+            "G21 G18 G98",
+            "G00 X40. Z2.",
+            "G71 U2. R.5",
+            "G71 P10 Q30 U.4 W.2 F300.",
+            "N10 G00 X20.",
+            "N20 G01 Z-30. Q7",
+            "N30 X40.",
+            "G01 X42. F100.",
+        ],
+    );
+    let last = |i: usize| r[i].last().unwrap().clone();
+    assert!(last(5).starts_with("ERR"), "{:?}", r[5]);
+    assert!(last(6).starts_with("ERR"), "{:?}", r[6]);
+    assert!(last(7).starts_with("OK NX=200 NZ=0"), "{:?}", r[7]);
+    assert_eq!(data(&r[2..7]), Vec::<String>::new());
+}
+
+/// G70 knows before its first move that the profile's feed moves have no
+/// feed; a first block's words that belong to the other cycle are refused;
+/// RESET drops a profile being read.
+#[test]
+fn cycle_refusals_come_before_motion() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let r = run_program(
+        &mut dev,
+        &[
+            "G21 G18 G98",
+            "G00 X40. Z2.",
+            "G71 P10 Q30 D2. F300.",
+            "N10 G00 X20.",
+            "N20 G01 Z-30.",
+            "N30 X40.",
+        ],
+    );
+    for reply in &r {
+        assert!(reply.last().unwrap().starts_with("OK"), "{reply:?}");
+    }
+    ask1(&mut dev, "SYNC");
+    assert_eq!(
+        ask1(&mut dev, "G70 P10 Q30"),
+        "ERR VALUE F not programmed: the profile's feed moves need G70 F or a feed in force"
+    );
+    assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "));
+    assert!(ask(&mut dev, b"G70 P10 Q30 F100.\n")
+        .last()
+        .unwrap()
+        .starts_with("OK"));
+    assert_eq!(
+        ask1(&mut dev, "G71 U1. R.5 W1."),
+        "ERR SYNTAX the first of the two blocks takes the depth (G71 U, G72 W) and the retract R"
+    );
+    assert_eq!(
+        ask1(&mut dev, "G72 W0 R.5"),
+        "ERR VALUE W the depth of cut must be above 0"
+    );
+    for line in [
+        "G71 U1. R.5 M08",
+        "G71 P1 Q2 D1. F.2 G99",
+        "G70 P10 Q30 S500",
+    ] {
+        let want = if line.contains('S') {
+            "ERR SYNTAX a cycle block takes P Q U W D R F (G71/G72) or P Q F U W (G70): S and T on their own line"
+        } else {
+            "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line"
+        };
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+    }
+    assert!(ask1(&mut dev, "AUX").contains("COOLANT=OFF"));
+    // A profile being read, dropped by RESET: the next line runs.
+    assert!(ask1(&mut dev, "G71 P1 Q2 D1. F100.").starts_with("OK"));
+    assert!(ask1(&mut dev, "N1 G00 X20.").ends_with("HELD=1"));
+    assert_eq!(ask1(&mut dev, "RESET"), "OK");
+    let r = ask(&mut dev, b"G00 X42.\n");
+    assert!(r.last().unwrap().starts_with("OK NX=200"), "{r:?}");
+}
+
+/// `G75` grooves and `G74` pecks as the blocks written out by hand: each
+/// peck in at the feed, back by the return at the rapid rate, out of the
+/// groove at the rapid rate, over by the step to the next groove, back to
+/// the start point at the end. Fanuc's `P`/`Q` in the least increment,
+/// Haas' `I`/`K` in millimetres, move alike.
+#[test]
+fn g74_and_g75_peck_as_their_blocks_written_out() {
+    let run = |program: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        for line in program {
+            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+        }
+        (ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"))
+    };
+    let fanuc = run(&[
+        "G21 G18 G98",
+        "G00 X42. Z-10.",
+        "G75 R.5",
+        "G75 X30. Z-14. P2500 Q2000 F50.",
+        "G00 X0 Z2.",
+        "G74 R1.",
+        "G74 Z-12. Q5000 F80.",
+    ]);
+    let haas = run(&[
+        "G21 G18 G98",
+        "G00 X42. Z-10.",
+        "G75 R.5",
+        "G75 X30. Z-14. I2.5 K2. F50.",
+        "G00 X0 Z2.",
+        "G74 R1.",
+        "G74 W-14. K5. F80.",
+    ]);
+    let mut by_hand = vec![
+        "G21 G18 G98",
+        "G00 X42. Z-10.",
+        "G01 X37. F50.",
+        "G00 X38.",
+        "G01 X32.",
+        "G00 X33.",
+        "G01 X30.",
+        "G00 X42.",
+    ];
+    for z in ["Z-12.", "Z-14."] {
+        by_hand.extend([
+            z, "G01 X37.", "G00 X38.", "G01 X32.", "G00 X33.", "G01 X30.", "G00 X42.",
+        ]);
+    }
+    by_hand.extend([
+        "Z-10.",
+        "X0 Z2.",
+        "G01 Z-3. F80.",
+        "G00 Z-2.",
+        "G01 Z-8.",
+        "G00 Z-7.",
+        "G01 Z-12.",
+        "G00 Z2.",
+    ]);
+    let by_hand = run(&by_hand);
+    assert_eq!(fanuc, by_hand);
+    assert_eq!(haas, by_hand);
+}
+
+/// What a grooving cycle cannot take is refused before anything moves.
+#[test]
+fn g74_and_g75_refusals_change_nothing() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    for line in ["G21 G18 G98", "G00 X42. Z-10."] {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
+    }
+    ask1(&mut dev, "SYNC");
+    let before = ask1(&mut dev, "POS");
+    for (line, want) in [
+        ("G75 Z-14. Q2000 F50.", "ERR SYNTAX G75 needs a depth: its X (U) away from the start point"),
+        ("G75 X30. Z-14. P2500 F50.", "ERR SYNTAX G75 to another Z needs the step between grooves: Q (K)"),
+        ("G75 X30. P2500 R.2 F50.", "ERR VALUE R a relief at the bottom is not supported: R0 (D0) or none"),
+        ("G75 X30. P2500 F50. M08", "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line"),
+        ("G75 X10. P1 F50.", "ERR RANGE a grooving cycle of more than 20000 moves"),
+        ("G75 X30. P2500", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
+        ("G75 X30. P2.5 F50.", "ERR VALUE P a step in the least increment, without a point (P2500: 2.5 mm)"),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
+        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
+    }
+}
