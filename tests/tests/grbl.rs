@@ -707,3 +707,25 @@ fn a_real_grbl_sender_streams_the_corpus_programs() {
         );
     }
 }
+
+/// What the operator must do at a stop (shift the gearbox, do the
+/// machine's own M code by hand) reaches a grbl sender as grbl's feedback
+/// message before the `ok`, and a refusal's text as its `[MSG:…]` before
+/// the error.
+#[test]
+fn a_stop_tells_the_operator_what_to_do_in_grbls_words() {
+    let mut dev = grbl_device();
+    assert_eq!(text(&mut dev, b"GEAR N=1 TOP=500\n"), "ok\r\n");
+    assert_eq!(
+        text(&mut dev, b"M41\n"),
+        "[MSG:M41: shift the gearbox to range 1 (up to 500.0000 rpm), then cycle start]\r\nok\r\n"
+    );
+    assert_eq!(
+        text(&mut dev, b"M16\n"),
+        "[MSG:M16: the machine's own M code; do it by hand, then cycle start]\r\nok\r\n"
+    );
+    assert_eq!(
+        text(&mut dev, b"G01 X10\n"),
+        "[MSG:VALUE F not programmed: a feed move needs F (mm/min)]\r\nerror:22\r\n"
+    );
+}

@@ -212,9 +212,20 @@ pub trait Io {
     }
 
     /// The next status line sent (a `STATUS` reply, a `!STATUS` line, or
-    /// the line given to [`Io::stop_status`]) says this.
-    fn status(&mut self, record: &StatusRecord) {
-        let _ = record;
+    /// the line given to [`Io::stop_status`]) says this; `realtime` when it
+    /// answers a status byte (a `!STATUS` line).
+    fn status(&mut self, record: &StatusRecord, realtime: bool) {
+        let _ = (record, realtime);
+    }
+
+    /// The next line sent is the request's final `OK` line (an `ERR` line
+    /// is told through [`Io::refused`]).
+    fn accepted(&mut self) {}
+
+    /// The next line sent is `DATA MSG` with this text: what the operator
+    /// must do at a stop (a gear range, the machine's own M code).
+    fn message(&mut self, text: &[u8]) {
+        let _ = text;
     }
 
     /// A reset dropped the motion (its `!RESET` line comes next):
@@ -328,8 +339,14 @@ macro_rules! forward_io {
         fn refused(&mut self, why: crate::protocol::io::Refused) {
             self.inner.refused(why);
         }
-        fn status(&mut self, record: &crate::protocol::io::StatusRecord) {
-            self.inner.status(record);
+        fn status(&mut self, record: &crate::protocol::io::StatusRecord, realtime: bool) {
+            self.inner.status(record, realtime);
+        }
+        fn accepted(&mut self) {
+            self.inner.accepted();
+        }
+        fn message(&mut self, text: &[u8]) {
+            self.inner.message(text);
         }
         fn reset_done(&mut self, running: bool) {
             self.inner.reset_done(running);

@@ -2,7 +2,7 @@
 //! call passes through; on a grbl link replies turn into grbl's.
 
 use super::report::*;
-use crate::protocol::io::{ErrorCode, Io, Refused, StatusRecord, StatusView, Timing};
+use crate::protocol::io::{Io, Refused, StatusRecord, StatusView, Timing};
 use crate::protocol::reply::ReplyLine;
 use core::fmt::Write;
 
@@ -19,8 +19,8 @@ pub struct Translate<'a, I: Io + ?Sized> {
     pub outcome: Option<Result<(), u8>>,
     /// A refusal's text, for its `[MSG:…]` line (a query's final line).
     pub message: ReplyLine,
-    /// What the refusal about to be sent is about.
-    pub(super) refused: Option<Refused>,
+    /// The next line is a refusal's, whose text grbl's `[MSG:…]` shows.
+    pub(super) refusal_text: bool,
     /// What the status line about to be sent says.
     pub(super) status: Option<StatusRecord>,
     /// A reset came, with a block running (`OF` > 0).
@@ -51,7 +51,7 @@ impl<'a, I: Io + ?Sized> Translate<'a, I> {
             statuses: true,
             outcome: None,
             message: ReplyLine::new(),
-            refused: None,
+            refusal_text: false,
             status: None,
             reset: None,
             dry: false,
@@ -94,41 +94,43 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
             .rposition(|&b| b == b'*')
             .and_then(|i| line.get(..i))
             .unwrap_or(line);
-        if body.starts_with(b"OK") {
-            self.outcome = Some(Ok(()));
-        } else if body.starts_with(b"ERR ") {
-            // Every `ERR` line is told first (`send_error_about`); one
-            // that was not is no command this control runs.
-            let why = self.refused.take().unwrap_or(Refused {
-                code: ErrorCode::Unknown,
-                about: None,
-            });
-            self.outcome = Some(Err(error_number(why)));
+        // What a line is was told first (`accepted`, `refused`, `status`,
+        // `message`); only a refusal's text is taken from its line, for
+        // grbl's `[MSG:…]`: the words after `ERR`.
+        if self.refusal_text {
+            self.refusal_text = false;
+            let text = body.iter().position(|&b| b == b' ');
             self.message = ReplyLine::new();
-            self.message.push_bytes(body.get(4..).unwrap_or(b""));
-        } else if body.starts_with(b"!STATUS") {
-            // Every status line is told first (`Io::status`).
-            if let (true, Some(record)) = (self.statuses, self.status.take()) {
-                let mut l = status_report(&record, &self.extras);
-                self.inner.send(finish(&mut l));
-            }
-        } else if let Some(text) = body.strip_prefix(b"DATA MSG ") {
-            // What the operator must do at a stop (a gear range, the
-            // machine's own M code): grbl's feedback message.
-            let mut l = ReplyLine::new();
-            l.push_bytes(b"[MSG:");
-            l.push_bytes(text);
-            l.push_bytes(b"]");
-            self.inner.send(finish(&mut l));
+            self.message
+                .push_bytes(text.and_then(|i| body.get(i + 1..)).unwrap_or(b""));
         }
         // `DATA` lines and the rest: not grbl's.
     }
+    fn accepted(&mut self) {
+        if self.grbl {
+            self.outcome = Some(Ok(()));
+        } else {
+            self.inner.accepted();
+        }
+    }
     fn refused(&mut self, why: Refused) {
         if self.grbl {
-            self.refused = Some(why);
+            self.outcome = Some(Err(error_number(why)));
+            self.refusal_text = true;
         } else {
             self.inner.refused(why);
         }
+    }
+    fn message(&mut self, text: &[u8]) {
+        if !self.grbl {
+            return self.inner.message(text);
+        }
+        // What the operator must do at a stop: grbl's feedback message.
+        let mut l = ReplyLine::new();
+        l.push_bytes(b"[MSG:");
+        l.push_bytes(text);
+        l.push_bytes(b"]");
+        self.inner.send(finish(&mut l));
     }
     fn reset_done(&mut self, running: bool) {
         if self.grbl {
@@ -137,11 +139,16 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
             self.inner.reset_done(running);
         }
     }
-    fn status(&mut self, record: &StatusRecord) {
-        if self.grbl {
+    fn status(&mut self, record: &StatusRecord, realtime: bool) {
+        if !self.grbl {
+            return self.inner.status(record, realtime);
+        }
+        if !realtime {
+            // For the line a program stop gives `stop_status`.
             self.status = Some(*record);
-        } else {
-            self.inner.status(record);
+        } else if self.statuses {
+            let mut l = status_report(record, &self.extras);
+            self.inner.send(finish(&mut l));
         }
     }
     fn stop_status(&mut self, line: &[u8]) {

@@ -24,7 +24,8 @@ impl Session {
                 let mut view = self.view(0);
                 (view.outputs.rpm, view.stop) = (st.spindle, Some(code));
                 let record = super::realtime::record(&st, view);
-                io.status(&record);
+                // The line a status byte gets while the program stops.
+                io.status(&record, false);
                 let mut line = status_line("!STATUS", &record);
                 io.stop_status(line.finish());
             }

@@ -421,13 +421,13 @@ impl Session {
                 .copied()
                 .flatten();
             match r {
-                Some(top) => send_data(
+                Some(top) => send_message(
                     io,
-                    format_args!("MSG M4{range}: shift the gearbox to range {range} (up to {top} rpm), then cycle start"),
+                    format_args!("M4{range}: shift the gearbox to range {range} (up to {top} rpm), then cycle start"),
                 ),
-                None => send_data(
+                None => send_message(
                     io,
-                    format_args!("MSG M4{range}: shift the gearbox to range {range}, then cycle start"),
+                    format_args!("M4{range}: shift the gearbox to range {range}, then cycle start"),
                 ),
             }
             self.program_stop(40 + u16::from(range), io);
@@ -437,9 +437,11 @@ impl Session {
             match action {
                 MAction::Stop => {
                     self.machine.flush(&mut Sink::new(io, self.drive));
-                    send_data(
+                    send_message(
                         io,
-                        format_args!("MSG M{m:02}: the machine's own M code; do it by hand, then cycle start"),
+                        format_args!(
+                            "M{m:02}: the machine's own M code; do it by hand, then cycle start"
+                        ),
                     );
                     self.program_stop(m, io);
                 }

@@ -287,6 +287,9 @@ impl Session {
         };
         if let Some(id) = out.id {
             if self.last_id == Some(id) {
+                if self.last_final.starts_with(b"OK") {
+                    out.inner.accepted();
+                }
                 out.send_body(&self.last_final);
                 return;
             }

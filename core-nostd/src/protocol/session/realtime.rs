@@ -15,9 +15,10 @@ impl Session {
         let mut view = self.view(st.speed(self.machine.tick()));
         view.outputs.rpm = st.spindle;
         let record = record(&st, view);
-        io.status(&record);
+        let realtime = prefix.starts_with('!');
+        io.status(&record, realtime);
         let mut line = status_line(prefix, &record);
-        if prefix.starts_with('!') {
+        if realtime {
             if let Some(timing) = io.timing() {
                 timing.write_to(&mut line);
             }

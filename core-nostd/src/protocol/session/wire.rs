@@ -189,7 +189,14 @@ impl<I: Io> Io for Suffixed<'_, I> {
     fn send(&mut self, line: &[u8]) {
         // Every line the handler composes ends in `*HH\r\n`.
         let body = line.get(..line.len().saturating_sub(5)).unwrap_or(&[]);
-        if body.starts_with(b"OK") || body.starts_with(b"ERR") {
+        // The final line. This front wrote it; an `OK` is told to those
+        // around it (a grbl front) as what it is (an `ERR` was, through
+        // `Io::refused`).
+        let ok = body.starts_with(b"OK");
+        if ok {
+            self.inner.accepted();
+        }
+        if ok || body.starts_with(b"ERR") {
             self.last.clear();
             let _ = self.last.extend_from_slice(body);
         }
@@ -536,6 +543,17 @@ pub(crate) fn send_ok<I: Io>(io: &mut I, words: Option<fmt::Arguments<'_>>) {
 pub(crate) fn send_data<I: Io>(io: &mut I, words: fmt::Arguments<'_>) {
     let mut line = ReplyLine::new();
     let _ = write!(line, "DATA {words}");
+    io.send(line.finish());
+}
+
+/// Sends `DATA MSG <text>`, what the operator must do at a stop, told
+/// first through [`Io::message`].
+pub(crate) fn send_message<I: Io>(io: &mut I, text: fmt::Arguments<'_>) {
+    let mut line = ReplyLine::new();
+    let _ = write!(line, "DATA MSG ");
+    let start = line.as_bytes().len();
+    let _ = write!(line, "{text}");
+    io.message(line.as_bytes().get(start..).unwrap_or(b""));
     io.send(line.finish());
 }
 
