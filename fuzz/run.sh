@@ -26,7 +26,7 @@ FUZZ_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 ROOT="$(dirname "$FUZZ_DIR")"
 cd "$ROOT" || exit 2
 
-ALL_TARGETS="request protocol length gcode words contour"
+ALL_TARGETS="request block protocol length gcode words contour"
 TARGETS="${TARGETS:-$ALL_TARGETS}"
 
 # Longest input per target: sessions of many lines for the protocol and the
@@ -37,7 +37,7 @@ max_len() {
     words) echo 8192 ;;
     contour) echo 8192 ;;
     gcode) echo 256 ;;
-    request) echo 256 ;;
+    request | block) echo 256 ;;
     length) echo 64 ;;
     *) echo 4096 ;;
     esac
@@ -75,13 +75,18 @@ summary=""
 for t in $TARGETS; do
     corpus="$FUZZ_DIR/corpus/$t"
     mkdir -p "$corpus" "$FUZZ_DIR/artifacts/$t"
-    if [ -d "$FUZZ_DIR/seeds/$t" ]; then
+    # The parser alone starts from the block lines' seeds and dictionary.
+    from="$t"
+    if [ "$t" = block ]; then
+        from=gcode
+    fi
+    if [ -d "$FUZZ_DIR/seeds/$from" ]; then
         # Seeds are named by content or purpose; never overwrite corpus files.
-        cp -n "$FUZZ_DIR/seeds/$t/"* "$corpus/" 2>/dev/null || true
+        cp -n "$FUZZ_DIR/seeds/$from/"* "$corpus/" 2>/dev/null || true
     fi
     dict=()
-    if [ -f "$FUZZ_DIR/dict/$t.dict" ]; then
-        dict=("-dict=$FUZZ_DIR/dict/$t.dict")
+    if [ -f "$FUZZ_DIR/dict/$from.dict" ]; then
+        dict=("-dict=$FUZZ_DIR/dict/$from.dict")
     fi
     log="$LOGS/$t.log"
     echo "fuzzing $t for ${SECONDS_PER_TARGET}s ..." >&2

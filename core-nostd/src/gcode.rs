@@ -824,7 +824,9 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
         dwell: scanned.dwell,
         position_offset: scanned.position_offset,
         blend: scanned.blend,
-        dynamic: scanned.dynamic,
+        // G41.1/G42.1 are LinuxCNC's: in Fanuc's words a D before them is
+        // no nose diameter (and they are refused as the other dialect's).
+        dynamic: scanned.dynamic && dialect == Dialect::Iso,
         cycle: match (scanned.cycle, dialect) {
             (Some(kind), Dialect::Fanuc) => Some(CycleWords {
                 kind,
@@ -1724,6 +1726,11 @@ mod tests {
             (BlockError::OtherDialect(b'U', 0, Dialect::Fanuc), 5)
         );
         assert_eq!(at("G01 X1 G71"), (BlockError::Cycle(710), 8));
+        // A D read left to right: LinuxCNC's G41.1 later in the line makes it
+        // no nose diameter in Fanuc's words.
+        let fanuc = |l: &str| parse(l, Dialect::Fanuc, Units::Mm).map_err(|e| e.error);
+        assert_eq!(fanuc("G0 D2 G41.1"), Err(BlockError::UnknownAddress(b'D')));
+        assert!(parse("G0 D2 G41.1", Dialect::Iso, Units::Mm).is_ok());
         assert_eq!(at("O1000 G00 X1"), (BlockError::ProgramNumber, 7));
         assert_eq!(at("G00 O1000"), (BlockError::ProgramNumber, 5));
         assert_eq!(at("o<sub> call"), (BlockError::HostLanguage, 8));
