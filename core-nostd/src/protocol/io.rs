@@ -331,10 +331,26 @@ pub trait Io {
     }
 }
 
-/// The [`Io`] methods a wrapper hands to its `inner` unchanged: motion,
-/// the background, waits and outputs (a wrapper writes its own `send`,
-/// `stop_status`, `timing` and `stop_holds`).
+/// The [`Io`] methods a wrapper hands to its `inner` unchanged: what the
+/// replies are, motion, the background, waits and outputs (a wrapper
+/// writes its own `send`, `stop_status`, `timing` and `stop_holds`).
 macro_rules! forward_io {
+    () => {
+        crate::protocol::io::forward_replies!();
+        fn view(&mut self, view: &crate::protocol::io::StatusView) {
+            self.inner.view(view);
+        }
+        fn pause(&mut self) {
+            self.inner.pause();
+        }
+        crate::protocol::io::forward_motion!();
+    };
+}
+pub(crate) use forward_io;
+
+/// What the replies are ([`Io::refused`], [`Io::status`], [`Io::accepted`],
+/// [`Io::message`], [`Io::reset_done`]), handed to `inner` unchanged.
+macro_rules! forward_replies {
     () => {
         fn refused(&mut self, why: crate::protocol::io::Refused) {
             self.inner.refused(why);
@@ -351,11 +367,24 @@ macro_rules! forward_io {
         fn reset_done(&mut self, running: bool) {
             self.inner.reset_done(running);
         }
+    };
+}
+pub(crate) use forward_replies;
+
+/// Motion, the background, waits and outputs handed to `inner`; with
+/// `unless flag`, none of them while the wrapper's `flag` is set (grbl's
+/// check mode: replies go out, nothing moves, waits or switches).
+macro_rules! forward_motion {
+    ($(unless $flag:ident)?) => {
         fn run_start(&mut self) {
-            self.inner.run_start();
+            if !(false $(|| self.$flag)?) {
+                self.inner.run_start();
+            }
         }
         fn block_start(&mut self, block: &crate::interleave::LinearBlock) {
-            self.inner.block_start(block);
+            if !(false $(|| self.$flag)?) {
+                self.inner.block_start(block);
+            }
         }
         #[inline(always)]
         fn step(
@@ -364,38 +393,49 @@ macro_rules! forward_io {
             tick: u64,
             drive: &crate::stepdir::DriveTiming,
         ) {
-            self.inner.step(event, tick, drive);
+            if !(false $(|| self.$flag)?) {
+                self.inner.step(event, tick, drive);
+            }
         }
         fn run_end(&mut self, ticks: u64) {
-            self.inner.run_end(ticks);
+            if !(false $(|| self.$flag)?) {
+                self.inner.run_end(ticks);
+            }
         }
         fn background(&mut self) -> Option<&mut dyn crate::machine::Background> {
+            if false $(|| self.$flag)? {
+                return None;
+            }
             self.inner.background()
         }
-        fn view(&mut self, view: &crate::protocol::io::StatusView) {
-            self.inner.view(view);
-        }
-        fn pause(&mut self) {
-            self.inner.pause();
-        }
         fn dwell(&mut self, us: u64) {
-            self.inner.dwell(us);
+            if !(false $(|| self.$flag)?) {
+                self.inner.dwell(us);
+            }
         }
         fn program_stop(&mut self, code: u16) {
-            self.inner.program_stop(code);
+            if !(false $(|| self.$flag)?) {
+                self.inner.program_stop(code);
+            }
         }
         fn user_output(&mut self, n: u8, on: bool) {
-            self.inner.user_output(n, on);
+            if !(false $(|| self.$flag)?) {
+                self.inner.user_output(n, on);
+            }
         }
         fn wait_input(&mut self, n: u8, level: bool) {
-            self.inner.wait_input(n, level);
+            if !(false $(|| self.$flag)?) {
+                self.inner.wait_input(n, level);
+            }
         }
         fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
-            self.inner.outputs(outputs);
+            if !(false $(|| self.$flag)?) {
+                self.inner.outputs(outputs);
+            }
         }
     };
 }
-pub(crate) use forward_io;
+pub(crate) use forward_motion;
 
 /// A board's own timing, at the end of its `!STATUS` lines.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -166,67 +166,11 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
     fn stop_holds(&mut self) -> bool {
         !self.dry && self.grbl && self.inner.background().is_some()
     }
-    fn run_start(&mut self) {
-        if !self.dry {
-            self.inner.run_start();
-        }
-    }
-    fn block_start(&mut self, block: &crate::interleave::LinearBlock) {
-        if !self.dry {
-            self.inner.block_start(block);
-        }
-    }
-    #[inline(always)]
-    fn step(
-        &mut self,
-        event: crate::interleave::StepEvent,
-        tick: u64,
-        drive: &crate::stepdir::DriveTiming,
-    ) {
-        if !self.dry {
-            self.inner.step(event, tick, drive);
-        }
-    }
-    fn run_end(&mut self, ticks: u64) {
-        if !self.dry {
-            self.inner.run_end(ticks);
-        }
-    }
-    fn background(&mut self) -> Option<&mut dyn crate::machine::Background> {
-        if self.dry {
-            return None;
-        }
-        self.inner.background()
-    }
     fn view(&mut self, view: &StatusView) {
         self.inner.view(view);
     }
     fn pause(&mut self) {
         self.inner.pause();
     }
-    fn dwell(&mut self, us: u64) {
-        if !self.dry {
-            self.inner.dwell(us);
-        }
-    }
-    fn program_stop(&mut self, code: u16) {
-        if !self.dry {
-            self.inner.program_stop(code);
-        }
-    }
-    fn user_output(&mut self, n: u8, on: bool) {
-        if !self.dry {
-            self.inner.user_output(n, on);
-        }
-    }
-    fn wait_input(&mut self, n: u8, level: bool) {
-        if !self.dry {
-            self.inner.wait_input(n, level);
-        }
-    }
-    fn outputs(&mut self, outputs: &crate::outputs::Outputs) {
-        if !self.dry {
-            self.inner.outputs(outputs);
-        }
-    }
+    crate::protocol::io::forward_motion!(unless dry);
 }
