@@ -63,13 +63,17 @@ impl Session {
         self.gcode_words(b, crc, io)
     }
 
-    /// A block's words, run (no cycle in it).
+    /// A block's words, run (no cycle in it), in numbered steps in the order
+    /// of the modal groups (RS274/NGC's order of execution, as grbl's
+    /// `gc_execute_block`): steps 1 to 9 compute and check the whole block,
+    /// step 10 commits it, so a refused block changes nothing.
     pub(super) fn gcode_words<'a, I: Io>(
         &mut self,
         b: crate::gcode::Block,
         crc: &mut Crc32,
         io: &mut I,
     ) -> Result<Block, Refusal<'a>> {
+        // 1. Feed mode and feed (G94/G95, F).
         let modal = self.modal.after(&b);
         // F0 (a header's, before G95) is taken; a feed move then needs a
         // feed above 0.
@@ -85,6 +89,8 @@ impl Session {
                 return Err(Refusal::Value("F", why));
             }
         }
+        // 2. Spindle (S, M03–M05, G96/G97, G50/G92 S) within its top
+        //    speed, coolant.
         let aux = self.aux.after(&b);
         // The spindle speed where the block starts: the programmed X, the
         // diameter the tool cuts at (X0 of every work system is the
@@ -96,6 +102,8 @@ impl Session {
                 .rpm(self.prog[0], modal.units)
                 .map_err(|e| Refusal::Value("S", e.as_str()))?;
         }
+        // 3. Offsets: the work system (G54–G59, G10), the tool (T, G43/G49),
+        //    G92 (G50) and its kin.
         let diam = b.diameter.unwrap_or(self.cfg.diam);
         let (sel, mut offsets) = self.offsets_after(&b, &aux, diam)?;
         let special = b.special;
@@ -164,6 +172,8 @@ impl Session {
             // G92 and its kin name the point here anew.
             prog = here;
         }
+        // 4. The end point: distance mode (G90/G91, U and W), diameter or
+        //    radius (G07/G08), G45–G48.
         // Words are work coordinates; increments add to the programmed point.
         let mut target = here;
         let words = if b.set_work.is_some()
@@ -189,6 +199,7 @@ impl Session {
         }
         let has_end = words.0.is_some() || words.1.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
+        // 5. Plane (G17–G19) and motion mode (G00–G03): the element.
         if modal.plane != Plane::Zx {
             let arc = matches!(modal.motion, Motion::ArcCw | Motion::ArcCcw)
                 && special.is_none()
@@ -270,6 +281,7 @@ impl Session {
             shape,
             n: b.n,
         });
+        // 6. The non-modal moves: G28/G30, G53.
         // G28/G30 (through the way point) and G53: rapids, G53 also a feed,
         // in machine coordinates.
         let mut machine_path = heapless::Vec::<[Length; 2], 2>::new();
@@ -328,6 +340,7 @@ impl Session {
         } else {
             None
         };
+        // 7. Nose compensation (G40–G42, G41.1/G42.1, G450/G451).
         let dynamic_tool = match (b.dynamic_nose, b.compensation) {
             (Some(nose), _) => Some(Tool::new(
                 nose.radius,
@@ -363,6 +376,7 @@ impl Session {
                 "not programmed: a feed move needs F (mm/min)",
             ));
         }
+        // 8. Stops (M00, M01, M02/M30), checked against compensation.
         let end = b.stop == Some(Stop::End);
         if end && contour.active() {
             return Err(Refusal::Busy("M02/M30"));
@@ -376,6 +390,7 @@ impl Session {
             // The compensated path of the last element is not known yet.
             return Err(Refusal::Busy("M00/M01"));
         }
+        // 9. Motion planned and checked whole.
         // Plan and check every block before the first one moves.
         let mut planned = heapless::Vec::<Planned, MAX_MOVES>::new();
         let mut cmd = self.cmd;
@@ -409,6 +424,9 @@ impl Session {
         if (b.gear.is_some() || machine_m.is_some()) && contour.active() {
             return Err(Refusal::Busy("a gear range or a machine's M code"));
         }
+        // 10. Committed, in this order: path control (G61/G64), the gear
+        //     range (M41–M44), the machine's own M code, the spindle and
+        //     coolant, the motion, a stop or the program's end.
         // Nothing refuses the block from here on.
         self.machine.set_join(join);
         // A gear range, then the machine's own M code, at rest before the
