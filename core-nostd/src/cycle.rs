@@ -117,6 +117,63 @@ pub enum Step {
     Arc([i64; 2], [i64; 2], ArcDir),
 }
 
+/// `G73`'s passes: the profile (moved by the finishing allowances) cut
+/// whole `passes` times, each pass moved further by a share of the relief
+/// that shrinks from all of it on the first pass to none on the last
+/// (`docs/cycles.md` §4).
+#[derive(Clone, Copy, Debug)]
+pub struct Pattern<'a> {
+    /// The start point S, where each pass returns.
+    pub start: [i64; 2],
+    /// The profile's first point (work coordinates, X on the radius),
+    /// moved by the allowances.
+    pub first: [i64; 2],
+    /// Its elements, moved alike.
+    pub segments: &'a [Segment],
+    /// The relief: how far the first pass lies beyond the last, X (on the
+    /// radius) and Z.
+    pub relief: [i64; 2],
+    /// The count of passes, at least 1.
+    pub passes: u32,
+}
+
+impl Pattern<'_> {
+    /// How far pass `j` (1 to `passes`) lies from the profile with its
+    /// allowances: `relief · (passes − j) / (passes − 1)`, rounded half
+    /// away from zero to the ångström.
+    pub fn offset(&self, j: u32) -> [i64; 2] {
+        let n = i64::from(self.passes.max(1));
+        let left = n - i64::from(j.clamp(1, self.passes.max(1)));
+        let share = |r: i64| {
+            if n == 1 {
+                0
+            } else {
+                crate::length::div_round_half_away(r.saturating_mul(left), n - 1)
+            }
+        };
+        [share(self.relief[0]), share(self.relief[1])]
+    }
+
+    /// Every move, in order: for each pass, at the rapid rate to the moved
+    /// profile's first point, along it at the feed (its arcs as arcs), and
+    /// at the rapid rate back to S.
+    pub fn steps<E>(&self, out: &mut impl FnMut(Step) -> Result<(), E>) -> Result<(), E> {
+        for j in 1..=self.passes.max(1) {
+            let o = self.offset(j);
+            let at = |p: [i64; 2]| [p[0].saturating_add(o[0]), p[1].saturating_add(o[1])];
+            out(Step::Rapid(at(self.first)))?;
+            for g in self.segments {
+                out(match g.arc {
+                    None => Step::Feed(at(g.to)),
+                    Some((c, dir)) => Step::Arc(at(g.to), at(c), dir),
+                })?;
+            }
+            out(Step::Rapid(self.start))?;
+        }
+        Ok(())
+    }
+}
+
 /// A piece of a profile in the `(c, d)` frame, monotone in `d` (arcs are
 /// cut at their deepest and shallowest points).
 #[derive(Clone, Copy, Debug)]

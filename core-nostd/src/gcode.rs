@@ -445,6 +445,9 @@ pub enum CycleKind {
     Turn,
     /// `G72`: stock removal in facing (cuts along X).
     Face,
+    /// `G73`: pattern repeating (the profile cut again and again, moved
+    /// in from a relief to its allowances).
+    Pattern,
     /// `G74`: face grooving and peck drilling (pecks along Z, grooves
     /// side by side along X).
     PeckFace,
@@ -483,8 +486,11 @@ pub struct CycleWords {
     pub r: Option<Length>,
     /// `G74`/`G75`: the step along X, a radius (Haas `I`, Fanuc `P`).
     pub i: Option<Length>,
-    /// `G74`/`G75`: the step along Z (Haas `K`, Fanuc `Q`).
+    /// `G74`/`G75`: the step along Z (Haas `K`, Fanuc `Q`). `G73` (Haas):
+    /// the relief along X (`I`, a radius) and Z (`K`).
     pub k: Option<Length>,
+    /// `G73`: the count of passes (Fanuc's first block `R`, Haas' `D`).
+    pub passes: Option<u32>,
 }
 
 /// Why a block was refused.
@@ -765,6 +771,7 @@ fn scan(line: &str) -> Scan {
                     Some(700) => found.cycle = Some(CycleKind::Finish),
                     Some(710) => found.cycle = Some(CycleKind::Turn),
                     Some(720) => found.cycle = Some(CycleKind::Face),
+                    Some(730) => found.cycle = Some(CycleKind::Pattern),
                     Some(740) => found.cycle = Some(CycleKind::PeckFace),
                     Some(750) => found.cycle = Some(CycleKind::PeckGroove),
                     Some(411 | 421) => found.dynamic = true,
@@ -838,6 +845,7 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
                 r: None,
                 i: None,
                 k: None,
+                passes: None,
             }),
             _ => None,
         },
@@ -969,6 +977,19 @@ fn whole_number(letter: u8, number: &str) -> Result<u32, BlockError> {
     Ok(digits.bytes().fold(0, |n, b| n * 10 + u32::from(b - b'0')))
 }
 
+/// `G73`'s count of passes: a whole number from 1 to 999, `3` or `3.`
+/// (`3.0`) as programs write it.
+fn passes(letter: u8, number: &str) -> Result<u32, BlockError> {
+    let whole = match crate::text::split_once(number, b'.') {
+        Some((w, f)) if f.bytes().all(|b| b == b'0') => w,
+        _ => number,
+    };
+    match whole_number(letter, whole) {
+        Ok(n @ 1..=999) => Ok(n),
+        _ => Err(BlockError::Range(letter, "a count of passes, 1 to 999")),
+    }
+}
+
 /// A whole number of at most four digits (`P`, `L`, `H`).
 fn whole(letter: u8, number: &str) -> Result<u32, BlockError> {
     let digits = number.trim_start_matches('0');
@@ -1057,6 +1078,41 @@ impl Reading {
                 _ => {
                     return Err(BlockError::Form(
                         "a G74/G75 block takes X (U) Z (W) P Q R (Fanuc) or I K D (Haas), and F",
+                    ))
+                }
+            }
+        } else if let Some(c) = self.cycle.as_mut().filter(|c| c.kind == CycleKind::Pattern) {
+            // G73: U and W a relief (first block) or allowances (second), I
+            // and K Haas' relief, R (Fanuc) and D (Haas) the count of
+            // passes.
+            match letter {
+                b'U' | b'W' | b'I' | b'K' => {
+                    let v = Some(length()?);
+                    match letter {
+                        b'U' => c.u = v,
+                        b'W' => c.w = v,
+                        b'I' => c.i = v,
+                        _ => c.k = v,
+                    }
+                    return Ok(());
+                }
+                b'R' | b'D' => {
+                    c.passes = Some(passes(letter, number)?);
+                    return Ok(());
+                }
+                b'P' | b'Q' => {
+                    let n = whole_number(letter, number)?;
+                    if letter == b'P' {
+                        c.p = Some(n);
+                    } else {
+                        c.q = Some(n);
+                    }
+                    return Ok(());
+                }
+                b'F' | b'N' => {}
+                _ => {
+                    return Err(BlockError::Form(
+                        "a G73 block takes U W R (Fanuc's first), P Q U W F, or Haas' P Q I K D U W F: S and T on their own line",
                     ))
                 }
             }
@@ -1283,7 +1339,7 @@ impl Reading {
                 set(&mut self.once, (tenths, pos))
             }
             540..=590 if tenths % 10 == 0 => set(&mut b.wcs, ((tenths - 540) / 10) as u8),
-            700 | 710 | 720 | 740 | 750 if fanuc => {
+            700 | 710 | 720 | 730 | 740 | 750 if fanuc => {
                 if self.cycle.is_none() {
                     // Two cycles in one block.
                     return repeated;
@@ -1855,9 +1911,15 @@ mod tests {
             "G50 belongs to the FANUC dialect (OPT DIALECT=FANUC)"
         );
         assert_eq!(
-            fanuc("G73 U1 R3").unwrap_err().error.to_string(),
+            fanuc("G76 P010060 Q100 R.05").unwrap_err().error.to_string(),
+            "G76 canned cycles not supported"
+        );
+        // G73 is LinuxCNC's chip-breaking drill in the ISO dialect.
+        assert_eq!(
+            iso("G73 X1 Z-5 R1 Q1").unwrap_err().error.to_string(),
             "G73 canned cycles not supported"
         );
+        assert!(fanuc("G73 U1 W.5 R3").unwrap().cycle.is_some());
         assert_eq!(
             iso("M98 P1000").unwrap_err().error.to_string(),
             "M98 subprograms are expanded by the host"

@@ -2264,7 +2264,7 @@ mod tests {
 
     #[test]
     fn plot_marks_refused_lines_where_the_tool_stood() {
-        let program = "G21 G18\nG00 X20 Z2\nG01 Z-10 F100\nG73 U1 R3\nG01 X30\n";
+        let program = "G21 G18\nG00 X20 Z2\nG01 Z-10 F100\nG76 P010060 Q100 R.05\nG01 X30\n";
         let paths = trace(program, &options(Dialect::Fanuc, None), &[]);
         assert_eq!(paths.refused.len(), 1);
         let m = &paths.refused[0];
@@ -2285,7 +2285,7 @@ mod tests {
         assert!(plot.svg.contains(">line 4</text>"));
         assert!(plot
             .svg
-            .contains("4: VALUE G73 canned cycles not supported"));
+            .contains("4: VALUE G76 canned cycles not supported"));
     }
 
     #[test]

@@ -641,7 +641,7 @@ mod tests {
         let program = "%\nO1000\nG21 G18 G98\nG00 X40. Z2.\n#100 = 0\n\
                        WHILE [#100 LT 2] DO1\nG01 X[38. - #100 * 2] Z0 F200.\n\
                        #100 = #100 + 1\nEND1\nM98 P2000 L2\nM30\n\
-                       O2000\nG00 W-5.\nG73 U1. R3\nM99\n%\n";
+                       O2000\nG00 W-5.\nG76 P010060 Q100 R.05\nM99\n%\n";
         let r = run(program, FANUC);
         assert_eq!(
             r.trace,
@@ -664,13 +664,13 @@ mod tests {
 
     #[test]
     fn refusals_are_listed_and_the_rest_runs() {
-        let r = run("G00 X10\nG73 U1 R3\nMOVE X=1\nG00 X20\n", FANUC);
+        let r = run("G00 X10\nG76 P010060 Q100 R.05\nMOVE X=1\nG00 X20\n", FANUC);
         assert_eq!(
             r.refused,
             [
                 Refused {
                     line: 2,
-                    reply: "ERR VALUE G73 canned cycles not supported".into()
+                    reply: "ERR VALUE G76 canned cycles not supported".into()
                 },
                 Refused {
                     line: 3,

@@ -151,7 +151,7 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
     std::fs::write(
         &part,
         "%\nO1000\nG21 G18 G99\nT0101\nG50 S2500\nG96 S180 M03\nG00 X30. Z2.\n\
-         G01 Z-40. F.2\nG19 G03 U2. W-1. R5.\nU2. W-1.\nG73 U1. R3\nM30\n%\n",
+         G01 Z-40. F.2\nG19 G03 U2. W-1. R5.\nU2. W-1.\nG76 P010060 Q100 R.05\nM30\n%\n",
     )
     .unwrap();
     let run = |args: &[&str]| {
@@ -166,7 +166,7 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
         format!(
             "{p}: dialect: FANUC (line 3 is one of its words)\n\
              {p}:9:1: in G19 (YZ): a lathe turns arcs and compensates in G18 (ZX)\n\
-             {p}:11:1: G73 canned cycles not supported\n\
+             {p}:11:1: G76 canned cycles not supported\n\
              {p}: 2 lines the device would refuse\n"
         )
     );

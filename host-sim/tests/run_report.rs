@@ -16,7 +16,7 @@ fn run_writes_the_page_beside_its_text_report() {
     let program = scratch("part.nc");
     std::fs::write(
         &program,
-        "%\nO0100\nG21 G18 G98\nT0101\nG00 X20. Z5.\nG01 Z-30. F300.\nG73 U1. R3\nG00 X40.\nM30\n%\n",
+        "%\nO0100\nG21 G18 G98\nT0101\nG00 X20. Z5.\nG01 Z-30. F300.\nG76 P010060 Q100 R.05\nG00 X40.\nM30\n%\n",
     )
     .unwrap();
     let page = scratch("part.html");
@@ -31,7 +31,7 @@ fn run_writes_the_page_beside_its_text_report() {
     let stderr = String::from_utf8(out.stderr).unwrap();
     // A refused line: exit status 1, named on stderr, as without the page.
     assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
-    assert!(stderr.contains(":7: ERR VALUE G73"), "{stderr}");
+    assert!(stderr.contains(":7: ERR VALUE G76"), "{stderr}");
     let cycle = stdout
         .lines()
         .find_map(|l| l.strip_prefix("cycle time "))
@@ -42,7 +42,7 @@ fn run_writes_the_page_beside_its_text_report() {
         html.contains(&format!("<span id=\"cycle-time\">{cycle}</span>")),
         "{cycle}"
     );
-    assert!(html.contains("<td class=\"n\">7</td><td>ERR VALUE G73"));
+    assert!(html.contains("<td class=\"n\">7</td><td>ERR VALUE G76"));
     assert!(stdout.contains(&format!("report: {}", page.display())));
     // The same text without the page.
     let plain = Command::new(env!("CARGO_BIN_EXE_host-sim"))

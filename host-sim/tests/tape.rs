@@ -275,7 +275,7 @@ fn what_the_tape_cannot_hold_is_named_with_its_line_and_nothing_is_printed() {
             "feed codes",
         ),
         (
-            "G21 G18 G98\nG00 X20 Z0\nG73 U1 R3\nM30\n",
+            "G21 G18 G98\nG00 X20 Z0\nG76 P010060 Q100 R.05\nM30\n",
             "bck5",
             "line 3:",
             "refused",

@@ -19,7 +19,7 @@ const FANUC: Options = Options {
 /// Line 6 is a long straight feed (85 mm at F600), line 7 a 1 s dwell,
 /// line 8 a feed across at F120, line 9 refused.
 const PROGRAM: &str = "%\nO0100\nG21 G18 G98\nT0101\nG00 X20. Z5.\nG01 Z-80. F600.\n\
-                       G04 P1000\nG01 X30. F120.\nG73 U1. R3\nG00 X40. Z5.\nM30\n%\n";
+                       G04 P1000\nG01 X30. F120.\nG76 P010060 Q100 R.05\nG00 X40. Z5.\nM30\n%\n";
 
 /// The points the program's blocks end on, (Z, X radius) mm, from the
 /// power-on position.
@@ -310,7 +310,7 @@ fn the_page_states_runs_facts_and_refusals() {
     // The refused line, with its number and the device's reason.
     assert!(
         html.contains(
-            "<tr><td>part.nc</td><td class=\"n\">9</td><td>ERR VALUE G73 canned cycles not supported</td></tr>"
+            "<tr><td>part.nc</td><td class=\"n\">9</td><td>ERR VALUE G76 canned cycles not supported</td></tr>"
         ),
         "{html}"
     );

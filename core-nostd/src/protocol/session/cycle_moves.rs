@@ -6,7 +6,7 @@
 use super::*;
 use crate::comp::{Move, MoveKind, Origin};
 use crate::crc32::Crc32;
-use crate::cycle::{Roughing, Step};
+use crate::cycle::{Pattern, Roughing, Step};
 use crate::interp::path_feed;
 use crate::length::Length;
 
@@ -151,6 +151,15 @@ impl CycleSteps for Roughing<'_> {
             }
         });
         out
+    }
+}
+
+impl CycleSteps for Pattern<'_> {
+    fn each(
+        &self,
+        f: &mut dyn FnMut(Step) -> Result<(), Refusal<'static>>,
+    ) -> Result<(), Refusal<'static>> {
+        self.steps(&mut |step| f(step))
     }
 }
 

@@ -32,6 +32,9 @@ pub struct Cycles {
     /// retract (`R`), modal.
     pub(super) depth: Option<Length>,
     pub(super) retract: Length,
+    /// Fanuc's first `G73` block: the relief, X (on the radius) and Z, and
+    /// the count of passes, modal.
+    pub(super) pattern: Option<([i64; 2], u32)>,
     pub(super) mode: Mode,
     /// The profile's blocks as text, end to end, and where each ends.
     pub(super) text: heapless::Vec<u8, ARENA>,
@@ -95,6 +98,9 @@ pub(super) struct Pending {
     pub(super) depth: i64,
     pub(super) retract: i64,
     pub(super) feed: Option<Length>,
+    /// `G73`: the relief and the count of passes (0 for the others).
+    pub(super) relief: [i64; 2],
+    pub(super) passes: u32,
 }
 
 impl Default for Cycles {
@@ -109,6 +115,7 @@ impl Cycles {
         Cycles {
             depth: None,
             retract: HALF_MM,
+            pattern: None,
             mode: Mode::Idle,
             text: heapless::Vec::new(),
             ends: heapless::Vec::new(),

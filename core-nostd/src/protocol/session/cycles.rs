@@ -11,11 +11,11 @@
 //! The profile stays held for `G70 P Q`, which runs its blocks as written
 //! (feeds, nose compensation) and returns to its start point.
 
-use super::cycle_moves::add;
+use super::cycle_moves::{add, CycleSteps};
 use super::*;
 use crate::arc::{centre_from_radius, ArcDir};
 use crate::crc32::Crc32;
-use crate::cycle::{Along, CycleError, Roughing, Segment, Step, PROFILE_BLOCKS};
+use crate::cycle::{Along, CycleError, Pattern, Roughing, Segment, Step, PROFILE_BLOCKS};
 use crate::gcode::{parse, CycleKind, CycleWords, Motion, SingleCycle};
 use crate::length::Length;
 use crate::protocol::io::ErrorCode;
@@ -179,6 +179,9 @@ impl Session {
         if c.kind == CycleKind::Finish {
             return self.finish_cycle(b, c, crc, io).map(|()| Block::Run);
         }
+        if c.kind == CycleKind::Pattern {
+            return self.pattern_block(b, c, radius(c.u.unwrap_or(Length::ZERO)));
+        }
         let (p, q) = match (c.p, c.q) {
             (None, None) => {
                 // Fanuc's first block: the depth and the retract.
@@ -242,14 +245,87 @@ impl Session {
             depth: depth.as_angstrom(),
             retract,
             feed: b.f,
+            relief: [0; 2],
+            passes: 0,
         };
+        self.hold_profile(pending);
+        Ok(Block::Run)
+    }
+
+    /// `G73`: Fanuc's first block sets the relief (`U`, `W`, on the radius
+    /// and along Z) and the count of passes (`R`); the second (`P Q U W
+    /// F`), or Haas' one block (`P Q I K D U W F`), reads the profile.
+    /// `u_allow` is the second block's `U` on the radius.
+    fn pattern_block<'a>(
+        &mut self,
+        b: &crate::gcode::Block,
+        c: CycleWords,
+        u_allow: i64,
+    ) -> Result<Block, Refusal<'a>> {
+        let (p, q) = match (c.p, c.q) {
+            (None, None) => {
+                if c.i.is_some() || c.k.is_some() || b.f.is_some() {
+                    return Err(Refusal::Missing(
+                        "the first of the two G73 blocks takes the relief U W and the count of passes R",
+                    ));
+                }
+                let passes = c.passes.ok_or(Refusal::Missing(
+                    "G73 U W R: the relief and the count of passes, or P and Q",
+                ))?;
+                let relief = [
+                    c.u.map_or(0, Length::as_angstrom),
+                    c.w.map_or(0, Length::as_angstrom),
+                ];
+                self.cycles.pattern = Some((relief, passes));
+                return Ok(Block::Run);
+            }
+            (Some(p), Some(q)) => (p, q),
+            _ => return Err(Refusal::Missing("G73 needs P and Q: the profile's blocks")),
+        };
+        if let Some(f) = b.f {
+            if f.as_angstrom() <= 0 {
+                return Err(Refusal::Value("F", "the roughing feed must be above 0"));
+            }
+        }
+        let (relief, passes) = if c.i.is_some() || c.k.is_some() || c.passes.is_some() {
+            let passes = c.passes.ok_or(Refusal::Missing(
+                "G73 with I and K needs D: the count of passes",
+            ))?;
+            (
+                [
+                    c.i.map_or(0, Length::as_angstrom),
+                    c.k.map_or(0, Length::as_angstrom),
+                ],
+                passes,
+            )
+        } else {
+            self.cycles.pattern.ok_or(Refusal::Missing(
+                "no relief: I K D, or G73 U W R in a block before",
+            ))?
+        };
+        let pending = Pending {
+            kind: CycleKind::Pattern,
+            p,
+            q,
+            allow: [u_allow, c.w.map_or(0, Length::as_angstrom)],
+            depth: 0,
+            retract: 0,
+            feed: b.f,
+            relief,
+            passes,
+        };
+        self.hold_profile(pending);
+        Ok(Block::Run)
+    }
+
+    /// Starts holding the profile of `pending` from where the tool stands.
+    fn hold_profile(&mut self, pending: Pending) {
         let cy = &mut self.cycles;
         cy.clear();
         cy.held = None;
         cy.from = [self.prog[0].as_angstrom(), self.prog[1].as_angstrom()];
         cy.motion = self.modal.motion;
         cy.mode = Mode::Holding(pending);
-        Ok(Block::Run)
     }
 
     /// A block that streams in while a profile is held or refused.
@@ -467,28 +543,41 @@ impl Session {
                 arc: g.arc.map(|(c, d)| (shift(c), d)),
             });
         }
-        let along = match pending.kind {
-            CycleKind::Face => Along::X,
-            _ => Along::Z,
-        };
-        let s = cy.from;
-        let roughing = Roughing::new(
-            along,
-            s,
-            shift(cy.first),
-            &moved,
-            pending.depth,
-            pending.retract,
-        )
-        .map_err(|e| Refusal::Geometry(e.as_str()))?;
         // The feed: the cycle's F, else the one in force.
         let mut modal = self.modal;
         if pending.feed.is_some() {
             modal.feed = pending.feed;
         }
         let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
-        self.check_steps(&roughing, s, &modal, &spindle, io)?;
-        self.run_steps(&roughing, s, &modal, &spindle, crc, io)?;
+        let s = cy.from;
+        let (pattern, roughing);
+        let steps: &dyn CycleSteps = if pending.kind == CycleKind::Pattern {
+            pattern = Pattern {
+                start: s,
+                first: shift(cy.first),
+                segments: &moved,
+                relief: pending.relief,
+                passes: pending.passes,
+            };
+            &pattern
+        } else {
+            let along = match pending.kind {
+                CycleKind::Face => Along::X,
+                _ => Along::Z,
+            };
+            roughing = Roughing::new(
+                along,
+                s,
+                shift(cy.first),
+                &moved,
+                pending.depth,
+                pending.retract,
+            )
+            .map_err(|e| Refusal::Geometry(e.as_str()))?;
+            &roughing
+        };
+        self.check_steps(steps, s, &modal, &spindle, io)?;
+        self.run_steps(steps, s, &modal, &spindle, crc, io)?;
         self.prog = [
             Length::from_angstrom(s[0]).unwrap_or(self.prog[0]),
             Length::from_angstrom(s[1]).unwrap_or(self.prog[1]),
@@ -519,7 +608,7 @@ impl Session {
         );
         if self.cycles.held != Some((p, q)) {
             return Err(Refusal::Missing(
-                "G70 finishes the profile a G71 or G72 held last: no such P and Q",
+                "G70 finishes the profile a G71, G72 or G73 held last: no such P and Q",
             ));
         }
         if let Some(f) = b.f {

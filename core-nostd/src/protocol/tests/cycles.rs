@@ -344,3 +344,119 @@ fn g74_and_g75_refusals_change_nothing() {
         assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
     }
 }
+
+/// `G73` cuts the profile whole, again and again: each pass at the rapid
+/// rate to the profile's first point moved by the allowances and a share
+/// of the relief (all of it on the first pass, none on the last), along
+/// it at the cycle's feed, at the rapid rate back to the start point.
+/// Fanuc's two blocks and Haas' one move as the passes written out by
+/// hand, and `G70` then finishes on the profile held.
+#[test]
+fn g73_repeats_the_profile_as_its_passes_written_out() {
+    let run = |program: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        for line in program {
+            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+        }
+        (ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"))
+    };
+    let profile = [
+        "N10 G00 X20. Z0",
+        "N20 G01 Z-20. F100.",
+        "N30 G02 X40. Z-30. I10. K0",
+        "N40 G01 X48.",
+        "G70 P10 Q40",
+    ];
+    let mut fanuc = vec![
+        "G21 G18 G98",
+        "G00 X50. Z2.",
+        "G73 U3. W1. R3",
+        "G73 P10 Q40 U.4 W.2 F200.",
+    ];
+    fanuc.extend(profile);
+    let mut haas = vec![
+        "G21 G18 G98",
+        "G00 X50. Z2.",
+        "G73 P10 Q40 I3. K1. D3. U.4 W.2 F200.",
+    ];
+    haas.extend(profile);
+    // Passes 1 to 3 lie 3, 1.5 and 0 mm out in X (on the radius) and 1,
+    // 0.5 and 0 mm in Z, beyond the allowances (0.2 mm a side, 0.2 in Z).
+    let mut by_hand = vec!["G21 G18 G98", "G00 X50. Z2."];
+    let passes = [
+        ["G00 X26.4 Z1.2", "G01 Z-18.8 F200.", "G02 X46.4 Z-28.8 I10. K0", "G01 X54.4", "G00 X50. Z2."],
+        ["G00 X23.4 Z.7", "G01 Z-19.3", "G02 X43.4 Z-29.3 I10. K0", "G01 X51.4", "G00 X50. Z2."],
+        ["G00 X20.4 Z.2", "G01 Z-19.8", "G02 X40.4 Z-29.8 I10. K0", "G01 X48.4", "G00 X50. Z2."],
+    ];
+    for pass in &passes {
+        by_hand.extend(pass);
+    }
+    by_hand.extend([
+        "G00 X20. Z0",
+        "G01 Z-20. F100.",
+        "G02 X40. Z-30. I10. K0",
+        "G01 X48.",
+        "G00 X50.",
+        "Z2.",
+    ]);
+    let by_hand = run(&by_hand);
+    assert_eq!(run(&fanuc), by_hand);
+    assert_eq!(run(&haas), by_hand);
+}
+
+/// What a `G73` block cannot take is refused naming it, and nothing
+/// moves or is held.
+#[test]
+fn g73_refusals_change_nothing() {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    for line in ["G21 G18 G98", "G00 X50. Z2."] {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
+    }
+    ask1(&mut dev, "SYNC");
+    let before = ask1(&mut dev, "POS");
+    for (line, want) in [
+        (
+            "G73 P10 Q40 U.4 W.2 F200.",
+            "ERR SYNTAX no relief: I K D, or G73 U W R in a block before",
+        ),
+        (
+            "G73 U3. W1.",
+            "ERR SYNTAX G73 U W R: the relief and the count of passes, or P and Q",
+        ),
+        ("G73 U3. W1. R0", "ERR VALUE R a count of passes, 1 to 999"),
+        ("G73 U3. W1. R2.5", "ERR VALUE R a count of passes, 1 to 999"),
+        (
+            "G73 U3. R3 F100.",
+            "ERR SYNTAX the first of the two G73 blocks takes the relief U W and the count of passes R",
+        ),
+        (
+            "G73 P10 Q40 I3. K1. F200.",
+            "ERR SYNTAX G73 with I and K needs D: the count of passes",
+        ),
+        ("G73 P10 I3. K1. D3", "ERR SYNTAX G73 needs P and Q: the profile's blocks"),
+        (
+            "G73 P10 Q40 I3. K1. D3 S500",
+            "ERR SYNTAX a G73 block takes U W R (Fanuc's first), P Q U W F, or Haas' P Q I K D U W F: S and T on their own line",
+        ),
+        (
+            "G73 P10 Q40 I3. K1. D3 M08",
+            "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line",
+        ),
+        (
+            "G70 P10 Q40",
+            "ERR SYNTAX G70 finishes the profile a G71, G72 or G73 held last: no such P and Q",
+        ),
+    ] {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
+        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
+    }
+    // Nothing was held: a numbered block runs as itself.
+    let r = ask(&mut dev, b"N10 G00 X48.\n");
+    assert!(r.last().unwrap().starts_with("OK NX=-200"), "{r:?}");
+    assert!(ask1(&mut dev, "AUX").contains("COOLANT=OFF"));
+}
