@@ -1911,7 +1911,10 @@ mod tests {
             "G50 belongs to the FANUC dialect (OPT DIALECT=FANUC)"
         );
         assert_eq!(
-            fanuc("G76 P010060 Q100 R.05").unwrap_err().error.to_string(),
+            fanuc("G76 P010060 Q100 R.05")
+                .unwrap_err()
+                .error
+                .to_string(),
             "G76 canned cycles not supported"
         );
         // G73 is LinuxCNC's chip-breaking drill in the ISO dialect.

@@ -386,9 +386,27 @@ fn g73_repeats_the_profile_as_its_passes_written_out() {
     // 0.5 and 0 mm in Z, beyond the allowances (0.2 mm a side, 0.2 in Z).
     let mut by_hand = vec!["G21 G18 G98", "G00 X50. Z2."];
     let passes = [
-        ["G00 X26.4 Z1.2", "G01 Z-18.8 F200.", "G02 X46.4 Z-28.8 I10. K0", "G01 X54.4", "G00 X50. Z2."],
-        ["G00 X23.4 Z.7", "G01 Z-19.3", "G02 X43.4 Z-29.3 I10. K0", "G01 X51.4", "G00 X50. Z2."],
-        ["G00 X20.4 Z.2", "G01 Z-19.8", "G02 X40.4 Z-29.8 I10. K0", "G01 X48.4", "G00 X50. Z2."],
+        [
+            "G00 X26.4 Z1.2",
+            "G01 Z-18.8 F200.",
+            "G02 X46.4 Z-28.8 I10. K0",
+            "G01 X54.4",
+            "G00 X50. Z2.",
+        ],
+        [
+            "G00 X23.4 Z.7",
+            "G01 Z-19.3",
+            "G02 X43.4 Z-29.3 I10. K0",
+            "G01 X51.4",
+            "G00 X50. Z2.",
+        ],
+        [
+            "G00 X20.4 Z.2",
+            "G01 Z-19.8",
+            "G02 X40.4 Z-29.8 I10. K0",
+            "G01 X48.4",
+            "G00 X50. Z2.",
+        ],
     ];
     for pass in &passes {
         by_hand.extend(pass);
