@@ -133,7 +133,31 @@ impl Session {
     /// A cycle block: `G71`/`G72` reads its profile from the blocks that
     /// follow (Fanuc's first block only sets the depth and the retract);
     /// `G70` finishes along the profile held.
+    ///
+    /// Its `F`, once the block is taken, is the feed in force from then
+    /// on, as any block's `F` is.
     pub(super) fn cycle_block<'a, I: Io>(
+        &mut self,
+        b: &crate::gcode::Block,
+        c: CycleWords,
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<Block, Refusal<'a>> {
+        if let Some(f) = b.f {
+            // Each form names its own feed (the roughing's, the
+            // finishing's); a first block's is checked here.
+            if f.as_angstrom() <= 0 && c.p.is_none() && c.q.is_none() && !c.kind.pecks() {
+                return Err(Refusal::Value("F", "the cycle's feed must be above 0"));
+            }
+        }
+        let taken = self.cycle_words(b, c, crc, io)?;
+        if let Some(f) = b.f {
+            self.modal.feed = Some(f);
+        }
+        Ok(taken)
+    }
+
+    fn cycle_words<'a, I: Io>(
         &mut self,
         b: &crate::gcode::Block,
         c: CycleWords,
@@ -264,7 +288,7 @@ impl Session {
     ) -> Result<Block, Refusal<'a>> {
         let (p, q) = match (c.p, c.q) {
             (None, None) => {
-                if c.i.is_some() || c.k.is_some() || b.f.is_some() {
+                if c.i.is_some() || c.k.is_some() {
                     return Err(Refusal::Missing(
                         "the first of the two G73 blocks takes the relief U W and the count of passes R",
                     ));

@@ -195,9 +195,8 @@ fn a_refused_profile_refuses_its_cycle_and_nothing_moves() {
     assert_eq!(data(&r[2..7]), Vec::<String>::new());
 }
 
-/// G70 knows before its first move that the profile's feed moves have no
-/// feed; a first block's words that belong to the other cycle are refused;
-/// RESET drops a profile being read.
+/// A first block's words that belong to the other cycle are refused, and
+/// what else a cycle block cannot take; RESET drops a profile being read.
 #[test]
 fn cycle_refusals_come_before_motion() {
     let mut dev = Device::new();
@@ -216,12 +215,6 @@ fn cycle_refusals_come_before_motion() {
     for reply in &r {
         assert!(reply.last().unwrap().starts_with("OK"), "{reply:?}");
     }
-    ask1(&mut dev, "SYNC");
-    assert_eq!(
-        ask1(&mut dev, "G70 P10 Q30"),
-        "ERR VALUE F not programmed: the profile's feed moves need G70 F or a feed in force"
-    );
-    assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "));
     assert!(ask(&mut dev, b"G70 P10 Q30 F100.\n")
         .last()
         .unwrap()
@@ -448,7 +441,7 @@ fn g73_refusals_change_nothing() {
         ("G73 U3. W1. R0", "ERR VALUE R a count of passes, 1 to 999"),
         ("G73 U3. W1. R2.5", "ERR VALUE R a count of passes, 1 to 999"),
         (
-            "G73 U3. R3 F100.",
+            "G73 U3. R3 K1.",
             "ERR SYNTAX the first of the two G73 blocks takes the relief U W and the count of passes R",
         ),
         (
@@ -477,4 +470,57 @@ fn g73_refusals_change_nothing() {
     let r = ask(&mut dev, b"N10 G00 X48.\n");
     assert!(r.last().unwrap().starts_with("OK NX=-200"), "{r:?}");
     assert!(ask1(&mut dev, "AUX").contains("COOLANT=OFF"));
+}
+
+/// A cycle block's `F` is the feed in force once the block is taken, as
+/// any block's is (a Haas program cuts its chamfer after a `G71` with the
+/// roughing's feed); a refused block leaves the feed as it was.
+#[test]
+fn a_cycle_blocks_feed_stays_in_force() {
+    let feed_of_next_cut = |program: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        for line in program {
+            ask(&mut dev, std::format!("{line}\n").as_bytes());
+        }
+        ask1(&mut dev, "SYNC");
+        // 10 mm at the feed in force: its time tells the feed.
+        let r = ask(&mut dev, b"G01 W-10.\n");
+        let last = r.last().unwrap().clone();
+        if !last.starts_with("OK") {
+            return last;
+        }
+        ask1(&mut dev, "SYNC")
+    };
+    let by_hand = |f: &str| feed_of_next_cut(&["G21 G18 G98", "G00 X40. Z2.", f]);
+    let shaft = [
+        "G21 G18 G98",
+        "G00 X40. Z2.",
+        "G71 U2. R.5",
+        "G71 P10 Q30 U.4 W.2 F300.",
+        "N10 G00 X20.",
+        "N20 G01 Z-30. F100.",
+        "N30 X40.",
+    ];
+    let after = feed_of_next_cut(&shaft);
+    assert_ne!(after, by_hand("F100."));
+    assert_eq!(after, by_hand("F300."));
+    // A first block's F, a grooving cycle's.
+    assert_eq!(
+        feed_of_next_cut(&["G21 G18 G98", "G00 X40. Z2.", "G71 U2. R.5 F250."]),
+        by_hand("F250.")
+    );
+    assert_eq!(
+        feed_of_next_cut(&["G21 G18 G98", "G00 X40. Z2.", "G75 X36. Z2. P1000 F80."]),
+        by_hand("F80.")
+    );
+    // Refused: the feed stays unset, and the next cut is refused for it.
+    assert_eq!(
+        feed_of_next_cut(&["G21 G18 G98", "G00 X40. Z2.", "G71 U2. R.5 F0"]),
+        "ERR VALUE F not programmed: a feed move needs F (mm/min)"
+    );
+    assert_eq!(
+        feed_of_next_cut(&["G21 G18 G98", "G00 X40. Z2.", "G71 U2. R.5 F250. M08"]),
+        "ERR VALUE F not programmed: a feed move needs F (mm/min)"
+    );
 }
