@@ -9,6 +9,7 @@
 #![no_main]
 
 use core::fmt::Write;
+use core_nostd::cycle::{Along, Roughing, Segment, PROFILE_BLOCKS};
 use core_nostd::impulse::Impulses;
 use core_nostd::interleave::{ImpulsePoint, LinearBlock};
 use core_nostd::protocol::{Device, Io};
@@ -429,6 +430,161 @@ fn calculators(tim: &StepTimer) {
     }
 }
 
+/// The roughing's passes of the staircase: the levels of 1 mm from the
+/// start's radius (20 mm) short of the profile's deepest point (7 mm).
+fn r_levels(segments: &[Segment]) -> u32 {
+    let deepest = segments.iter().map(|g| g.to[0]).min().unwrap_or(0);
+    ((200_000_000 - deepest - 1) / 10_000_000) as u32
+}
+
+/// Replies counted by kind: bytes, and the `DATA` lines (a cycle's
+/// moves).
+struct Moves {
+    bytes: u32,
+    moves: u32,
+}
+impl Io for Moves {
+    fn send(&mut self, line: &[u8]) {
+        self.bytes = self.bytes.wrapping_add(line.len() as u32);
+        if line.starts_with(b"DATA G") {
+            self.moves += 1;
+        }
+    }
+}
+
+/// The turning cycles (`G71` roughing, `G73` pattern repeating): each
+/// profile block as it is held, and the block `Q` whose reply is the whole
+/// roughing, every move planned and checked, then run (queued, its `SEQ`
+/// over every event, the queue drained as it fills). The longest profile
+/// is 128 blocks: a staircase of 63 steps.
+fn cycles(tim: &StepTimer) {
+    let mut quiet = Moves { bytes: 0, moves: 0 };
+    let mut dev = Device::new();
+    for line in [
+        &b"OPT DIALECT=FANUC\r\n"[..],
+        b"G21 G18 G98\r\n",
+        b"G00 X40. Z2.\r\n",
+        b"SYNC\r\n",
+    ] {
+        dev.receive_bytes(line, &mut quiet);
+    }
+    // Fanuc's two blocks, the stepped shaft of docs/cycles.md section 9.
+    let rough = |dev: &mut Device, head: &[&[u8]], profile: &mut dyn Iterator<Item = Line>| {
+        let mut quiet = Moves { bytes: 0, moves: 0 };
+        for line in head {
+            dev.receive_bytes(line, &mut quiet);
+        }
+        let (mut held, mut blocks, mut last) = (0u32, 0u32, 0u32);
+        let mut lines = profile.peekable();
+        while let Some(line) = lines.next() {
+            let bytes = line.0.as_bytes();
+            if lines.peek().is_none() {
+                quiet.moves = 0;
+                last = measure(tim, || dev.receive_bytes(bytes, &mut quiet));
+            } else {
+                held += measure(tim, || dev.receive_bytes(bytes, &mut quiet));
+                blocks += 1;
+            }
+        }
+        let moves = quiet.moves;
+        dev.receive_bytes(b"SYNC\r\n", &mut quiet);
+        (held / blocks.max(1), blocks + 1, last, moves)
+    };
+    let text = |t: &str| {
+        let mut l = Line(heapless::String::new());
+        let _ = l.0.push_str(t);
+        let _ = l.0.push_str("\r\n");
+        l
+    };
+    let (per_block, blocks, q, moves) = rough(
+        &mut dev,
+        &[b"G71 U2. R.5\r\n", b"G71 P10 Q30 U.4 W.2 F300.\r\n"],
+        &mut ["N10 G00 X20.", "N20 G01 Z-30. F100.", "N30 X40."]
+            .into_iter()
+            .map(text),
+    );
+    Line::print(format_args!(
+        "cycle G71 (stepped shaft, 4 passes and the pass along the profile): {per_block} instructions per held block ({blocks} blocks), block Q {q} instructions for {moves} moves, {} per pass",
+        q / 5
+    ));
+    // The longest profile: 128 blocks, a staircase of 63 steps of 0.2 mm
+    // on the radius and 1 mm along Z.
+    let mut n = 0u32;
+    let mut stairs = core::iter::from_fn(|| {
+        n += 1;
+        let mut l = Line(heapless::String::new());
+        let k = n / 2;
+        let _ = match n {
+            1 => write!(l.0, "N10 G00 X14.\r\n"),
+            128 => write!(l.0, "N20 G01 X40.\r\n"),
+            _ if n.is_multiple_of(2) => write!(l.0, "G01 Z-{k}.\r\n"),
+            _ => write!(l.0, "X{}.{}\r\n", 14 + (4 * k) / 10, (4 * k) % 10),
+        };
+        (n <= 128).then_some(l)
+    });
+    let (per_block, blocks, q, moves) = rough(
+        &mut dev,
+        &[b"G00 X40. Z2.\r\n", b"G71 P10 Q20 D1. U.4 W.2 F300.\r\n"],
+        &mut stairs,
+    );
+    Line::print(format_args!(
+        "cycle G71 (the longest profile, a staircase): {per_block} instructions per held block ({blocks} blocks), block Q {q} instructions for {moves} moves (their step events run through the device's own stepper)",
+    ));
+    // The passes' geometry alone: the same staircase (Å, X on the radius),
+    // every move of the roughing computed once, as the check and the run
+    // each do.
+    let mut segments = heapless::Vec::<Segment, PROFILE_BLOCKS>::new();
+    let mut at = [70_000_000i64, 0];
+    for k in 1..=63i64 {
+        at[1] = -k * 10_000_000;
+        let _ = segments.push(Segment { to: at, arc: None });
+        at[0] = 70_000_000 + k * 2_000_000;
+        let _ = segments.push(Segment { to: at, arc: None });
+    }
+    at[0] = 200_000_000;
+    let _ = segments.push(Segment { to: at, arc: None });
+    let mut steps = 0u32;
+    let t = measure(tim, || {
+        if let Ok(r) = Roughing::new(
+            Along::Z,
+            [200_000_000, 20_000_000],
+            [72_000_000, 2_000_000],
+            &segments,
+            10_000_000,
+            5_000_000,
+        ) {
+            r.steps(&mut |_| steps += 1);
+        }
+    });
+    let passes = r_levels(&segments);
+    Line::print(format_args!(
+        "cycle G71 geometry (the staircase, {} elements): {t} instructions for {steps} moves in {passes} passes, {} per pass, {} per move",
+        segments.len(),
+        t / passes.max(1),
+        t / steps.max(1)
+    ));
+    let (per_block, blocks, q, moves) = rough(
+        &mut dev,
+        &[
+            b"G00 X50. Z4.\r\n",
+            b"G73 U3. W1. R3\r\n",
+            b"G73 P10 Q40 U.4 W.2 F200.\r\n",
+        ],
+        &mut [
+            "N10 G00 X20. Z0",
+            "N20 G01 Z-20. F100.",
+            "N30 G02 X40. Z-30. I10. K0",
+            "N40 G01 X48.",
+        ]
+        .into_iter()
+        .map(text),
+    );
+    Line::print(format_args!(
+        "cycle G73 (3 passes of a line, an arc and a line): {per_block} instructions per held block ({blocks} blocks), block Q {q} instructions for {moves} moves, {} per pass",
+        q / 3
+    ));
+}
+
 #[entry]
 fn main() -> ! {
     let mut b = firmware::boot();
@@ -506,6 +662,7 @@ fn main() -> ! {
     }
     compensation(tim);
     calculators(tim);
+    cycles(tim);
     finish()
 }
 
