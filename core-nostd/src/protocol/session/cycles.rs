@@ -260,7 +260,27 @@ impl Session {
             }
         }
         let allow = [c.u.map_or(0, radius), c.w.map_or(0, |w| w.as_angstrom())];
-        let retract = c.r.unwrap_or(self.cycles.retract).as_angstrom().max(0);
+        let retract = match (c.d, c.r) {
+            // Haas' one block: R1 selects type II roughing (the pockets),
+            // which every roughing here is; the retract is the first
+            // block's (or 0.5 mm).
+            (Some(_), Some(r)) => {
+                let one = match self.modal.units {
+                    crate::gcode::Units::Mm => 10_000_000,
+                    crate::gcode::Units::Inch => 254_000_000,
+                };
+                if r.as_angstrom() != one {
+                    return Err(Refusal::Value(
+                        "R",
+                        "in Haas' one block R1 selects type II roughing (pockets), which every roughing is: R1 or none",
+                    ));
+                }
+                self.cycles.retract
+            }
+            (_, r) => r.unwrap_or(self.cycles.retract),
+        }
+        .as_angstrom()
+        .max(0);
         let pending = Pending {
             kind: c.kind,
             p,

@@ -524,3 +524,52 @@ fn a_cycle_blocks_feed_stays_in_force() {
         "ERR VALUE F not programmed: a feed move needs F (mm/min)"
     );
 }
+
+/// Haas' one-block roughing reads `R1` as type II (the pockets), which
+/// every roughing here is: the same moves as without it. Any other `R`
+/// there is refused; a Fanuc second block's `R` is its retract.
+#[test]
+fn haas_r1_selects_the_pockets_every_roughing_follows() {
+    let run = |cycle: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        let mut last = String::new();
+        let program = ["G21 G18 G98", "G00 X40. Z2."].iter().chain(cycle).chain(&[
+            "N10 G00 X20.",
+            "N20 G01 Z-10. F100.",
+            "N25 X30. Z-15.",
+            "N26 X24. Z-20.",
+            "N30 X40.",
+        ]);
+        for line in program {
+            last = ask(&mut dev, std::format!("{line}\n").as_bytes())
+                .last()
+                .unwrap()
+                .clone();
+        }
+        (last, ask1(&mut dev, "SYNC"))
+    };
+    let plain = run(&["G71 P10 Q30 U.4 W.2 D2. F300."]);
+    assert!(plain.0.starts_with("OK NX=0 NZ=0"), "{plain:?}");
+    assert_eq!(run(&["G71 P10 Q30 U.4 W.2 D2. F300. R1"]), plain);
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    ask1(&mut dev, "G21 G18 G98");
+    for line in ["G71 P10 Q30 D2. R2", "G71 P10 Q30 U.4 D2. F300. R.5"] {
+        assert_eq!(
+            ask1(&mut dev, line),
+            "ERR VALUE R in Haas' one block R1 selects type II roughing (pockets), which every roughing is: R1 or none"
+        );
+    }
+    // Nothing is held after it: a numbered block runs as itself.
+    assert!(ask(&mut dev, b"N10 G00 X20.\n")
+        .last()
+        .unwrap()
+        .starts_with("OK NX="));
+    // Fanuc's second block: R is the retract (1 mm, not 0.5).
+    let fanuc = |r: &str| run(&["G71 U2. R.5", &std::format!("G71 P10 Q30 U.4 W.2 F300.{r}")]);
+    assert_eq!(fanuc(""), plain);
+    assert_eq!(fanuc(" R.5"), plain);
+    assert!(fanuc(" R1").0.starts_with("OK NX=0 NZ=0"));
+    assert_ne!(fanuc(" R1"), plain);
+}
