@@ -267,3 +267,34 @@ fn gcode_words_written_together() {
     assert!(ask1(&mut dev, "G42 G03 X20 R5").starts_with("ERR GEOMETRY"));
     assert_eq!(state(&dev), before);
 }
+
+/// Found by the `protocol` target: a turning cycle's block refused after a
+/// move (a `G73` with no relief known, a `G71` with no depth) cleared the
+/// session's record of what the last request moved, the one thing a
+/// refusal may not change. And a refused block of a profile drops the
+/// cycle whole (`docs/cycles.md` §2), which the target now allows.
+#[test]
+fn a_refused_cycle_block_changes_nothing() {
+    let mut dev = Device::new();
+    for line in ["OPT DIALECT=FANUC", "G21 G18 G98", "G00 X50. Z2."] {
+        assert!(ask(&mut dev, format!("{line}\n").as_bytes())
+            .lines
+            .last()
+            .unwrap()
+            .starts_with("OK"));
+    }
+    let moved = dev.session().last_moves().clone();
+    assert_eq!(moved.len(), 1);
+    let before = state(&dev);
+    for line in [
+        "G73 P10 Q40 U.4 W.2 F200.",
+        "G71 P10 Q40 U.4 W.2 F200.",
+        "G73 U3. W1. R0",
+        "G75 X40. Z-5. F100.",
+        "G70 P1 Q2",
+    ] {
+        assert!(ask1(&mut dev, line).starts_with("ERR"), "{line}");
+        assert_eq!(dev.session().last_moves(), &moved, "{line}");
+        assert_eq!(state(&dev), before, "{line}");
+    }
+}

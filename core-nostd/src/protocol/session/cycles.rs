@@ -150,7 +150,11 @@ impl Session {
                 return Err(Refusal::Value("F", "the cycle's feed must be above 0"));
             }
         }
-        let taken = self.cycle_words(b, c, crc, io)?;
+        // A refused block leaves what the last request moved as it was.
+        let kept = core::mem::replace(&mut self.last_moves, crate::comp::Moves::new());
+        let taken = self.cycle_words(b, c, crc, io).inspect_err(|_| {
+            self.last_moves = kept;
+        })?;
         if let Some(f) = b.f {
             self.modal.feed = Some(f);
         }

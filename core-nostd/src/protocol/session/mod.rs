@@ -208,6 +208,13 @@ impl Session {
         self.pos
     }
 
+    /// Whether G-code lines streaming in are a turning cycle's profile
+    /// (held, or refused with it): a refused one drops the cycle whole
+    /// (`docs/cycles.md` §2).
+    pub fn reading_profile(&self) -> bool {
+        self.cycles.holding()
+    }
+
     /// The theoretical-tool-tip blocks the last G-code request sent, each
     /// with the programmed block it belongs to (what its `DATA` lines show).
     pub const fn last_moves(&self) -> &Moves {
