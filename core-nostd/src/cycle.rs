@@ -351,13 +351,28 @@ impl<'a> Roughing<'a> {
     pub fn steps(&self, f: &mut impl FnMut(Step)) {
         let fr = self.frame;
         let at = |c: i64, d: i64| fr.to_xz([c, d]);
+        // Moves of no length are left out.
+        let mut last = fr.start;
+        let f = &mut |step: Step| {
+            let to = match step {
+                Step::Rapid(p) | Step::Feed(p) | Step::Arc(p, _, _) => p,
+            };
+            if to != last {
+                last = to;
+                f(step);
+            }
+        };
         let mut above = 0i64;
         for d in self.levels() {
             let mut first = true;
             let mut here = [0i64, above];
             let mut cuts = 0;
+            // Whether the last cut was a pocket: stock may stand between it
+            // and the start side at the depth it retracted to.
+            let mut pocket = false;
             self.intervals(d, &mut |c1, c2| {
                 cuts += 1;
+                pocket = !(first && c1 == 0);
                 if first && c1 == 0 {
                     // In from the start side at the depth of the pass.
                     if here != [0, d] {
@@ -386,7 +401,7 @@ impl<'a> Roughing<'a> {
             });
             // Back to the start side for the next pass.
             if cuts > 0 {
-                if cuts > 1 && here[1] != 0 {
+                if pocket && here[1] != 0 {
                     f(Step::Rapid(at(here[0], 0)));
                     here[1] = 0;
                 }
