@@ -15,6 +15,9 @@
 //!   (`docs/compensation.md` §1–§6);
 //! - [`cone`]: f64 taper corrections and the Nomura table
 //!   (`docs/compensation.md` §7);
+//! - [`cycle`]: f64 roughing of the turning cycles `G71`, `G72` and `G73`,
+//!   move for move, with the geometric checks of its passes
+//!   (`docs/cycles.md` §1–§3);
 //! - [`trihedral`]: the trihedral corner built from three edge vectors
 //!   (`docs/calculators.md` §4);
 //! - [`exact`]: exact rational model of `MOVE`, `CFG`, `ZERO` and `POS`, `Q`,
@@ -29,6 +32,7 @@
 pub mod arc;
 pub mod comp;
 pub mod cone;
+pub mod cycle;
 mod dd;
 pub mod exact;
 pub mod impulse;
