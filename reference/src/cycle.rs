@@ -42,8 +42,10 @@
 //! 1. Passes at `d = k·Δd`, `k = 1, 2, …` while `d` is short of the deepest
 //!    point of the profile.
 //! 2. At each depth, the stock intervals: the open intervals of `c` in
-//!    `[0, c_far]` where the profile lies deeper than `d`, between its
-//!    crossings of the line at depth `d`, from the start side outwards.
+//!    `[0, c_far]` where the profile lies deeper than `d` (or exactly at `d`,
+//!    a flat the cut runs along), between its crossings of the line at depth
+//!    `d`, from the start side outwards; in front of `A` the profile is read
+//!    as starting on the start side at `A`'s depth.
 //! 3. An interval beginning at `c = 0`: a rapid along the start side to depth
 //!    `d`, a feed to its end. A pocket (any other interval): a rapid out to
 //!    `d = 0`, across to the interval's start, down to `(k − 1)·Δd`, then a
@@ -98,18 +100,17 @@
 //! * **"Limited by the length of the cut and by `d`"**: `e' = min(e, L, d)`,
 //!   `L` the length of the cut along `c` (a pocket's feed in not counted).
 //! * **"Down to the depth cleared by the pass before"** is `(k − 1)·Δd`.
-//! * **A pass of one cut** returns to `c = 0` at its retracted depth, as
-//!   §3.2 says, whether that cut began on the start side or not (the model
-//!   does not look for a collision there; the tests keep the first point the
-//!   deepest, so that every pass has a cut from the start side).
+//! * **The return after a pass** is at its retracted depth only when the
+//!   last cut began on the start side; after a pocket it goes out to the
+//!   start depth first (§3.2).
 //! * **The stock side.** `A` is taken with its allowances both for the side of
 //!   the depth and for "`A` on `S`'s own line" (refused, 10⁻⁹ mm). The
 //!   direction of `c` is that of the farthest point of the profile with its
 //!   allowances (arc extremes included). Where the profile has not begun
-//!   (`c` before `A`'s, an `A` in front of the start side's line) there is no
-//!   stock: §3.2 defines the stock by the profile alone.
+//!   (`c` before `A`'s, an `A` in front of the start side's line) the stock
+//!   reaches `A`'s depth (§3.2).
 //! * **The profile must run one way along the cut** for `G71` and `G72`
-//!   ("Unlike `G71` it \[`G73`\] need not be monotone", §3.6): a piece that
+//!   (`G73`'s passes follow the profile "up and down alike", §3.6): a piece that
 //!   goes back along `c` by more than 10⁻⁹ mm is refused
 //!   ([`CycleError::NotMonotone`]); walls along the depth axis are allowed.
 //!
@@ -467,9 +468,20 @@ fn stock_removal(cycle: &Cycle, depth_x: bool) -> Result<Vec<Move>, CycleError> 
         return Err(CycleError::Retract);
     }
     let moved = cycle.profile.moved(cycle.allowance);
-    let (frame, pieces) = frame_of(cycle.start, &moved, depth_x)?;
+    let (frame, mut pieces) = frame_of(cycle.start, &moved, depth_x)?;
     monotone(&pieces)?;
     let a = frame.to(moved.start);
+    // In front of A the stock reaches A's depth (docs/cycles.md §3.2): the
+    // profile is read as starting on the start side at that depth.
+    if a.c > EPS {
+        pieces.insert(
+            0,
+            Piece::Line {
+                a: V::new(0.0, a.d),
+                b: a,
+            },
+        );
+    }
     let c_far = pieces.iter().map(|p| p.b().c).fold(a.c, f64::max);
     let d_max = pieces.iter().map(|p| p.b().d).fold(a.d, f64::max);
     let dd = cycle.depth;
@@ -563,7 +575,9 @@ fn intervals(pieces: &[Piece], d: f64, c_far: f64) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::new();
     for w in cs.windows(2) {
         let (lo, hi) = (w[0], w[1]);
-        let deeper = depth_at(pieces, 0.5 * (lo + hi)).is_some_and(|p| p > d + EPS);
+        // Deeper than the pass, or a flat exactly at its depth, which the
+        // cut runs along (docs/cycles.md §3.2).
+        let deeper = depth_at(pieces, 0.5 * (lo + hi)).is_some_and(|p| p > d - EPS);
         if !deeper {
             continue;
         }

@@ -1086,10 +1086,9 @@ fn each_check_can_fail() {
 // ---------------------------------------------------------------------------
 // Cases the random profiles stay clear of (no flat at a pass's depth, the
 // first point the deepest and on or behind the start side's line, the first
-// cut longer than the retract). Two were faults of the device, fixed; two
-// are readings of `docs/cycles.md` §3.2 the device and the reference make
-// differently, ignored until the page settles them: `cargo test --release -p
-// tests --test cycles -- --ignored` shows both lists.
+// cut longer than the retract), where the reference first disagreed with
+// the device. Two were faults of the device, fixed; two were readings of
+// `docs/cycles.md` §3.2 the page left open, now settled there.
 
 /// Runs a case that disagrees: panics with both lists while it does.
 fn disagreement(case: &Case) {
@@ -1100,14 +1099,11 @@ fn disagreement(case: &Case) {
 
 /// A shoulder exactly at a pass's depth: S X30, A X20 (5 deep), a flat at X24
 /// (3 deep, the second pass) from Z-5 to Z-10. The device cuts the pass at
-/// X24 along the flat to Z-10; the reference ends it at Z-5, where the
-/// profile stops lying deeper than the pass ("the stock is where the profile
-/// lies deeper than `d`", §3.2), leaving the flat's 1.5 mm to the pass along
-/// the profile. §3.2's "less than one depth of cut" does not settle it: a
-/// pass exactly at the deepest point is not run either ("while `d` is short
-/// of"), which leaves exactly one depth of cut there in both.
+/// X24 along the flat to Z-10, on the profile; docs/cycles.md §3.2 said "where
+/// the profile lies deeper than `d`", which ends the cut at Z-5. The page now
+/// says a flat at the pass's depth is cut along with it, and the reference
+/// reads it so.
 #[test]
-#[ignore = "the device cuts along a flat at the pass's depth; docs/cycles.md §3.2 says deeper than d"]
 fn flat_at_a_pass_depth() {
     disagreement(&Case {
         kind: CaseKind::G71,
@@ -1176,11 +1172,11 @@ fn pocket_deeper_than_the_first_point() {
 
 /// The first point in front of the start side: S X30 Z2, A X18 Z0 (with
 /// W0.1, Z0.1), a chamfer to X20. The device cuts every pass from the start
-/// side (Z2), as if the stock reached from there; the reference finds no
-/// profile, so no stock, between Z2 and A's Z0.1, and enters each pass as a
-/// pocket at Z0.1 (§3.2 defines the stock by the profile only).
+/// side (Z2), the stock in front of A reaching A's depth; the page defined
+/// the stock by the profile only, so the reference entered each pass as a
+/// pocket at Z0.1, leaving what stood in front of A to the rapid to A. The
+/// page now says the stock reaches A's depth in front of it.
 #[test]
-#[ignore = "the device takes stock in front of A; docs/cycles.md §3.2 defines it by the profile"]
 fn first_point_in_front_of_the_start_side() {
     disagreement(&Case {
         kind: CaseKind::G71,
