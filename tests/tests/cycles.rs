@@ -27,8 +27,9 @@
 //! one circle, so that the radius is exact. The first point `A` is the
 //! deepest point, with a flat across the start side's line, so that every
 //! pass has a cut from the start side, and the depth of cut is moved off the
-//! depth of every flat: the device and the model read those cases
-//! differently (the ignored tests at the end give each). `G73` profiles take
+//! depth of every flat; the cases outside that (a flat at a pass's depth, a
+//! first point in front of the start side, a pass whose one cut is a
+//! pocket) are the fixed tests at the end. `G73` profiles take
 //! any shape that runs one way along the cut; their relief and allowance
 //! along the cut are 0 when the profile has pockets (a pattern moved along
 //! the cut enters a pocket's near wall, which the cycle does not forbid).
