@@ -1081,48 +1081,22 @@ impl Reading {
                     ))
                 }
             }
-        } else if let Some(c) = self.cycle.as_mut().filter(|c| c.kind == CycleKind::Pattern) {
-            // G73: U and W a relief (first block) or allowances (second), I
-            // and K Haas' relief, R (Fanuc) and D (Haas) the count of
-            // passes.
-            match letter {
-                b'U' | b'W' | b'I' | b'K' => {
-                    let v = Some(length()?);
-                    match letter {
-                        b'U' => c.u = v,
-                        b'W' => c.w = v,
-                        b'I' => c.i = v,
-                        _ => c.k = v,
-                    }
-                    return Ok(());
-                }
-                b'R' | b'D' => {
-                    c.passes = Some(passes(letter, number)?);
-                    return Ok(());
-                }
-                b'P' | b'Q' => {
-                    let n = whole_number(letter, number)?;
-                    if letter == b'P' {
-                        c.p = Some(n);
-                    } else {
-                        c.q = Some(n);
-                    }
-                    return Ok(());
-                }
-                b'F' | b'N' => {}
-                _ => {
-                    return Err(BlockError::Form(
-                        "a G73 block takes U W R (Fanuc's first), P Q U W F, or Haas' P Q I K D U W F: S and T on their own line",
-                    ))
-                }
-            }
         } else if let Some(c) = &mut self.cycle {
-            // A cycle's own words.
+            // A cycle's own words. In G73, U and W are a relief (first
+            // block) or allowances (second), I and K Haas' relief, R
+            // (Fanuc) and D (Haas) the count of passes.
+            let pattern = c.kind == CycleKind::Pattern;
+            if pattern && matches!(letter, b'R' | b'D') {
+                c.passes = Some(passes(letter, number)?);
+                return Ok(());
+            }
             let slot = match letter {
                 b'U' => Some(&mut c.u),
                 b'W' => Some(&mut c.w),
                 b'D' => Some(&mut c.d),
                 b'R' => Some(&mut c.r),
+                b'I' if pattern => Some(&mut c.i),
+                b'K' if pattern => Some(&mut c.k),
                 _ => None,
             };
             if let Some(slot) = slot {
@@ -1141,9 +1115,11 @@ impl Reading {
                 }
                 b'F' | b'N' => {}
                 _ => {
-                    return Err(BlockError::Form(
-                        "a cycle block takes P Q U W D R F (G71/G72) or P Q F U W (G70): S and T on their own line",
-                    ))
+                    return Err(BlockError::Form(if pattern {
+                        "a G73 block takes U W R (Fanuc's first), P Q U W F, or Haas' P Q I K D U W F: S and T on their own line"
+                    } else {
+                        "a cycle block takes P Q U W D R F (G71/G72) or P Q F U W (G70): S and T on their own line"
+                    }))
                 }
             }
         }
