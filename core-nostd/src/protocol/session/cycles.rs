@@ -124,7 +124,6 @@ impl Session {
             modal.feed = b.f;
         }
         let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
-        self.last_moves = crate::comp::Moves::new();
         self.check_steps(&geom, s, &modal, &spindle, io)?;
         self.run_steps(&geom, s, &modal, &spindle, crc, io)?;
         Ok(Block::Run)
@@ -203,7 +202,6 @@ impl Session {
                 a
             }
         };
-        self.last_moves = crate::comp::Moves::new();
         if c.kind == CycleKind::Finish {
             return self.finish_cycle(b, c, crc, io).map(|()| Block::Run);
         }

@@ -79,18 +79,32 @@ fn single_cycles_move_as_their_blocks_written_out() {
     assert!(trace[2].starts_with("OK NX=0 NZ=0"), "{}", trace[2]);
 }
 
-/// What a single cycle cannot take is refused before anything moves.
-#[test]
-fn single_cycle_refusals_change_nothing() {
+/// A Fanuc-dialect device at `start`: each `(line, reply)` refused as
+/// written, with no step event since and the position as before it.
+fn refusals_change_nothing(start: &str, cases: &[(&str, &str)]) -> Device {
     let mut dev = Device::new();
     ask1(&mut dev, "OPT DIALECT=fanuc");
-    for line in ["G21 G18 G98", "G00 X50. Z5."] {
+    for line in ["G21 G18 G98", start] {
         let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
         assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
     }
     ask1(&mut dev, "SYNC");
     let before = ask1(&mut dev, "POS");
-    for (line, want) in [
+    for &(line, want) in cases {
+        assert_eq!(ask1(&mut dev, line), want, "{line}");
+        // No event since: the SYNC since the last one is empty.
+        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
+        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
+    }
+    dev
+}
+
+/// What a single cycle cannot take is refused before anything moves.
+#[test]
+fn single_cycle_refusals_change_nothing() {
+    refusals_change_nothing(
+        "G00 X50. Z5.",
+        &[
         (
             "G90 G01 X40. Z-20. F100.",
             "ERR SYNTAX G90/G94 and a motion code in one block: one of them",
@@ -100,12 +114,8 @@ fn single_cycle_refusals_change_nothing() {
             "ERR SYNTAX a G90/G94 block takes X (U), Z (W), R and F: put other words on their own line",
         ),
         ("G90 X40. Z-20.", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
-    ] {
-        assert_eq!(ask1(&mut dev, line), want, "{line}");
-        // No event since: the SYNC since the last one is empty.
-        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
-        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
-    }
+        ],
+    );
 }
 
 /// Fanuc's two-block `G71` roughs a stepped shaft as the manual draws it:
@@ -315,27 +325,18 @@ fn g74_and_g75_peck_as_their_blocks_written_out() {
 /// What a grooving cycle cannot take is refused before anything moves.
 #[test]
 fn g74_and_g75_refusals_change_nothing() {
-    let mut dev = Device::new();
-    ask1(&mut dev, "OPT DIALECT=fanuc");
-    for line in ["G21 G18 G98", "G00 X42. Z-10."] {
-        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
-        assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
-    }
-    ask1(&mut dev, "SYNC");
-    let before = ask1(&mut dev, "POS");
-    for (line, want) in [
-        ("G75 Z-14. Q2000 F50.", "ERR SYNTAX G75 needs a depth: its X (U) away from the start point"),
-        ("G75 X30. Z-14. P2500 F50.", "ERR SYNTAX G75 to another Z needs the step between grooves: Q (K)"),
-        ("G75 X30. P2500 R.2 F50.", "ERR VALUE R a relief at the bottom is not supported: R0 (D0) or none"),
-        ("G75 X30. P2500 F50. M08", "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line"),
-        ("G75 X10. P1 F50.", "ERR RANGE a grooving cycle of more than 20000 moves"),
-        ("G75 X30. P2500", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
-        ("G75 X30. P2.5 F50.", "ERR VALUE P a step in the least increment, without a point (P2500: 2.5 mm)"),
-    ] {
-        assert_eq!(ask1(&mut dev, line), want, "{line}");
-        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
-        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
-    }
+    refusals_change_nothing(
+        "G00 X42. Z-10.",
+        &[
+            ("G75 Z-14. Q2000 F50.", "ERR SYNTAX G75 needs a depth: its X (U) away from the start point"),
+            ("G75 X30. Z-14. P2500 F50.", "ERR SYNTAX G75 to another Z needs the step between grooves: Q (K)"),
+            ("G75 X30. P2500 R.2 F50.", "ERR VALUE R a relief at the bottom is not supported: R0 (D0) or none"),
+            ("G75 X30. P2500 F50. M08", "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line"),
+            ("G75 X10. P1 F50.", "ERR RANGE a grooving cycle of more than 20000 moves"),
+            ("G75 X30. P2500", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
+            ("G75 X30. P2.5 F50.", "ERR VALUE P a step in the least increment, without a point (P2500: 2.5 mm)"),
+        ],
+    );
 }
 
 /// `G73` cuts the profile whole, again and again: each pass at the rapid
@@ -421,15 +422,9 @@ fn g73_repeats_the_profile_as_its_passes_written_out() {
 /// moves or is held.
 #[test]
 fn g73_refusals_change_nothing() {
-    let mut dev = Device::new();
-    ask1(&mut dev, "OPT DIALECT=fanuc");
-    for line in ["G21 G18 G98", "G00 X50. Z2."] {
-        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
-        assert!(r.last().unwrap().starts_with("OK"), "{r:?}");
-    }
-    ask1(&mut dev, "SYNC");
-    let before = ask1(&mut dev, "POS");
-    for (line, want) in [
+    let mut dev = refusals_change_nothing(
+        "G00 X50. Z2.",
+        &[
         (
             "G73 P10 Q40 U.4 W.2 F200.",
             "ERR SYNTAX no relief: I K D, or G73 U W R in a block before",
@@ -461,11 +456,8 @@ fn g73_refusals_change_nothing() {
             "G70 P10 Q40",
             "ERR SYNTAX G70 finishes the profile a G71, G72 or G73 held last: no such P and Q",
         ),
-    ] {
-        assert_eq!(ask1(&mut dev, line), want, "{line}");
-        assert!(ask1(&mut dev, "SYNC").starts_with("OK EV=0 "), "{line}");
-        assert_eq!(ask1(&mut dev, "POS"), before, "{line}");
-    }
+        ],
+    );
     // Nothing was held: a numbered block runs as itself.
     let r = ask(&mut dev, b"N10 G00 X48.\n");
     assert!(r.last().unwrap().starts_with("OK NX=-200"), "{r:?}");
