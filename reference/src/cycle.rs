@@ -316,6 +316,20 @@ pub struct Move {
     pub centre: Option<Pt>,
 }
 
+/// Moves as the device's `DATA` lines print them (without `DATA `), each
+/// from where the one before ends, the first from `start`.
+pub fn texts(start: Pt, moves: &[Move]) -> Vec<String> {
+    let mut at = start;
+    moves
+        .iter()
+        .map(|m| {
+            let t = m.text(at);
+            at = m.end;
+            t
+        })
+        .collect()
+}
+
 impl Move {
     /// The move as a `DATA` line prints it (without `DATA `), from `from`:
     /// X on the diameter, four decimals, an arc's `I`, `K` from its start.
@@ -1350,18 +1364,6 @@ mod tests {
         }
     }
 
-    fn texts(cycle: &Cycle, moves: &[Move]) -> Vec<String> {
-        let mut at = cycle.start;
-        moves
-            .iter()
-            .map(|m| {
-                let t = m.text(at);
-                at = m.end;
-                t
-            })
-            .collect()
-    }
-
     #[test]
     fn the_worked_example_of_the_docs() {
         let c = step_shaft();
@@ -1387,7 +1389,7 @@ mod tests {
             "G00 X30.0000 Z-24.9000",
             "G00 X30.0000 Z2.0000",
         ];
-        assert_eq!(texts(&c, &moves), expected);
+        assert_eq!(texts(c.start, &moves), expected);
         let region = Region::of(&c).unwrap();
         let mut at = c.start;
         for m in &moves {
@@ -1476,7 +1478,7 @@ mod tests {
             retract: 0.5,
         };
         let moves = roughing(&c).unwrap();
-        let t = texts(&c, &moves);
+        let t = texts(c.start, &moves);
         // The pass at X28 (depth 6): up to the bump, then the pocket.
         let at = t.iter().position(|l| l == "G00 X28.0000 Z2.0000").unwrap();
         assert_eq!(
@@ -1508,7 +1510,7 @@ mod tests {
             count: 3,
         };
         let moves = roughing(&c).unwrap();
-        let t = texts(&c, &moves);
+        let t = texts(c.start, &moves);
         assert_eq!(t[0], "G00 X26.4000 Z3.1000");
         assert_eq!(t[5], "G00 X23.4000 Z2.6000");
         assert_eq!(t[10], "G00 X20.4000 Z2.1000");
@@ -1544,7 +1546,7 @@ mod tests {
             depth: 1.5,
             retract: 0.3,
         };
-        let t = texts(&c, &roughing(&c).unwrap());
+        let t = texts(c.start, &roughing(&c).unwrap());
         assert_eq!(
             t[..4],
             [

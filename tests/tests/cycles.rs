@@ -39,8 +39,8 @@ use host_sim::link::Transport;
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use reference::cycle::{
-    finishing_pass, mm4, roughing, split_final_pass, stock_left, ArcDir, Axis, Cycle, Element,
-    Kind, Move, MoveKind, Profile, Pt, Region,
+    finishing_pass, mm4, roughing, split_final_pass, stock_left, texts, ArcDir, Axis, Cycle,
+    Element, Kind, Move, MoveKind, Profile, Pt, Region,
 };
 use std::sync::OnceLock;
 
@@ -116,19 +116,6 @@ fn device(lines: &[String], profile_from: usize) -> Result<Vec<Printed>, String>
         last = r.data;
     }
     Ok(last.iter().map(|l| Printed::parse(l)).collect())
-}
-
-/// The reference's moves as the device prints them.
-fn texts(start: Pt, moves: &[Move]) -> Vec<String> {
-    let mut at = start;
-    moves
-        .iter()
-        .map(|m| {
-            let t = m.text(at);
-            at = m.end;
-            t
-        })
-        .collect()
 }
 
 /// (a): `dev` is `reference`, move for move.
