@@ -35,6 +35,8 @@
 //! - [`prep`]: the prep stage: started motion turned into ready events
 //!   (tick, pins, TSEQ) ahead of the step interrupt, which only issues
 //!   them, and what it issued.
+//! - [`sync`]: motion locked to the spindle: a threading pass as an exact
+//!   function of the encoder counts, and its step events by count.
 //! - [`store`]: the tool table and work offsets as a record in two flash
 //!   slots that a power cut during a write cannot break.
 //! - [`machine`]: the planner and the stepper behind one front, as the
@@ -80,6 +82,7 @@ pub mod step;
 pub mod stepdir;
 pub mod stepper;
 pub mod store;
+pub mod sync;
 mod text;
 pub mod trig;
 pub mod watch;

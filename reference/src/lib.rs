@@ -22,6 +22,9 @@
 //!   (`docs/calculators.md` §4);
 //! - [`exact`]: exact rational model of `MOVE`, `CFG`, `ZERO` and `POS`, `Q`,
 //!   the step rule and CRC-32, with no floating point at all;
+//! - [`sync`]: exact model of motion locked to the spindle: the progress,
+//!   registers and step events of a synchronised pass, its refusals and its
+//!   lead-in (`docs/threading.md`), with no floating point;
 //! - [`protocol`]: the protocol's limits, error codes and request numbers, for
 //!   the oracles (`docs/protocol.md`).
 //!
@@ -38,4 +41,5 @@ pub mod exact;
 pub mod impulse;
 pub mod motion;
 pub mod protocol;
+pub mod sync;
 pub mod trihedral;

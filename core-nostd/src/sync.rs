@@ -1,0 +1,511 @@
+//! Motion locked to the spindle (`docs/threading.md`): a synchronised pass
+//! whose position is an exact function of the encoder counts, and its step
+//! events, each at the count where a register changes.
+//!
+//! The progress along the lead axis is `s(c) = num(c) / den` with
+//! `den = 8·K·N·C` (`K` the lead, `N` the counts per revolution, `C` the
+//! lead-in, all integers), so that every piece of `docs/threading.md` §1 has
+//! an integer numerator:
+//!
+//! | piece | `num(c)` |
+//! |---|---|
+//! | lead-in | `K²·(2c + C)²` |
+//! | locked | `8·K²·C·c` |
+//! | lead-out | `8·K·N·C·D − (2·D·N + K·C − 2·K·c)²` |
+//!
+//! An axis crosses its next rounding boundary `B` when
+//! `|Δa|·s(c)/D ≥ σ·(B − a0)`; with both sides times `2·D·den` this is a
+//! comparison of two products of `u128`, made exactly in 256 bits. The
+//! count of the next event is found by bisection over that monotone
+//! condition. The ranges ([`MAX_LEAD`], [`MAX_CPR`], [`MAX_LEAD_IN`],
+//! [`MAX_TRAVEL`]) keep every numerator below 2¹²⁷.
+
+use crate::impulse::ImpulsePrice;
+use crate::interleave::StepEvent;
+use crate::length::{div_round_half_away, Length};
+use crate::wide::U256;
+
+/// The longest lead: 2³⁰ × 10⁻⁷ mm (107.37 mm per revolution).
+pub const MAX_LEAD: i64 = 1 << 30;
+/// The most counts per revolution an encoder may have.
+pub const MAX_CPR: u32 = 1 << 16;
+/// The longest lead-in, in counts.
+pub const MAX_LEAD_IN: u32 = 1 << 30;
+/// The longest travel of a pass along its lead axis: 2³⁵ × 10⁻⁷ mm
+/// (3 435.97 mm).
+pub const MAX_TRAVEL: i64 = 1 << 35;
+
+/// Why a synchronised pass is refused before it starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SyncError {
+    /// The pass does not travel along its lead axis (`D = 0`).
+    NoTravel,
+    /// An axis would move more than one impulse per count while locked:
+    /// the encoder is too coarse for this lead and this impulse.
+    TooCoarse {
+        /// `'X'` or `'Z'`.
+        axis: char,
+    },
+    /// The pass is shorter than its lead-in and lead-out, `u·C`: the travel
+    /// it needs along the lead axis, rounded up to 10⁻⁷ mm.
+    TooShort {
+        /// The travel needed.
+        needed: Length,
+    },
+    /// A lead, an encoder, a lead-in or a travel beyond the ranges of this
+    /// module, or a lead-in that is odd or below 2.
+    Range,
+}
+
+/// One synchronised pass (`docs/threading.md` §1), checked: its events
+/// follow without any check that could fail.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SyncPass {
+    /// Start and end, ångström, X on the radius: `[x, z]`.
+    from: [i64; 2],
+    delta: [i64; 2],
+    price: [i64; 2],
+    lead: i64,
+    cpr: i64,
+    lead_in: i64,
+    travel: i64,
+}
+
+impl SyncPass {
+    /// A pass from `from` to `to` (`(x radius, z)`) at `lead` per revolution
+    /// along the lead axis, with `cpr` counts per revolution and a lead-in of
+    /// `lead_in` counts (even, at least 2).
+    pub fn new(
+        from: (Length, Length),
+        to: (Length, Length),
+        prices: (ImpulsePrice, ImpulsePrice),
+        lead: Length,
+        cpr: u32,
+        lead_in: u32,
+    ) -> Result<SyncPass, SyncError> {
+        let from = [from.0.as_angstrom(), from.1.as_angstrom()];
+        let to = [to.0.as_angstrom(), to.1.as_angstrom()];
+        let delta = [to[0] - from[0], to[1] - from[1]];
+        let price = [prices.0.as_angstrom(), prices.1.as_angstrom()];
+        let lead = lead.as_angstrom();
+        let travel = delta[0].abs().max(delta[1].abs());
+        if lead <= 0
+            || lead > MAX_LEAD
+            || cpr == 0
+            || cpr > MAX_CPR
+            || !(2..=MAX_LEAD_IN).contains(&lead_in)
+            || !lead_in.is_multiple_of(2)
+            || travel > MAX_TRAVEL
+        {
+            return Err(SyncError::Range);
+        }
+        if travel == 0 {
+            return Err(SyncError::NoTravel);
+        }
+        let (cpr, c) = (i64::from(cpr), i64::from(lead_in));
+        // Locked, an axis moves u·|Δa|/D per count: less than h, or
+        // K·|Δa| < h·N·D (at h exactly, an axis passing from −h/2 to h/2
+        // in one count would go from −1 to 1: Q rounds ties away from 0).
+        for (i, axis) in [(0, 'X'), (1, 'Z')] {
+            let moved = i128::from(lead) * i128::from(delta[i & 1].abs());
+            if moved >= i128::from(price[i & 1]) * i128::from(cpr) * i128::from(travel) {
+                return Err(SyncError::TooCoarse { axis });
+            }
+        }
+        // D ≥ u·C, or D·N ≥ K·C.
+        let needed = i128::from(lead) * i128::from(c);
+        if i128::from(travel) * i128::from(cpr) < needed {
+            let n = i128::from(cpr);
+            let mm = (needed + n - 1).checked_div(n).unwrap_or(0);
+            return Err(SyncError::TooShort {
+                needed: i64::try_from(mm)
+                    .ok()
+                    .and_then(Length::from_angstrom)
+                    .ok_or(SyncError::Range)?,
+            });
+        }
+        Ok(SyncPass {
+            from,
+            delta,
+            price,
+            lead,
+            cpr,
+            lead_in: c,
+            travel,
+        })
+    }
+
+    /// The first count of the lead-in: the pass is at rest at its start up
+    /// to `−C/2` and moves from the next count on.
+    pub const fn first_count(&self) -> i64 {
+        -self.lead_in / 2
+    }
+
+    /// The first count at which the pass is at its end, `⌈D·N/K + C/2⌉`.
+    pub const fn last_count(&self) -> i64 {
+        let n = 2 * self.travel as i128 * self.cpr as i128 + (self.lead * self.lead_in) as i128;
+        let d = 2 * self.lead as i128;
+        // K > 0 (checked by `new`): the quotient always exists.
+        match (n + d - 1).checked_div(d) {
+            Some(c) => c as i64,
+            None => 0,
+        }
+    }
+
+    /// The lead-in and the lead-out's length along the lead axis, `u·C/2`,
+    /// rounded up to 10⁻⁷ mm.
+    pub fn lead_in_length(&self) -> Length {
+        let n = 2 * i128::from(self.cpr);
+        let l = (i128::from(self.lead) * i128::from(self.lead_in) + n - 1)
+            .checked_div(n)
+            .unwrap_or(0);
+        Length::from_angstrom(l as i64).unwrap_or(Length::ZERO)
+    }
+
+    /// `8·K·N·C`, the denominator of the progress.
+    fn den(&self) -> i128 {
+        8 * i128::from(self.lead) * i128::from(self.cpr) * i128::from(self.lead_in)
+    }
+
+    /// The numerator of the progress `s(c)` over [`Self::den`], in
+    /// `0 ..= D·den`.
+    fn num(&self, c: i64) -> i128 {
+        let (k, n, cc, d) = (
+            i128::from(self.lead),
+            i128::from(self.cpr),
+            i128::from(self.lead_in),
+            i128::from(self.travel),
+        );
+        let c = i128::from(c);
+        if 2 * c <= -cc {
+            0
+        } else if 2 * c <= cc {
+            let t = k * (2 * c + cc);
+            t * t
+        } else if 2 * k * c <= 2 * d * n - k * cc {
+            8 * k * cc * (k * c)
+        } else if 2 * k * c < 2 * d * n + k * cc {
+            let t = 2 * d * n + k * cc - 2 * k * c;
+            8 * k * n * cc * d - t * t
+        } else {
+            8 * k * n * cc * d
+        }
+    }
+
+    /// The registers at the start, `(Q(x0/hX), Q(z0/hZ))`.
+    pub fn start_registers(&self) -> (i64, i64) {
+        (
+            div_round_half_away(self.from[0], self.price[0]),
+            div_round_half_away(self.from[1], self.price[1]),
+        )
+    }
+
+    /// The registers at the end, `(Q(x1/hX), Q(z1/hZ))`.
+    pub fn end_registers(&self) -> (i64, i64) {
+        (
+            div_round_half_away(self.from[0] + self.delta[0], self.price[0]),
+            div_round_half_away(self.from[1] + self.delta[1], self.price[1]),
+        )
+    }
+
+    /// Whether axis `i`, at register `k`, has left it for the next one
+    /// towards the end at count `c`.
+    fn crossed(&self, i: usize, k: i64, c: i64) -> bool {
+        // `i` is 0 or 1; the mask keeps the indexing free of a bounds check.
+        let sigma: i64 = if self.delta[i & 1] < 0 { -1 } else { 1 };
+        // The boundary B = (2k + σ)·h/2: R = σ·(2B − 2a0) ≥ 0.
+        let r = i128::from(sigma)
+            * ((2 * i128::from(k) + i128::from(sigma)) * i128::from(self.price[i & 1])
+                - 2 * i128::from(self.from[i & 1]));
+        // |Δa|·s/D ≥ σ(B − a0)  ⇔  2·|Δa|·num ≥ R·D·den.
+        let lhs = U256::mul(
+            2 * self.delta[i & 1].unsigned_abs() as u128,
+            self.num(c) as u128,
+        );
+        if r <= 0 {
+            return true;
+        }
+        let rhs = U256::mul(r as u128 * self.travel as u128, self.den() as u128);
+        // A boundary on the side towards zero is crossed strictly (`Q`
+        // rounds a tie away from zero): σ·B < 0.
+        let b2 = (2 * i128::from(k) + i128::from(sigma)) * i128::from(sigma);
+        if b2 < 0 {
+            lhs > rhs
+        } else {
+            lhs >= rhs
+        }
+    }
+
+    /// Where axis `i`, at register `k`, would leave it if the pass were
+    /// locked there: `⌈R·D·N / (2·|Δa|·K)⌉`, a guess that
+    /// [`SyncEvents::next_count`] checks.
+    fn locked_crossing(&self, i: usize, k: i64) -> Option<i64> {
+        let sigma = if self.delta[i & 1] < 0 { -1 } else { 1 };
+        let r = i128::from(sigma)
+            * ((2 * i128::from(k) + i128::from(sigma)) * i128::from(self.price[i & 1])
+                - 2 * i128::from(self.from[i & 1]));
+        let n = r * i128::from(self.travel) * i128::from(self.cpr);
+        let d = 2 * i128::from(self.delta[i & 1].abs()) * i128::from(self.lead);
+        // R ≥ 0 and d > 0: the floor and the remainder of plain division.
+        let (q, rem) = (n.checked_div(d)?, n.checked_rem(d)?);
+        i64::try_from(q + i128::from(rem > 0)).ok()
+    }
+
+    /// The step events of the pass, in order of their counts.
+    pub fn events(&self) -> SyncEvents {
+        let (x, z) = self.start_registers();
+        let (x1, z1) = self.end_registers();
+        let mut e = SyncEvents {
+            pass: *self,
+            reg: [x, z],
+            end: [x1, z1],
+            next: [i64::MAX; 2],
+        };
+        let c0 = self.first_count();
+        for i in 0..2 {
+            e.next[i & 1] = e.next_count(i, c0);
+        }
+        e
+    }
+}
+
+/// The step events of a [`SyncPass`]: `(count, event)`, counts ascending.
+#[derive(Clone, Debug)]
+pub struct SyncEvents {
+    pass: SyncPass,
+    reg: [i64; 2],
+    end: [i64; 2],
+    /// The count of each axis' next step, `i64::MAX` when it is at its end.
+    next: [i64; 2],
+}
+
+impl SyncEvents {
+    /// The least count after `after` at which axis `i` leaves its register,
+    /// or `i64::MAX` when it is at its end.
+    fn next_count(&self, i: usize, after: i64) -> i64 {
+        if self.reg[i & 1] == self.end[i & 1] {
+            return i64::MAX;
+        }
+        let k = self.reg[i & 1];
+        let p = &self.pass;
+        // Locked, the crossing is the least c with 2·|Δa|·K·c ≥ R·D·N
+        // (num = 8·K²·C·c): one division, checked against the exact
+        // condition (ties and the ends of the locked piece included).
+        if let Some(c) = p.locked_crossing(i, k) {
+            if c > after && p.crossed(i, k, c) && (c - 1 <= after || !p.crossed(i, k, c - 1)) {
+                return c;
+            }
+        }
+        // At the last count the pass is at its end: the axis has crossed.
+        let (mut lo, mut hi) = (after, p.last_count());
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if self.pass.crossed(i, k, mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    }
+
+    /// The registers after the events so far, `(X, Z)`.
+    pub const fn registers(&self) -> (i64, i64) {
+        (self.reg[0], self.reg[1])
+    }
+}
+
+impl Iterator for SyncEvents {
+    type Item = (i64, StepEvent);
+
+    fn next(&mut self) -> Option<(i64, StepEvent)> {
+        let c = self.next[0].min(self.next[1]);
+        if c == i64::MAX {
+            return None;
+        }
+        let mut bits = 0;
+        for (i, step, neg) in [
+            (0, StepEvent::X_STEP, StepEvent::X_NEG),
+            (1, StepEvent::Z_STEP, StepEvent::Z_NEG),
+        ] {
+            if self.next[i & 1] == c {
+                let sigma = if self.pass.delta[i & 1] < 0 { -1 } else { 1 };
+                self.reg[i & 1] += sigma;
+                bits |= step | if sigma < 0 { neg } else { 0 };
+                self.next[i & 1] = self.next_count(i, c);
+            }
+        }
+        Some((c, StepEvent::from_bits(bits)))
+    }
+}
+
+/// The lead-in of `docs/threading.md` §2: the least even count
+/// `C ≥ K·n²·N / (3600·a)`, at least 2, for a lead `K`, a speed of `rpm`
+/// revolutions per minute, `cpr` counts per revolution and a path
+/// acceleration of `accel` mm/s²; `None` beyond [`MAX_LEAD_IN`] or for an
+/// acceleration of 0.
+pub fn lead_in_counts(lead: Length, rpm: u32, cpr: u32, accel: u32) -> Option<u32> {
+    if accel == 0 || lead.as_angstrom() <= 0 {
+        return None;
+    }
+    // K in 10⁻⁷ mm: C ≥ K·n²·N / (3600·a·10⁷).
+    let num = lead.as_angstrom() as u128 * u128::from(rpm) * u128::from(rpm) * u128::from(cpr);
+    let den = 3600 * u128::from(accel) * crate::length::ANGSTROM_PER_MM as u128;
+    let c = num.checked_div(den)? + u128::from(num.checked_rem(den)? != 0);
+    let c = c.max(2);
+    let c = c + c % 2;
+    u32::try_from(c).ok().filter(|&c| c <= MAX_LEAD_IN)
+}
+
+/// The highest whole speed (rev/min) whose lead-in fits a pass of `travel`
+/// along its lead axis (`u·C ≤ D`, `docs/threading.md` §2), or 0 when none
+/// does.
+pub fn max_rpm(lead: Length, travel: Length, cpr: u32, accel: u32) -> u32 {
+    let fits = |n: u32| match lead_in_counts(lead, n, cpr, accel) {
+        Some(c) => {
+            i128::from(lead.as_angstrom()) * i128::from(c)
+                <= i128::from(travel.as_angstrom()) * i128::from(cpr)
+        }
+        None => false,
+    };
+    if !fits(0) {
+        return 0;
+    }
+    let (mut lo, mut hi) = (0u32, 1u32 << 20);
+    if fits(hi) {
+        return hi;
+    }
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    fn mm(s: &str) -> Length {
+        Length::from_mm_str(s).unwrap()
+    }
+
+    fn h(s: &str) -> ImpulsePrice {
+        ImpulsePrice::from_length(mm(s)).unwrap()
+    }
+
+    /// The events with the registers after each: `(count, X, Z)`.
+    fn run(p: &SyncPass) -> Vec<(i64, i64, i64)> {
+        let (mut x, mut z) = p.start_registers();
+        p.events()
+            .map(|(c, e)| {
+                let (dx, dz) = e.moves();
+                x += i64::from(dx);
+                z += i64::from(dz);
+                (c, x, z)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn locked_z_is_the_count_times_the_lead() {
+        // Z from 2 to −20 at 1.5 mm per revolution, 4096 counts, h 0.01.
+        let p = SyncPass::new(
+            (mm("10"), mm("2")),
+            (mm("10"), mm("-20")),
+            (h("0.005"), h("0.01")),
+            mm("1.5"),
+            4096,
+            2000,
+        )
+        .unwrap();
+        let ev = run(&p);
+        assert_eq!(ev.len(), 2200);
+        assert_eq!(ev.last().map(|e| e.2), Some(-2000));
+        // Locked from C/2 = 1000 to D·N/K − C/2 = 22·4096/1.5 − 1000.
+        let lock = 1000..=59074;
+        let mut locked = 0;
+        for &(c, x, z) in &ev {
+            assert_eq!(x, 2000);
+            if lock.contains(&c) {
+                // z = 2 − c·1.5/4096 mm, in 10⁻⁷ mm times 4096, over 0.01 mm.
+                let want = div_round_half_away(20_000_000 * 4096 - c * 15_000_000, 4096 * 100_000);
+                assert_eq!(z, want, "c={c}");
+                locked += 1;
+            }
+        }
+        assert!(locked > 1900, "{locked}");
+    }
+
+    #[test]
+    fn counts_are_ascending_and_each_axis_steps_once_per_count() {
+        let p = SyncPass::new(
+            (mm("12"), mm("0")),
+            (mm("10.5"), mm("-7.25")),
+            (h("0.005"), h("0.01")),
+            mm("2"),
+            1000,
+            400,
+        )
+        .unwrap();
+        let ev: Vec<_> = p.events().collect();
+        assert!(ev.windows(2).all(|w| w[0].0 < w[1].0));
+        let xs = ev.iter().filter(|e| e.1.x_steps()).count();
+        let zs = ev.iter().filter(|e| e.1.z_steps()).count();
+        assert_eq!((xs, zs), (300, 725));
+        assert!(ev.iter().all(|e| e.1.x_negative() == e.1.x_steps()));
+    }
+
+    #[test]
+    fn refusals() {
+        let prices = (h("0.005"), h("0.01"));
+        let o = (mm("0"), mm("0"));
+        let new = |to, lead, cpr, c| SyncPass::new(o, to, prices, mm(lead), cpr, c);
+        assert_eq!(new(o, "1", 4096, 2), Err(SyncError::NoTravel));
+        // 41 mm of lead over 4096 counts is above 0.01 mm a count.
+        assert_eq!(
+            new((mm("0"), mm("-100")), "41", 4096, 2),
+            Err(SyncError::TooCoarse { axis: 'Z' })
+        );
+        assert_eq!(
+            new((mm("0"), mm("-100")), "40.96", 4096, 2),
+            Err(SyncError::TooCoarse { axis: 'Z' })
+        );
+        assert!(new((mm("0"), mm("-100")), "40.959999", 4096, 2).is_ok());
+        // A taper: X moves 0.6 of Z's travel at half of Z's price.
+        assert_eq!(
+            new((mm("60"), mm("-100")), "40", 4096, 2),
+            Err(SyncError::TooCoarse { axis: 'X' })
+        );
+        // 1 mm of lead, 4096 counts, C = 8192: needs 2 mm.
+        assert_eq!(
+            new((mm("0"), mm("-1.999999")), "1", 4096, 8192),
+            Err(SyncError::TooShort { needed: mm("2") })
+        );
+        assert!(new((mm("0"), mm("-2")), "1", 4096, 8192).is_ok());
+        assert_eq!(
+            new((mm("0"), mm("-2")), "1", 4096, 3),
+            Err(SyncError::Range)
+        );
+    }
+
+    #[test]
+    fn lead_in_counts_by_hand() {
+        // K = 1.5 mm, 600 rpm, 4096 counts, 500 mm/s²:
+        // 1.5·600²·4096/(3600·500) = 1228.8 → 1230 (even).
+        assert_eq!(lead_in_counts(mm("1.5"), 600, 4096, 500), Some(1230));
+        assert_eq!(lead_in_counts(mm("1.5"), 0, 4096, 500), Some(2));
+        // The highest speed for 22 mm of travel: C·1.5/4096 ≤ 22.
+        let n = max_rpm(mm("1.5"), mm("22"), 4096, 500);
+        let c = lead_in_counts(mm("1.5"), n, 4096, 500).unwrap();
+        assert!(c as i64 * 15 <= 220 * 4096);
+        let c1 = lead_in_counts(mm("1.5"), n + 1, 4096, 500).unwrap();
+        assert!(c1 as i64 * 15 > 220 * 4096);
+    }
+}
