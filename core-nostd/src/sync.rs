@@ -14,16 +14,20 @@
 //! | lead-out | `8·K·N·C·D − (2·D·N + K·C − 2·K·c)²` |
 //!
 //! An axis crosses its next rounding boundary `B` when
-//! `|Δa|·s(c)/D ≥ σ·(B − a0)`; with both sides times `2·D·den` this is a
-//! comparison of two products of `u128`, made exactly in 256 bits. The
-//! count of the next event is found by bisection over that monotone
-//! condition. The ranges ([`MAX_LEAD`], [`MAX_CPR`], [`MAX_LEAD_IN`],
-//! [`MAX_TRAVEL`]) keep every numerator below 2¹²⁷.
+//! `|Δa|·s(c)/D ≥ σ·(B − a0)` (`>` past a boundary on the side towards
+//! zero, as `Q` rounds ties away from zero). The count of the next event
+//! is solved for piece by piece, in closed form: while locked it is a
+//! quotient that follows by additions from one boundary to the next (`R`,
+//! twice the distance to the boundary, grows by `2h`); in the lead-in a
+//! ceiling square root, in the lead-out a floor square root, of exact
+//! integers (256-bit products where they need them). The tests check every
+//! event against the definition. The ranges ([`MAX_LEAD`], [`MAX_CPR`],
+//! [`MAX_LEAD_IN`], [`MAX_TRAVEL`]) keep every intermediate in its type.
 
 use crate::impulse::ImpulsePrice;
 use crate::interleave::StepEvent;
 use crate::length::{div_round_half_away, Length};
-use crate::wide::U256;
+use crate::wide::{isqrt, U256};
 
 /// The longest lead: 2³⁰ × 10⁻⁷ mm (107.37 mm per revolution).
 pub const MAX_LEAD: i64 = 1 << 30;
@@ -163,12 +167,14 @@ impl SyncPass {
     }
 
     /// `8·K·N·C`, the denominator of the progress.
+    #[cfg(test)]
     fn den(&self) -> i128 {
         8 * i128::from(self.lead) * i128::from(self.cpr) * i128::from(self.lead_in)
     }
 
     /// The numerator of the progress `s(c)` over [`Self::den`], in
     /// `0 ..= D·den`.
+    #[cfg(test)]
     fn num(&self, c: i64) -> i128 {
         let (k, n, cc, d) = (
             i128::from(self.lead),
@@ -208,23 +214,29 @@ impl SyncPass {
         )
     }
 
+    /// `R = σ·(2B − 2a0)`, twice the distance from the start to the
+    /// boundary `B = (2k + σ)·h/2` that axis `i` crosses to leave register
+    /// `k` towards its end (`σ` its direction); at least 0.
+    fn boundary(&self, i: usize, k: i64) -> i128 {
+        let sigma: i128 = if self.delta[i & 1] < 0 { -1 } else { 1 };
+        sigma
+            * ((2 * i128::from(k) + sigma) * i128::from(self.price[i & 1])
+                - 2 * i128::from(self.from[i & 1]))
+    }
+
     /// Whether axis `i`, at register `k`, has left it for the next one
-    /// towards the end at count `c`.
+    /// towards the end at count `c`: the definition, which the closed forms
+    /// of [`SyncEvents::next_count`] are checked against.
+    #[cfg(test)]
     fn crossed(&self, i: usize, k: i64, c: i64) -> bool {
         // `i` is 0 or 1; the mask keeps the indexing free of a bounds check.
         let sigma: i64 = if self.delta[i & 1] < 0 { -1 } else { 1 };
-        // The boundary B = (2k + σ)·h/2: R = σ·(2B − 2a0) ≥ 0.
-        let r = i128::from(sigma)
-            * ((2 * i128::from(k) + i128::from(sigma)) * i128::from(self.price[i & 1])
-                - 2 * i128::from(self.from[i & 1]));
+        let r = self.boundary(i, k);
         // |Δa|·s/D ≥ σ(B − a0)  ⇔  2·|Δa|·num ≥ R·D·den.
         let lhs = U256::mul(
             2 * self.delta[i & 1].unsigned_abs() as u128,
             self.num(c) as u128,
         );
-        if r <= 0 {
-            return true;
-        }
         let rhs = U256::mul(r as u128 * self.travel as u128, self.den() as u128);
         // A boundary on the side towards zero is crossed strictly (`Q`
         // rounds a tie away from zero): σ·B < 0.
@@ -236,31 +248,51 @@ impl SyncPass {
         }
     }
 
-    /// Where axis `i`, at register `k`, would leave it if the pass were
-    /// locked there: `⌈R·D·N / (2·|Δa|·K)⌉`, a guess that
-    /// [`SyncEvents::next_count`] checks.
-    fn locked_crossing(&self, i: usize, k: i64) -> Option<i64> {
-        let sigma = if self.delta[i & 1] < 0 { -1 } else { 1 };
-        let r = i128::from(sigma)
-            * ((2 * i128::from(k) + i128::from(sigma)) * i128::from(self.price[i & 1])
-                - 2 * i128::from(self.from[i & 1]));
-        let n = r * i128::from(self.travel) * i128::from(self.cpr);
-        let d = 2 * i128::from(self.delta[i & 1].abs()) * i128::from(self.lead);
-        // R ≥ 0 and d > 0: the floor and the remainder of plain division.
-        let (q, rem) = (n.checked_div(d)?, n.checked_rem(d)?);
-        i64::try_from(q + i128::from(rem > 0)).ok()
-    }
-
     /// The step events of the pass, in order of their counts.
     pub fn events(&self) -> SyncEvents {
         let (x, z) = self.start_registers();
         let (x1, z1) = self.end_registers();
+        let (k, n, cc, d) = (
+            i128::from(self.lead),
+            i128::from(self.cpr),
+            i128::from(self.lead_in),
+            i128::from(self.travel),
+        );
         let mut e = SyncEvents {
             pass: *self,
             reg: [x, z],
             end: [x1, z1],
             next: [i64::MAX; 2],
+            line: [(0, 0); 2],
+            line_step: [(0, 0); 2],
+            line_den: [1; 2],
+            // Locked from C/2 to ⌊(2DN − KC)/2K⌋ (empty when D·N = K·C
+            // leaves less than a count).
+            lock: (
+                self.lead_in / 2,
+                (2 * d * n - k * cc).checked_div(2 * k).unwrap_or(0) as i64,
+            ),
         };
+        for i in 0..2 {
+            // The locked line crosses the boundary of register k where
+            // 2·|Δa|·K·c ≥ R·D·N: R grows by 2h at each step, so the
+            // quotient and remainder follow by additions.
+            let den = 2 * i128::from(self.delta[i & 1].abs()) * k;
+            if den > 0 {
+                let r0 = self.boundary(i, e.reg[i & 1]) * d * n;
+                let step = 2 * i128::from(self.price[i & 1]) * d * n;
+                e.line_den[i & 1] = den;
+                // R ≥ 0 and den > 0: plain division floors.
+                let divrem = |v: i128| {
+                    (
+                        v.checked_div(den).unwrap_or(0),
+                        v.checked_rem(den).unwrap_or(0),
+                    )
+                };
+                e.line[i & 1] = divrem(r0);
+                e.line_step[i & 1] = divrem(step);
+            }
+        }
         let c0 = self.first_count();
         for i in 0..2 {
             e.next[i & 1] = e.next_count(i, c0);
@@ -277,6 +309,15 @@ pub struct SyncEvents {
     end: [i64; 2],
     /// The count of each axis' next step, `i64::MAX` when it is at its end.
     next: [i64; 2],
+    /// Per axis, `⌊R·D·N / (2·|Δa|·K)⌋` and its remainder for the current
+    /// register: where the locked line leaves it.
+    line: [(i128, i128); 2],
+    /// What a step adds to [`Self::line`]: `2h·D·N` divided likewise.
+    line_step: [(i128, i128); 2],
+    /// `2·|Δa|·K` (1 for an axis that does not move).
+    line_den: [i128; 2],
+    /// The first and last counts of the locked piece.
+    lock: (i64, i64),
 }
 
 impl SyncEvents {
@@ -288,25 +329,60 @@ impl SyncEvents {
         }
         let k = self.reg[i & 1];
         let p = &self.pass;
-        // Locked, the crossing is the least c with 2·|Δa|·K·c ≥ R·D·N
-        // (num = 8·K²·C·c): one division, checked against the exact
-        // condition (ties and the ends of the locked piece included).
-        if let Some(c) = p.locked_crossing(i, k) {
-            if c > after && p.crossed(i, k, c) && (c - 1 <= after || !p.crossed(i, k, c - 1)) {
-                return c;
+        // A boundary on the side towards zero is passed strictly (Q rounds
+        // a tie away from zero).
+        let sigma = if p.delta[i & 1] < 0 { -1 } else { 1 };
+        let strict = (2 * k + sigma) * sigma < 0;
+        // Locked, the pass is on the line, whose crossings follow by
+        // additions: from a locked count, a crossing on the line is it.
+        let (q, rem) = self.line[i & 1];
+        let line = q as i64 + i64::from(rem > 0 || strict);
+        if after >= self.lock.0 && line <= self.lock.1 {
+            return line.max(after + 1);
+        }
+        let (kk, n, cc, d) = (
+            i128::from(p.lead),
+            i128::from(p.cpr),
+            i128::from(p.lead_in),
+            i128::from(p.travel),
+        );
+        let da = i128::from(p.delta[i & 1].abs());
+        let r = p.boundary(i, k);
+        // In the lead-in (m = c + C/2, num = 4·K²·m²) the axis has crossed
+        // when |Δa|·K·m² ≥ R·D·N·C: the least m is a ceiling square root.
+        if after < self.lock.0 {
+            let x = (r * d * n * cc) as u128;
+            let y = (da * kk) as u128;
+            let (fl, rem) = (x.checked_div(y).unwrap_or(0), x.checked_rem(y).unwrap_or(0));
+            // m² ≥ X: m² ≥ ⌈X⌉; m² > X: m² ≥ ⌊X⌋ + 1.
+            let t = fl + u128::from(rem > 0 || strict);
+            let m = ceil_sqrt(t);
+            let c = m as i64 - self.lock.0;
+            if c <= self.lock.0 {
+                return c.max(after + 1);
             }
         }
-        // At the last count the pass is at its end: the axis has crossed.
-        let (mut lo, mut hi) = (after, p.last_count());
-        while hi - lo > 1 {
-            let mid = lo + (hi - lo) / 2;
-            if self.pass.crossed(i, k, mid) {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
+        // Past the lead-in, a crossing on the line is it.
+        if line <= self.lock.1 {
+            return line.max(after + 1);
         }
-        hi
+        // In the lead-out (w = 2DN + KC − 2Kc, num = 8KNCD − w²) it has
+        // crossed when w² ≤ V = 4·K·N·C·D·(2|Δa| − R)/|Δa| (w² < V past a
+        // strict boundary): the greatest w is a square root.
+        let prod = U256::mul((4 * kk * n * cc * d) as u128, (2 * da - r) as u128);
+        let v = prod.div(da as u128);
+        let exact = U256::mul(v, da as u128) == prod;
+        // w² < V: w² ≤ ⌈V⌉ − 1, which is ⌊V⌋ − 1 when V is whole.
+        let v = if strict && exact {
+            v.saturating_sub(1)
+        } else {
+            v
+        };
+        let w = i128::from(isqrt(v));
+        let top = 2 * d * n + kk * cc - w;
+        let c = (top + 2 * kk - 1).checked_div(2 * kk).unwrap_or(0) as i64;
+        // (`clamp` would check its bounds; the crossing lies between them.)
+        c.max(after + 1).min(p.last_count().max(after + 1))
     }
 
     /// The registers after the events so far, `(X, Z)`.
@@ -331,12 +407,26 @@ impl Iterator for SyncEvents {
             if self.next[i & 1] == c {
                 let sigma = if self.pass.delta[i & 1] < 0 { -1 } else { 1 };
                 self.reg[i & 1] += sigma;
+                let (dq, dr) = self.line_step[i & 1];
+                let (q, r) = &mut self.line[i & 1];
+                *q += dq;
+                *r += dr;
+                if *r >= self.line_den[i & 1] {
+                    *r -= self.line_den[i & 1];
+                    *q += 1;
+                }
                 bits |= step | if sigma < 0 { neg } else { 0 };
                 self.next[i & 1] = self.next_count(i, c);
             }
         }
         Some((c, StepEvent::from_bits(bits)))
     }
+}
+
+/// The least `m` with `m² ≥ t`.
+fn ceil_sqrt(t: u128) -> u64 {
+    let s = isqrt(t);
+    s + u64::from(u128::from(s) * u128::from(s) < t)
 }
 
 /// The lead-in of `docs/threading.md` §2: the least even count
@@ -460,6 +550,65 @@ mod tests {
         let zs = ev.iter().filter(|e| e.1.z_steps()).count();
         assert_eq!((xs, zs), (300, 725));
         assert!(ev.iter().all(|e| e.1.x_negative() == e.1.x_steps()));
+    }
+
+    /// Each event is at the least count where its axes cross, by the
+    /// definition: crossed at its count, not at the count before.
+    #[test]
+    fn closed_forms_meet_the_definition() {
+        let cases = [
+            (
+                (mm("10"), mm("2")),
+                (mm("10"), mm("-20")),
+                "1.5",
+                4096,
+                2000,
+            ),
+            (
+                (mm("12"), mm("0")),
+                (mm("10.5"), mm("-7.25")),
+                "2",
+                1000,
+                400,
+            ),
+            (
+                (mm("0.0025"), mm("-0.005")),
+                (mm("3"), mm("0.005")),
+                "0.75",
+                360,
+                6,
+            ),
+            (
+                (mm("-1"), mm("1.000001")),
+                (mm("1"), mm("-1.23")),
+                "0.5",
+                2048,
+                5000,
+            ),
+        ];
+        for (from, to, lead, cpr, c) in cases {
+            let p = SyncPass::new(from, to, (h("0.005"), h("0.01")), mm(lead), cpr, c).unwrap();
+            let (mut x, mut z) = p.start_registers();
+            let mut checked = 0;
+            for (count, e) in p.events() {
+                for (i, k, steps) in [(0, x, e.x_steps()), (1, z, e.z_steps())] {
+                    if steps {
+                        assert!(p.crossed(i, k, count), "{from:?} {i} {k} {count}");
+                        assert!(!p.crossed(i, k, count - 1), "{from:?} {i} {k} {count}");
+                        checked += 1;
+                    } else if (x, z) != p.end_registers()
+                        && k != [p.end_registers().0, p.end_registers().1][i]
+                    {
+                        assert!(!p.crossed(i, k, count), "{from:?} {i} {k} {count}");
+                    }
+                }
+                let (dx, dz) = e.moves();
+                x += i64::from(dx);
+                z += i64::from(dz);
+            }
+            assert_eq!((x, z), p.end_registers());
+            assert!(checked > 0);
+        }
     }
 
     #[test]
