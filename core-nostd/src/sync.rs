@@ -423,6 +423,36 @@ impl Iterator for SyncEvents {
     }
 }
 
+/// The reference of a pass (`docs/threading.md` §1): the count, since the
+/// encoder started, that is the pass's `c = 0`. It is an index (`index`,
+/// the count at which one was seen, and every `cpr` counts from it) plus
+/// the start angle in counts, `start`, taken as the first such count whose
+/// lead-in begins after `now`, so that the pass waits at rest for it. With
+/// the same `index` and `start`, every pass's reference is the same angle
+/// of the spindle, whatever `now` and the lead-in are.
+pub fn reference_count(now: i64, index: i64, cpr: u32, start: u32, lead_in: u32) -> i64 {
+    let n = i64::from(cpr.max(1));
+    let offset = i64::from(start) % n;
+    // The least r = index + offset + j·N with r − C/2 > now.
+    let first = index + offset;
+    let need = now + i64::from(lead_in / 2) + 1;
+    if first >= need {
+        // Never before an index that has been seen.
+        return first;
+    }
+    let j = (need - first + n - 1) / n;
+    first + j * n
+}
+
+/// The start angle of a pass in counts, `Q(θ·N/360°)` modulo `N`, for an
+/// angle in thousandths of a degree.
+pub fn start_counts(milli_degrees: u32, cpr: u32) -> u32 {
+    let n = u64::from(cpr.max(1));
+    let a = u64::from(milli_degrees) % 360_000;
+    // Q half away from zero of a non-negative value: ⌊(2aN + 360 000) / 720 000⌋.
+    ((2 * a * n + 360_000) / 720_000 % n) as u32
+}
+
 /// The least `m` with `m² ≥ t`.
 fn ceil_sqrt(t: u128) -> u64 {
     let s = isqrt(t);
@@ -608,6 +638,25 @@ mod tests {
             }
             assert_eq!((x, z), p.end_registers());
             assert!(checked > 0);
+        }
+    }
+
+    #[test]
+    fn every_pass_waits_for_the_same_angle() {
+        // An index seen at count 1000, 4096 counts, a start at 90°.
+        let quarter = start_counts(90_000, 4096);
+        assert_eq!(quarter, 1024);
+        assert_eq!(start_counts(360_000, 4096), 0);
+        // 0.0439453125° per count: 45.5 counts' worth rounds half away.
+        assert_eq!(start_counts(4_000, 4096), 46);
+        for now in [0i64, 1500, 2024, 2025, 9000, 1_000_000] {
+            for c in [2u32, 1000, 8190, 20_000] {
+                let r = reference_count(now, 1000, 4096, quarter, c);
+                assert_eq!((r - 1000 - 1024).rem_euclid(4096), 0, "{now} {c}");
+                // The lead-in starts after now, and not a turn later.
+                assert!(r - i64::from(c / 2) > now, "{now} {c}");
+                assert!(r - 4096 - i64::from(c / 2) <= now || r == 2024, "{now} {c}");
+            }
         }
     }
 
