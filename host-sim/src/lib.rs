@@ -35,7 +35,9 @@
 //! - [`report`]: `host-sim run FILE --report OUT.html`, one HTML page of the
 //!   run: its facts as tables, the picture, the speed along the path over
 //!   time;
-//! - [`scenario`]: the built-in scenarios of the main job.
+//! - [`scenario`]: the built-in scenarios of the main job;
+//! - [`spindle`]: the simulated spindle and encoder (speed, ripple, load
+//!   dips), and synchronised passes placed in time by its counts.
 
 pub mod board;
 pub mod calculators;
@@ -55,6 +57,7 @@ pub mod report;
 pub mod scenario;
 pub mod send;
 pub mod soak;
+pub mod spindle;
 pub mod stream;
 pub mod table;
 pub mod tape;

@@ -268,3 +268,112 @@ fn most_random_passes_are_accepted() {
     assert!(accepted * 2 > n, "{accepted} of {n} accepted");
     eprintln!("{accepted} of {n} random passes accepted");
 }
+
+/// Passes of one thread against a simulated spindle (`host_sim::spindle`)
+/// at 200, 800 and 2000 rpm, with ±5 % ripple and load dips, each pass
+/// deeper, ready at another time and planned for the speed it measured
+/// (so each has its own lead-in): every Z step of every locked event is at
+/// the same spindle angle in every pass and at every speed, and the Z
+/// register there is `Q((z0 − (counts − reference)·K/N)/h)`. The phase
+/// error between passes is 0 counts.
+#[test]
+fn every_pass_cuts_the_same_groove_against_a_real_spindle() {
+    use host_sim::spindle::{run_pass, Dip, Spindle};
+    use std::collections::BTreeMap;
+    let tick_hz = 50_000.0;
+    let (cpr, lead, accel) = (4096u32, 15_000_000i64, 500u32);
+    let (z0, z1) = (20_000_000i64, -200_000_000i64);
+    // Z register → the angle (counts modulo N) where a locked pass reaches it.
+    let mut angles: BTreeMap<i64, i64> = BTreeMap::new();
+    let mut lead_ins = Vec::new();
+    let mut passes = 0;
+    for rpm in [200.0, 800.0, 2000.0] {
+        let spindle = Spindle {
+            rpm,
+            ripple: 0.05,
+            dips: vec![
+                Dip {
+                    start: 0.7,
+                    length: 0.3,
+                    fraction: 0.08,
+                },
+                Dip {
+                    start: 2.1,
+                    length: 0.05,
+                    fraction: 0.03,
+                },
+            ],
+            cpr,
+        };
+        for (j, depth) in [0i64, 3_000_000, 6_000_000, 8_000_000].iter().enumerate() {
+            let x = 100_000_000 - depth;
+            let ready = 20_000 + 31_337 * j as u64 * (1 + (rpm as u64) % 7);
+            let measured = spindle.measured_rpm(ready as f64 / tick_hz, 0.01);
+            // Planned for 10 % above what was measured.
+            let c = core_nostd::sync::lead_in_counts(
+                len(lead),
+                (measured * 1.1).ceil() as u32,
+                cpr,
+                accel,
+            )
+            .unwrap();
+            let pass = SyncPass::new(
+                (len(x), len(z0)),
+                (len(x), len(z1)),
+                (
+                    ImpulsePrice::from_length(len(50_000)).unwrap(),
+                    ImpulsePrice::from_length(len(100_000)).unwrap(),
+                ),
+                len(lead),
+                cpr,
+                c,
+            )
+            .unwrap();
+            lead_ins.push((rpm, c, pass.lead_in_length().as_angstrom()));
+            let (reference, events) = run_pass(&spindle, &pass, 1024, c, ready, tick_hz);
+            assert_eq!(reference.rem_euclid(i64::from(cpr)), 1024);
+            assert!(events
+                .windows(2)
+                .all(|w| w[0].tick <= w[1].tick && w[0].count < w[1].count));
+            let half = i64::from(c / 2);
+            let lock_end = (2 * 220_000_000 * i64::from(cpr) - lead * i64::from(c)) / (2 * lead);
+            for e in &events {
+                assert!(
+                    e.counts >= reference + e.count,
+                    "the event came before its count"
+                );
+                if e.count >= half && e.count <= lock_end && e.event.z_steps() {
+                    // z = z0 − c·K/N: Q over h = 0.01 mm, exactly.
+                    let num = z0 * i64::from(cpr) - e.count * lead;
+                    let den = i64::from(cpr) * 100_000;
+                    let want = {
+                        // Half away from zero.
+                        let r = (2 * num.abs() + den) / (2 * den);
+                        if num < 0 {
+                            -r
+                        } else {
+                            r
+                        }
+                    };
+                    assert_eq!(e.z, want, "rpm {rpm} pass {j} count {}", e.count);
+                    let angle = (reference + e.count).rem_euclid(i64::from(cpr));
+                    let was = *angles.entry(e.z).or_insert(angle);
+                    assert_eq!(was, angle, "Z {} at another angle: rpm {rpm} pass {j}", e.z);
+                }
+            }
+            passes += 1;
+        }
+    }
+    assert_eq!(passes, 12);
+    // Most registers were reached locked by several passes.
+    assert!(angles.len() > 1500, "{}", angles.len());
+    // The lead-in grows with the square of the speed: L = u·C/2.
+    for &(rpm, c, l) in &lead_ins {
+        assert_eq!(
+            l,
+            (lead * i64::from(c) + 2 * 4096 - 1) / (2 * 4096),
+            "{rpm}"
+        );
+    }
+    eprintln!("lead-ins (rpm, C, L in 10⁻⁷ mm): {lead_ins:?}");
+}
