@@ -27,6 +27,7 @@
 use crate::impulse::ImpulsePrice;
 use crate::interleave::StepEvent;
 use crate::length::{div_round_half_away, Length};
+use crate::plan::Limits;
 use crate::wide::{isqrt, U256};
 
 /// The longest lead: 2³⁰ × 10⁻⁷ mm (107.37 mm per revolution).
@@ -453,6 +454,61 @@ pub fn start_counts(milli_degrees: u32, cpr: u32) -> u32 {
     ((2 * a * n + 360_000) / 720_000 % n) as u32
 }
 
+/// The highest whole speed (rev/min) at which the spindle may turn for a
+/// pass from `from` to `to` (`(x radius, z)`) at `lead` per revolution
+/// (`docs/threading.md` §2): locked, no axis beyond its rate
+/// (`VMAX_a·D/(K·|Δa|)`) nor beyond the drive's events per second
+/// (`60·rate·h_a·D/(K·|Δa|)`), and the lead-in and lead-out within the
+/// travel at the lead axis' acceleration (the least `AMAX_a·D/|Δa|`, whole
+/// mm/s²). 0 when the pass does not travel along its lead axis.
+pub fn highest_rpm(
+    from: (Length, Length),
+    to: (Length, Length),
+    lead: Length,
+    prices: (ImpulsePrice, ImpulsePrice),
+    cpr: u32,
+    limits: &Limits,
+    rate_hz: u32,
+) -> u32 {
+    let delta = [
+        (to.0.as_angstrom() - from.0.as_angstrom()).unsigned_abs(),
+        (to.1.as_angstrom() - from.1.as_angstrom()).unsigned_abs(),
+    ];
+    let d = delta[0].max(delta[1]);
+    let k = lead.as_angstrom().max(0).unsigned_abs();
+    if d == 0 || k == 0 {
+        return 0;
+    }
+    let price = [
+        prices.0.as_angstrom().unsigned_abs(),
+        prices.1.as_angstrom().unsigned_abs(),
+    ];
+    let mut best = u128::from(u32::MAX);
+    let mut accel = u128::MAX;
+    for a in 0..2 {
+        if delta[a & 1] == 0 {
+            continue;
+        }
+        let kd = u128::from(k) * u128::from(delta[a & 1]);
+        let rate = u128::from(limits.rate(a).as_angstrom().unsigned_abs());
+        let by_rate = (rate * u128::from(d)).checked_div(kd).unwrap_or(0);
+        let steps = (60 * u128::from(rate_hz) * u128::from(price[a & 1]) * u128::from(d))
+            .checked_div(kd)
+            .unwrap_or(0);
+        best = best.min(by_rate).min(steps);
+        let amax = u128::from(limits.accel(a).as_angstrom().unsigned_abs());
+        accel = accel.min(
+            (amax * u128::from(d))
+                .checked_div(u128::from(delta[a & 1]) * crate::length::ANGSTROM_PER_MM as u128)
+                .unwrap_or(0),
+        );
+    }
+    let accel = u32::try_from(accel).unwrap_or(u32::MAX);
+    let travel = Length::from_angstrom(d as i64).unwrap_or(Length::ZERO);
+    let fits = max_rpm(lead, travel, cpr, accel);
+    (best as u32).min(fits)
+}
+
 /// The least `m` with `m² ≥ t`.
 fn ceil_sqrt(t: u128) -> u64 {
     let s = isqrt(t);
@@ -658,6 +714,38 @@ mod tests {
                 assert!(r - 4096 - i64::from(c / 2) <= now || r == 2024, "{now} {c}");
             }
         }
+    }
+
+    #[test]
+    fn the_highest_speed_is_the_least_of_the_limits() {
+        let prices = (h("0.005"), h("0.01"));
+        let l = Limits::DEFAULT; // X 1500, Z 3000 mm/min; 100, 150 mm/s².
+        let at = |to: (&str, &str), lead: &str, rate: u32| {
+            highest_rpm(
+                (mm("10"), mm("2")),
+                (mm(to.0), mm(to.1)),
+                mm(lead),
+                prices,
+                4096,
+                &l,
+                rate,
+            )
+        };
+        // Z's rate: 3000/1.5 = 2000 rpm (steps: 60·50 000·0.01/1.5 = 20 000;
+        // the lead-in over 22 mm at 150 mm/s² allows about 2297).
+        assert_eq!(at(("10", "-20"), "1.5", 50_000), 2000);
+        // The drive: 60·2 000·0.01/1.5 = 800 rpm.
+        assert_eq!(at(("10", "-20"), "1.5", 2_000), 800);
+        // 2 mm of travel: the lead-in, about 60·√(150·2)/1.5 = 692.8 rpm.
+        let n = at(("10", "0"), "1.5", 50_000);
+        assert_eq!(n, max_rpm(mm("1.5"), mm("2"), 4096, 150));
+        assert!((690..=693).contains(&n), "{n}");
+        // A face thread along X: 1500/1.5 = 1000 rpm.
+        assert_eq!(at(("30", "2"), "1.5", 50_000), 1000);
+        // A taper 1:4 on the radius along Z: X at 1500/(1.5/4) = 4000,
+        // so Z's 2000 still rules.
+        assert_eq!(at(("15.5", "-20"), "1.5", 50_000), 2000);
+        assert_eq!(at(("10", "2"), "1.5", 50_000), 0);
     }
 
     #[test]
