@@ -120,8 +120,7 @@ impl SyncPass {
         // D ≥ u·C, or D·N ≥ K·C.
         let needed = i128::from(lead) * i128::from(c);
         if i128::from(travel) * i128::from(cpr) < needed {
-            let n = i128::from(cpr);
-            let mm = (needed + n - 1).checked_div(n).unwrap_or(0);
+            let mm = ceil_div(needed, i128::from(cpr));
             return Err(SyncError::TooShort {
                 needed: i64::try_from(mm)
                     .ok()
@@ -149,21 +148,16 @@ impl SyncPass {
     /// The first count at which the pass is at its end, `⌈D·N/K + C/2⌉`.
     pub const fn last_count(&self) -> i64 {
         let n = 2 * self.travel as i128 * self.cpr as i128 + (self.lead * self.lead_in) as i128;
-        let d = 2 * self.lead as i128;
-        // K > 0 (checked by `new`): the quotient always exists.
-        match (n + d - 1).checked_div(d) {
-            Some(c) => c as i64,
-            None => 0,
-        }
+        ceil_div(n, 2 * self.lead as i128) as i64
     }
 
     /// The lead-in and the lead-out's length along the lead axis, `u·C/2`,
     /// rounded up to 10⁻⁷ mm.
     pub fn lead_in_length(&self) -> Length {
-        let n = 2 * i128::from(self.cpr);
-        let l = (i128::from(self.lead) * i128::from(self.lead_in) + n - 1)
-            .checked_div(n)
-            .unwrap_or(0);
+        let l = ceil_div(
+            i128::from(self.lead) * i128::from(self.lead_in),
+            2 * i128::from(self.cpr),
+        );
         Length::from_angstrom(l as i64).unwrap_or(Length::ZERO)
     }
 
@@ -215,11 +209,29 @@ impl SyncPass {
         )
     }
 
+    /// The direction of axis `i` towards the end, −1 or 1 (`i` is 0 or 1;
+    /// the mask keeps the indexing free of a bounds check).
+    const fn sigma(&self, i: usize) -> i64 {
+        if self.delta[i & 1] < 0 {
+            -1
+        } else {
+            1
+        }
+    }
+
+    /// Whether the boundary axis `i` crosses to leave register `k` lies on
+    /// the side towards zero (`σ·B < 0`): it is passed strictly, as `Q`
+    /// rounds a tie away from zero.
+    const fn strict(&self, i: usize, k: i64) -> bool {
+        let sigma = self.sigma(i);
+        (2 * k + sigma) * sigma < 0
+    }
+
     /// `R = σ·(2B − 2a0)`, twice the distance from the start to the
     /// boundary `B = (2k + σ)·h/2` that axis `i` crosses to leave register
     /// `k` towards its end (`σ` its direction); at least 0.
     fn boundary(&self, i: usize, k: i64) -> i128 {
-        let sigma: i128 = if self.delta[i & 1] < 0 { -1 } else { 1 };
+        let sigma = i128::from(self.sigma(i));
         sigma
             * ((2 * i128::from(k) + sigma) * i128::from(self.price[i & 1])
                 - 2 * i128::from(self.from[i & 1]))
@@ -230,8 +242,6 @@ impl SyncPass {
     /// of [`SyncEvents::next_count`] are checked against.
     #[cfg(test)]
     fn crossed(&self, i: usize, k: i64, c: i64) -> bool {
-        // `i` is 0 or 1; the mask keeps the indexing free of a bounds check.
-        let sigma: i64 = if self.delta[i & 1] < 0 { -1 } else { 1 };
         let r = self.boundary(i, k);
         // |Δa|·s/D ≥ σ(B − a0)  ⇔  2·|Δa|·num ≥ R·D·den.
         let lhs = U256::mul(
@@ -239,10 +249,7 @@ impl SyncPass {
             self.num(c) as u128,
         );
         let rhs = U256::mul(r as u128 * self.travel as u128, self.den() as u128);
-        // A boundary on the side towards zero is crossed strictly (`Q`
-        // rounds a tie away from zero): σ·B < 0.
-        let b2 = (2 * i128::from(k) + i128::from(sigma)) * i128::from(sigma);
-        if b2 < 0 {
+        if self.strict(i, k) {
             lhs > rhs
         } else {
             lhs >= rhs
@@ -330,10 +337,7 @@ impl SyncEvents {
         }
         let k = self.reg[i & 1];
         let p = &self.pass;
-        // A boundary on the side towards zero is passed strictly (Q rounds
-        // a tie away from zero).
-        let sigma = if p.delta[i & 1] < 0 { -1 } else { 1 };
-        let strict = (2 * k + sigma) * sigma < 0;
+        let strict = p.strict(i, k);
         // Locked, the pass is on the line, whose crossings follow by
         // additions: from a locked count, a crossing on the line is it.
         let (q, rem) = self.line[i & 1];
@@ -381,7 +385,7 @@ impl SyncEvents {
         };
         let w = i128::from(isqrt(v));
         let top = 2 * d * n + kk * cc - w;
-        let c = (top + 2 * kk - 1).checked_div(2 * kk).unwrap_or(0) as i64;
+        let c = ceil_div(top, 2 * kk) as i64;
         // (`clamp` would check its bounds; the crossing lies between them.)
         c.max(after + 1).min(p.last_count().max(after + 1))
     }
@@ -406,7 +410,7 @@ impl Iterator for SyncEvents {
             (1, StepEvent::Z_STEP, StepEvent::Z_NEG),
         ] {
             if self.next[i & 1] == c {
-                let sigma = if self.pass.delta[i & 1] < 0 { -1 } else { 1 };
+                let sigma = self.pass.sigma(i);
                 self.reg[i & 1] += sigma;
                 let (dq, dr) = self.line_step[i & 1];
                 let (q, r) = &mut self.line[i & 1];
@@ -507,6 +511,15 @@ pub fn highest_rpm(
     let travel = Length::from_angstrom(d as i64).unwrap_or(Length::ZERO);
     let fits = max_rpm(lead, travel, cpr, accel);
     (best as u32).min(fits)
+}
+
+/// `⌈n/d⌉` for `n ≥ 0` and `d > 0` (0 for `d = 0`, which no caller
+/// passes: a division that cannot panic).
+const fn ceil_div(n: i128, d: i128) -> i128 {
+    match (n + d - 1).checked_div(d) {
+        Some(q) => q,
+        None => 0,
+    }
 }
 
 /// The least `m` with `m² ≥ t`.

@@ -346,15 +346,7 @@ fn every_pass_cuts_the_same_groove_against_a_real_spindle() {
                     // z = z0 − c·K/N: Q over h = 0.01 mm, exactly.
                     let num = z0 * i64::from(cpr) - e.count * lead;
                     let den = i64::from(cpr) * 100_000;
-                    let want = {
-                        // Half away from zero.
-                        let r = (2 * num.abs() + den) / (2 * den);
-                        if num < 0 {
-                            -r
-                        } else {
-                            r
-                        }
-                    };
+                    let want = reference::exact::q_div(num.into(), den.into()) as i64;
                     assert_eq!(e.z, want, "rpm {rpm} pass {j} count {}", e.count);
                     let angle = (reference + e.count).rem_euclid(i64::from(cpr));
                     let was = *angles.entry(e.z).or_insert(angle);
