@@ -1,8 +1,9 @@
 //! G-code blocks: words parsed and checked, before any motion.
 //!
 //! A block is a line of address words: a letter followed by a number, with or
-//! without spaces between words (`N10 G01 X27.532 Z0`, `G1X12.5`), letters in
-//! either case. Comments in parentheses and everything after `;` are ignored.
+//! without spaces between words (`N10 G01 X27.532 Z0`, `G1X12.5`) and between
+//! a letter and its number (`G0 X 2`, as LinuxCNC and Fanuc read it), letters
+//! in either case. Comments in parentheses and everything after `;` are ignored.
 //! Each address may appear once, except `G` and `M`, which may appear once
 //! per modal group. Lines as CAM posts and machinists write them are read
 //! too:
@@ -648,14 +649,15 @@ pub struct Located {
 }
 
 /// Whether a request line is a G-code line: its first word is an address
-/// letter directly followed by a number, or it begins with `%`, `/`, `(`,
-/// `;`, `:` or `O<`.
+/// letter followed by a number (spaces and tabs between them allowed), or
+/// it begins with `%`, `/`, `(`, `;`, `:` or `O<`.
 ///
 /// ```
 /// use core_nostd::gcode::is_block;
 /// assert!(is_block("N10 G01 X12"));
 /// assert!(is_block("x-1.5"));
 /// assert!(is_block("X.5"));
+/// assert!(is_block("G 0 X 2"));
 /// assert!(is_block("%"));
 /// assert!(is_block("(FACE)"));
 /// assert!(is_block("O<part> (name)"));
@@ -667,8 +669,9 @@ pub fn is_block(line: &str) -> bool {
     match b {
         [b'%' | b'/' | b'(' | b';' | b':', ..] => true,
         [b'O' | b'o', b'<', ..] => true,
-        [l, d, ..] => {
-            l.is_ascii_alphabetic() && (d.is_ascii_digit() || matches!(d, b'+' | b'-' | b'.'))
+        [l, rest @ ..] if l.is_ascii_alphabetic() => {
+            let d = rest.get(after_blanks(rest, 0));
+            d.is_some_and(|d| d.is_ascii_digit() || matches!(d, b'+' | b'-' | b'.'))
         }
         _ => false,
     }
@@ -761,8 +764,9 @@ fn scan(line: &str) -> Scan {
                 pos += close + 1;
             }
             b'G' | b'g' => {
-                let n = number_len(bytes, pos + 1);
-                match line.get(pos + 1..pos + 1 + n).and_then(g_code) {
+                let from = after_blanks(bytes, pos + 1);
+                let n = number_len(bytes, from);
+                match line.get(from..from + n).and_then(g_code) {
                     Some(200) if found.units.is_none() => found.units = Some(Units::Inch),
                     Some(210) if found.units.is_none() => found.units = Some(Units::Mm),
                     Some(40) => found.dwell = true,
@@ -777,12 +781,23 @@ fn scan(line: &str) -> Scan {
                     Some(411 | 421) => found.dynamic = true,
                     _ => {}
                 }
-                pos += 1 + n;
+                pos = from + n;
             }
             _ => pos += 1,
         }
     }
     found
+}
+
+/// The first byte from `pos` that is not a space or a tab: a word's
+/// number may stand apart from its letter (`X 2`, as LinuxCNC and Fanuc
+/// read it).
+fn after_blanks(bytes: &[u8], pos: usize) -> usize {
+    pos + bytes
+        .iter()
+        .skip(pos)
+        .take_while(|b| matches!(b, b' ' | b'\t'))
+        .count()
 }
 
 /// The bytes of a word's number from `pos`: digits, signs and points.
@@ -930,10 +945,9 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
             }
             _ if c.is_ascii_alphabetic() => {
                 let letter = c.to_ascii_uppercase();
-                let end = pos + 1 + number_len(bytes, pos + 1);
-                let number = line
-                    .get(pos + 1..end)
-                    .ok_or(at(BlockError::NotAWord, pos))?;
+                let from = after_blanks(bytes, pos + 1);
+                let end = from + number_len(bytes, from);
+                let number = line.get(from..end).ok_or(at(BlockError::NotAWord, pos))?;
                 if number.is_empty() {
                     return Err(at(BlockError::NotAWord, pos));
                 }
@@ -1695,6 +1709,24 @@ mod tests {
             Some(Corner::Intersection)
         );
         assert_eq!(parse_block("N1.5").unwrap().n, None);
+    }
+
+    #[test]
+    fn a_number_may_stand_apart_from_its_letter() {
+        let b = parse_block("G0 X 2 Z\t-3.5").unwrap();
+        assert_eq!(b.motion, Some(Motion::Rapid));
+        assert_eq!((b.x, b.z), (mm("2"), mm("-3.5")));
+        assert_eq!(parse_block("G 1 X1").unwrap().motion, Some(Motion::Linear));
+        // G 20 is read for the whole line, as G20 is.
+        let b = parse_in("X 1 G 20", Units::Mm).unwrap();
+        assert_eq!(b.x, mm("25.4"));
+        let b = parse("G 4 P 1500", Dialect::Fanuc, Units::Mm).unwrap();
+        assert_eq!(b.dwell, Some(1_500_000));
+        // Within a number spaces are refused, at the digit left over.
+        let e = parse_located("X1 2").unwrap_err();
+        assert_eq!((e.error, e.column), (BlockError::NotAWord, 4));
+        assert_eq!(parse_block("X Z1"), Err(BlockError::NotAWord));
+        assert!(is_block("X 2") && is_block("g\t0") && !is_block("X ") && !is_block("X Z"));
     }
 
     #[test]

@@ -348,16 +348,38 @@ pub fn write_exact_mm<W: fmt::Write + ?Sized>(w: &mut W, angstrom: i64) -> fmt::
 
 /// A G-code number without a unit (the grammar of [`Length::from_gcode_mm`])
 /// times 10ᵉ, `e` ≤ 7, rounded once half away from zero: seconds or
-/// milliseconds as microseconds (`e` 6 or 3).
+/// milliseconds as microseconds (`e` 6 or 3). The rounded number, on its
+/// own scale, is at most 99 999.999999: a number that rounds beyond it is
+/// refused, as a length is.
 ///
 /// ```
-/// use core_nostd::length::gcode_scaled;
+/// use core_nostd::length::{gcode_scaled, LengthError};
 /// assert_eq!(gcode_scaled("1.5", 6), Ok(1_500_000));
 /// assert_eq!(gcode_scaled("0.0000004999999", 6), Ok(0));
 /// assert_eq!(gcode_scaled("-2.0005", 3), Ok(-2_001));
+/// assert_eq!(gcode_scaled("99999.9999994", 6), Ok(99_999_999_999));
+/// assert_eq!(gcode_scaled("99999.9999995", 6), Err(LengthError::OutOfRange));
+/// assert_eq!(gcode_scaled("99999.9995", 3), Err(LengthError::OutOfRange));
 /// ```
 pub fn gcode_scaled(text: &str, e: u32) -> Result<i64, LengthError> {
-    from_gcode(text, 1, e.min(7)).map(Length::as_angstrom)
+    // ⌊99 999.999999 · 10ᵉ⌋ for e = 0 … 7.
+    const MOST: [u64; 8] = [
+        99_999,
+        999_999,
+        9_999_999,
+        99_999_999,
+        999_999_999,
+        9_999_999_999,
+        99_999_999_999,
+        999_999_999_990,
+    ];
+    let e = e.min(7);
+    let most = MOST.get(e as usize).copied().unwrap_or(0);
+    let v = from_gcode(text, 1, e)?.as_angstrom();
+    if v.unsigned_abs() > most {
+        return Err(LengthError::OutOfRange);
+    }
+    Ok(v)
 }
 
 /// Writes a count of 0.0001 mm as `[-]int.dddd`.

@@ -267,8 +267,10 @@ pub fn names_a_code_beyond(text: &str, fanuc: bool, inch: bool) -> bool {
         if !b[i].eq_ignore_ascii_case(&b'G') {
             return false;
         }
-        // `i` is at an ASCII byte: `i + 1` is a char boundary.
+        // `i` is at an ASCII byte: `i + 1` is a char boundary. Spaces and
+        // tabs may stand between the letter and its number.
         let number: String = text[i + 1..]
+            .trim_start_matches([' ', '\t'])
             .chars()
             .take_while(|c| c.is_ascii_digit() || *c == '.')
             .collect();

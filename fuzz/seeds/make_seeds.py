@@ -176,7 +176,11 @@ for n in sorted(numbers):
 
 blocks = [l for l in lines if re.match(r"^\s*[A-Za-z][0-9+\-.]", l)]
 blocks += ["G01 X1 X2", "G01 G02", "G1.5", "Q5", "G01 X", "G01 X1 $", "G01 (open", "X1.1234567",
-           "Z--1", "", "x-1.5", "N10 G01 X12"]
+           "Z--1", "", "x-1.5", "N10 G01 X12",
+           # Dwell times that round onto and beyond the top of the range.
+           "G04 P99999.999999500", "G04 P99999.9999994", "G04 P99999.9995",
+           # Numbers apart from their letters.
+           "G0 X 2 Z\t-3", "T1 MG 71 M7 G4", "X1 2"]
 for b in dict.fromkeys(blocks):
     write("gcode", None, b.encode())
 print({t: len(os.listdir(os.path.join(SEEDS, t))) for t in ("protocol", "length", "gcode")})

@@ -1111,6 +1111,9 @@ fn reference_scan(line: &str) -> (Option<bool>, bool, bool) {
             ';' => break,
             'G' | 'g' => {
                 let mut number = String::new();
+                while i < chars.len() && matches!(chars[i], ' ' | '\t') {
+                    i += 1;
+                }
                 while i < chars.len() && (chars[i].is_ascii_digit() || "+-.".contains(chars[i])) {
                     number.push(chars[i]);
                     i += 1;
@@ -1144,8 +1147,8 @@ pub fn parse_gcode_mm(text: &str) -> Result<i64, LengthRefusal> {
 }
 
 /// A G-code number (the grammar of [`parse_gcode_mm`]) times 10^e, rounded
-/// half away from zero; at most 5 integer digits and 999 999 999 990 after
-/// rounding.
+/// half away from zero; at most 5 integer digits, and after rounding at
+/// most 99 999.999999 on the scale 10^e (999 999 999 990 for e = 7).
 pub fn parse_gcode_scaled(text: &str, e: u32) -> Result<i64, LengthRefusal> {
     let (negative, body) = match text.as_bytes().first() {
         Some(b'-') => (true, &text[1..]),
@@ -1174,7 +1177,8 @@ pub fn parse_gcode_scaled(text: &str, e: u32) -> Result<i64, LengthRefusal> {
     };
     let (q, r) = (num / den, num % den);
     let a = if 2 * r >= den { q + 1 } else { q };
-    if a > 999_999_999_990 {
+    // 99 999.999999 · 10^e, rounded down.
+    if a * 1_000_000 > 99_999_999_999 * 10i128.pow(e) {
         return Err(LengthRefusal::OutOfRange);
     }
     Ok(if negative { -(a as i64) } else { a as i64 })
@@ -1182,8 +1186,8 @@ pub fn parse_gcode_scaled(text: &str, e: u32) -> Result<i64, LengthRefusal> {
 
 /// Reads a block per the `gcode` module docs: an optional line head (`%`,
 /// `/`, a program number `O123`, `O<name>`, `:123`), then address words (a
-/// letter and the run of `0-9 + - .` after it), spaces and tabs between
-/// words optional, `( … )` comments, `;` ends the block; `N F X Y Z I K R`
+/// letter and the run of `0-9 + - .` after it, spaces and tabs between the
+/// two allowed), spaces and tabs between words optional, `( … )` comments, `;` ends the block; `N F X Y Z I K R`
 /// once each with numbers that must be G-code lengths, `Y` zero; `S`, `D`
 /// (only with G96) and `P` (only with G4, seconds) numbers of at least 0;
 /// `T` a tool of at most two digits; `G` once per group (00–03, 18, 20–21,
@@ -1278,7 +1282,14 @@ pub fn reference_block_in(
             _ if b.kind == 1 => return Err(RefBlockError::NotAWord),
             c if c.is_ascii_alphabetic() => {
                 let letter = c.to_ascii_uppercase() as u8;
-                let mut end = at + 1;
+                // Spaces and tabs may stand between the letter and its
+                // number.
+                let mut from = at + 1;
+                while let Some(&(i, ' ' | '\t')) = chars.peek() {
+                    from = i + 1;
+                    chars.next();
+                }
+                let mut end = from;
                 while let Some(&(i, d)) = chars.peek() {
                     if d.is_ascii_digit() || matches!(d, '+' | '-' | '.') {
                         end = i + 1;
@@ -1287,7 +1298,7 @@ pub fn reference_block_in(
                         break;
                     }
                 }
-                let number = &rest[at + 1..end];
+                let number = &rest[from..end];
                 if number.is_empty() {
                     return Err(RefBlockError::NotAWord);
                 }
@@ -1598,8 +1609,11 @@ pub fn reference_is_block(line: &str) -> bool {
     match (c.next(), c.next()) {
         (Some('%' | '/' | '(' | ';' | ':'), _) => true,
         (Some('O' | 'o'), Some('<')) => true,
-        (Some(l), Some(d)) => {
-            l.is_ascii_alphabetic() && (d.is_ascii_digit() || matches!(d, '+' | '-' | '.'))
+        (Some(l), Some(_)) if l.is_ascii_alphabetic() => {
+            // Spaces and tabs may stand between the letter and its number.
+            let after = &t[1..];
+            let d = after.trim_start_matches([' ', '\t']).chars().next();
+            d.is_some_and(|d| d.is_ascii_digit() || matches!(d, '+' | '-' | '.'))
         }
         _ => false,
     }

@@ -106,6 +106,31 @@ fn printed_length_at_the_limit() {
     assert_eq!(ask1(&mut dev, "POS"), pos);
 }
 
+/// Found by the `block` target: `G04 P99999.9999995` rounds to 100 000 s,
+/// one past the largest dwell, and was taken while the same time written
+/// back (`G04 P100000.000000`) was refused. A number without a unit is now
+/// held to 99 999.999999 after rounding, as a length is; the refusal names
+/// the word and changes nothing in the session.
+#[test]
+fn dwell_that_rounds_beyond_the_range() {
+    use core_nostd::gcode::{parse, BlockError, Dialect, Units};
+    let range = Err(BlockError::Range(b'P', "must be 0 to 99999.999999"));
+    assert_eq!(parse_block("G04 P99999.999999500"), range);
+    assert_eq!(parse_block("G04 P100000.000000"), range);
+    let b = parse_block("G04 P99999.9999994").unwrap();
+    assert_eq!(b.dwell, Some(99_999_999_999));
+    // Fanuc's P is milliseconds: 99 999.9995 ms rounds to 100 000 ms.
+    let fanuc = |t| parse(t, Dialect::Fanuc, Units::Mm).map_err(|l| l.error);
+    assert_eq!(fanuc("G04 P99999.9995"), range);
+    assert_eq!(fanuc("G04 P99999.9994").unwrap().dwell, Some(99_999_999));
+    let mut dev = Device::new();
+    let before = ask1(&mut dev, "POS");
+    let reply = ask1(&mut dev, "G04 P99999.999999500");
+    assert!(reply.starts_with("ERR VALUE"), "{reply}");
+    assert!(reply.contains('P'), "{reply}");
+    assert_eq!(ask1(&mut dev, "POS"), before);
+}
+
 // ---------------------------------------------------------------------------
 // Corpus inputs kept as regression tests (all pass)
 // ---------------------------------------------------------------------------

@@ -60,6 +60,21 @@ const PEERS: &[Peer] = &[
         inch: false,
     },
     Peer {
+        name: "LinuxCNC's lathe_test.ngc (G8, G64, a space between letter and number)",
+        body: include_str!("../data/linuxcnc/lathe_test.ngc"),
+        tool: None,
+        entry: None,
+        inch: false,
+    },
+    Peer {
+        name: "spaces and tabs between letters and numbers",
+        body: "G 18 G21 G7 G90\nG00 X 30 Z\t5\nG01 Z -10 F 100\nG02 X 40 Z -15 R 5\n\
+               G00 X 50 Z 5\nM 2\n",
+        tool: None,
+        entry: None,
+        inch: false,
+    },
+    Peer {
         name: "incremental words (G91)",
         body: "G18 G21 G7 G90\nG00 X20 Z2\nG91 G01 Z-12 F80\nX10 Z-5\n\
                G02 X8 Z-4 I0 K-4\nG03 X-4 Z-6 I-1 K-3\nG01 Z-3.333\nG90 G00 X60 Z5\nM2\n",
