@@ -363,6 +363,9 @@ pub struct Block {
     /// the nose diameter and `L` the orientation (LinuxCNC's dynamic
     /// compensation).
     pub dynamic_nose: Option<DynamicNose>,
+    /// G41/G42 `D` (ISO, as LinuxCNC reads it): the tool whose nose
+    /// compensates, 1 … 32 (0: the loaded tool's, as without `D`).
+    pub nose_tool: Option<u8>,
     /// G20 or G21 if given; the block's lengths are read in it.
     pub units: Option<Units>,
     /// G94/G95 (ISO), G98/G99 (Fanuc) if given.
@@ -1614,15 +1617,42 @@ impl Reading {
             _ => {}
         }
         if let Some((d, at)) = self.d {
-            if b.spindle_mode != Some(SpindleMode::Surface) {
-                return Err((
-                    BlockError::Form(
-                        "D only with G96 (the spindle speed limit) or G45 to G48 (the offset register)",
-                    ),
-                    at,
-                ));
+            let surface = b.spindle_mode == Some(SpindleMode::Surface);
+            let nose = matches!(
+                b.compensation,
+                Some(Compensation::Left | Compensation::Right)
+            ) && self.dialect == Dialect::Iso;
+            match (nose, surface) {
+                (true, true) => {
+                    return Err((
+                        BlockError::Form(
+                            "D with both G96 and G41/G42: write them in separate blocks",
+                        ),
+                        at,
+                    ))
+                }
+                (true, false) => {
+                    // A tool number: whole, one of the table's registers.
+                    let a = d.as_angstrom();
+                    let unit = crate::length::ANGSTROM_PER_MM;
+                    if a % unit != 0 || a / unit > TOOL_REGISTERS as i64 {
+                        return Err((
+                            BlockError::Range(b'D', "with G41/G42 names a tool, 0 to 32"),
+                            at,
+                        ));
+                    }
+                    b.nose_tool = Some((a / unit) as u8);
+                }
+                (false, true) => b.clamp = Some(d),
+                (false, false) => {
+                    return Err((
+                        BlockError::Form(
+                            "D only with G41/G42 (the tool), G96 (the spindle speed limit) or G45 to G48 (the offset register)",
+                        ),
+                        at,
+                    ))
+                }
             }
-            b.clamp = Some(d);
         }
         Ok(self.block)
     }
@@ -1712,6 +1742,37 @@ mod tests {
     }
 
     #[test]
+    fn g41_g42_d_names_the_tool_whose_nose_compensates() {
+        let b = parse_block("g42 d1").unwrap();
+        assert_eq!(
+            (b.compensation, b.nose_tool),
+            (Some(Compensation::Right), Some(1))
+        );
+        let b = parse_block("G41 D0 G01 X2").unwrap();
+        assert_eq!(
+            (b.compensation, b.nose_tool),
+            (Some(Compensation::Left), Some(0))
+        );
+        assert_eq!(parse_block("G42").unwrap().nose_tool, None);
+        // Inch or millimetre, D is a tool number.
+        assert_eq!(
+            parse_in("G20 G42 D32", Units::Mm).unwrap().nose_tool,
+            Some(32)
+        );
+        let range = BlockError::Range(b'D', "with G41/G42 names a tool, 0 to 32");
+        assert_eq!(parse_block("G42 D33"), Err(range));
+        assert_eq!(parse_block("G42 D1.5"), Err(range));
+        assert!(matches!(parse_block("G40 D1"), Err(BlockError::Form(_))));
+        assert!(matches!(
+            parse_block("G96 S100 G42 D1"),
+            Err(BlockError::Form(_))
+        ));
+        // Fanuc's G41/G42 take the nose from the T word's register.
+        let fanuc = parse("G42 D1", Dialect::Fanuc, Units::Mm).map_err(|l| l.error);
+        assert_eq!(fanuc, Err(BlockError::UnknownAddress(b'D')));
+    }
+
+    #[test]
     fn a_number_may_stand_apart_from_its_letter() {
         let b = parse_block("G0 X 2 Z\t-3.5").unwrap();
         assert_eq!(b.motion, Some(Motion::Rapid));
@@ -1780,7 +1841,7 @@ mod tests {
             at("G97 S200 D3000"),
             (
                 BlockError::Form(
-                    "D only with G96 (the spindle speed limit) or G45 to G48 (the offset register)"
+                    "D only with G41/G42 (the tool), G96 (the spindle speed limit) or G45 to G48 (the offset register)"
                 ),
                 10
             )

@@ -72,6 +72,7 @@ pub fn as_reference(b: &Block) -> RefBlock {
         }),
         tool_change: b.tool_change,
         position_offset: b.position_offset.map(|p| (p.times, p.register)),
+        nose_tool: b.nose_tool,
         special: b.special.map(|s| match s {
             Special::Reference(n) => 280 + 20 * u16::from(n),
             Special::Store(n) => 281 + 20 * u16::from(n),
@@ -159,6 +160,9 @@ pub fn canonical(b: &RefBlock) -> String {
     .flatten()
     {
         words.push(format!("G{g:02}"));
+    }
+    if let Some(t) = b.nose_tool {
+        words.push(format!("D{t}"));
     }
     if let Some(g) = b.corner {
         words.push(format!("G{g}"));

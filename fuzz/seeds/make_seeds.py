@@ -180,7 +180,9 @@ blocks += ["G01 X1 X2", "G01 G02", "G1.5", "Q5", "G01 X", "G01 X1 $", "G01 (open
            # Dwell times that round onto and beyond the top of the range.
            "G04 P99999.999999500", "G04 P99999.9999994", "G04 P99999.9995",
            # Numbers apart from their letters.
-           "G0 X 2 Z\t-3", "T1 MG 71 M7 G4", "X1 2"]
+           "G0 X 2 Z\t-3", "T1 MG 71 M7 G4", "X1 2",
+           # G41/G42 D: the tool whose nose compensates.
+           "g42 d1", "G41 D0 G01 X2", "G42 D33", "G96 S100 G42 D1"]
 for b in dict.fromkeys(blocks):
     write("gcode", None, b.encode())
 print({t: len(os.listdir(os.path.join(SEEDS, t))) for t in ("protocol", "length", "gcode")})

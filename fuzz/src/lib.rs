@@ -1023,6 +1023,8 @@ pub struct RefBlock {
     pub special: Option<u16>,
     /// G45–G48 (+1, −1, +2, −2) and D, the offset register.
     pub position_offset: Option<(i8, u8)>,
+    /// ISO's G41/G42 D: the tool whose nose compensates.
+    pub nose_tool: Option<u8>,
 }
 
 /// Why the reference reading refuses a block.
@@ -1593,16 +1595,25 @@ pub fn reference_block_in(
         _ => {}
     }
     if let Some(d) = d {
-        if b.spindle_mode != Some(96) {
-            return Err(RefBlockError::Form);
+        // ISO's G41/G42 D: a tool number, 0 … 32; with G96 as well, D is
+        // refused (which of the two it is would be a guess).
+        let nose = matches!(b.compensation, Some(41 | 42)) && !fanuc;
+        let surface = b.spindle_mode == Some(96);
+        match (nose, surface) {
+            (true, false) if d % 10_000_000 == 0 && d / 10_000_000 <= 32 => {
+                b.nose_tool = Some((d / 10_000_000) as u8);
+            }
+            (true, false) => return Err(RefBlockError::Range(b'D')),
+            (false, true) => b.clamp = Some(d),
+            _ => return Err(RefBlockError::Form),
         }
-        b.clamp = Some(d);
     }
     Ok(b)
 }
 
 /// Whether a request line is a G-code block: its first word is an address
-/// letter directly followed by a digit, sign or point.
+/// letter followed (spaces and tabs between allowed) by a digit, sign or
+/// point.
 pub fn reference_is_block(line: &str) -> bool {
     let t = line.trim_start_matches([' ', '\t']);
     let mut c = t.chars();

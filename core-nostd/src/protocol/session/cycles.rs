@@ -472,6 +472,7 @@ impl Session {
             || b.tool_change
             || b.tool_offset.is_some()
             || b.dynamic_nose.is_some()
+            || b.nose_tool.is_some()
             || b.kind != crate::gcode::LineKind::Words;
         if other {
             return Err(refuse_profile(

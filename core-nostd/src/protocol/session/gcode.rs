@@ -341,11 +341,14 @@ impl Session {
             None
         };
         // 7. Nose compensation (G40–G42, G41.1/G42.1, G450/G451).
-        let dynamic_tool = match (b.dynamic_nose, b.compensation) {
+        let dynamic_tool = match (b.dynamic_nose, b.nose_tool) {
             (Some(nose), _) => Some(Tool::new(
                 nose.radius,
                 TipCode::new(linuxcnc_orientation(nose.orientation)).unwrap_or(self.cfg.tip),
             )),
+            // G41/G42 D: the named tool's nose (D0: the loaded tool's).
+            (None, Some(0)) => None,
+            (None, Some(d)) => Some(self.nose_of(&offsets, d)),
             // G40 too: the lead-out is the nose's that compensated.
             (None, _) => self.dynamic_tool,
         };

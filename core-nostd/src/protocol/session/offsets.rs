@@ -165,6 +165,12 @@ impl Session {
             Dialect::Fanuc => sel.register,
             Dialect::Iso => sel.loaded,
         };
+        self.nose_of(offsets, register)
+    }
+
+    /// The nose of a register (ISO's `G41`/`G42 D`: a tool's), else the
+    /// configured `RN` and `TIP`.
+    pub(in crate::protocol) fn nose_of(&self, offsets: &Offsets, register: u8) -> Tool {
         match offsets.register(register).and_then(|t| t.nose) {
             Some((r, tip)) => Tool::new(r, TipCode::new(tip).unwrap_or(self.cfg.tip)),
             None => Tool::new(self.cfg.rn, self.cfg.tip),

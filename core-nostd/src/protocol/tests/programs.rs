@@ -415,6 +415,6 @@ fn g45_to_g48_lengthen_and_shorten_the_move_by_an_offset_register() {
     assert!(last(&mut iso, "G91 G00 Z0").starts_with("OK"));
     assert_eq!(nz(&mut iso, "G45 Z-5 D2"), "OK NX=0 NZ=-470");
     assert!(last(&mut iso, "G01 Z1 D2").starts_with(
-        "ERR SYNTAX D only with G96 (the spindle speed limit) or G45 to G48 (the offset register)"
+        "ERR SYNTAX D only with G41/G42 (the tool), G96 (the spindle speed limit) or G45 to G48 (the offset register)"
     ));
 }
