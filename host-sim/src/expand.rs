@@ -32,7 +32,7 @@
 //! | | LinuxCNC ([`Dialect::Iso`]) | Fanuc ([`Dialect::Fanuc`]) |
 //! |---|---|---|
 //! | unset parameter | reads as 0 | vacant: 0 in arithmetic; a word whose value is vacant is left out; `EQ`/`NE` tell vacant from 0 |
-//! | named parameters | `#<name>` (case-insensitive), `#<_name>` global, others local to their call; reading an unset one is an error; `EXISTS[#<name>]` | none |
+//! | named parameters | `#<name>` (case-insensitive), `#<_name>` global, others local to their call; reading an unset one is an error; `EXISTS[#<name>]`; `#<_current_tool>` (`#5400`) and `#<_selected_tool>` read-only, following the blocks' `T` and `M6` from 0 and −1 (no tool at the program's start) | none |
 //! | locals | `#1`–`#30` saved around `oN call`, set from its arguments (the rest 0) | `#1`–`#33` fresh (vacant) for each `G65`, which maps A→#1 … Z→#26; `M98` shares its caller's |
 //! | assignments | several on a line, with words; all take effect after the line is read | one per line, alone (`IF […] THEN #i = …` too) |
 //! | `EQ`, `NE` | within 0.0001 | within 10⁻⁹ of the larger magnitude |
@@ -1713,7 +1713,14 @@ struct Run<'a> {
     cap: usize,
     runs: usize,
     done: bool,
+    /// LinuxCNC's `#<_current_tool>` (`#5400`) and `#<_selected_tool>`:
+    /// the tool in the turret's station and the last `T`, followed
+    /// through the blocks put out (a run starts with none: 0 and −1).
+    tool: [f64; 2],
 }
+
+/// LinuxCNC's predefined parameters the expansion keeps: read-only.
+const TOOL_PARAMETERS: [&str; 2] = ["_current_tool", "_selected_tool"];
 
 impl<'a> Run<'a> {
     fn new(src: &'a [Src<'a>], plan: &'a Plan, dialect: Dialect, cap: usize) -> Self {
@@ -1730,6 +1737,7 @@ impl<'a> Run<'a> {
             cap,
             runs: 0,
             done: false,
+            tool: [0.0, -1.0],
         }
     }
 
@@ -1799,6 +1807,24 @@ impl<'a> Run<'a> {
                     self.cap
                 ),
             ));
+        }
+        if self.dialect == Dialect::Iso {
+            // `T` selects, `M6` puts the selected tool in (LinuxCNC).
+            let (mut t, mut m6) = (None, false);
+            scan_words(&text, |run, value| {
+                match (run.first().map(u8::to_ascii_uppercase), run.len(), value) {
+                    (Some(b'T'), 1, Some(n)) => t = Some(n),
+                    (Some(b'M'), 1, Some(6.0)) => m6 = true,
+                    _ => {}
+                }
+                false
+            });
+            if let Some(n) = t {
+                self.tool[1] = n;
+            }
+            if m6 && self.tool[1] >= 0.0 {
+                self.tool[0] = self.tool[1];
+            }
         }
         self.out.push(Line {
             source: self.src[pc].no,
@@ -1898,6 +1924,9 @@ impl<'a> Run<'a> {
     }
 
     fn read(&self, i: usize) -> Val {
+        if self.dialect == Dialect::Iso && i == 5400 {
+            return num(self.tool[0]);
+        }
         let stored = if self.dialect == Dialect::Fanuc && (1..=FANUC_LOCALS).contains(&i) {
             self.levels.last().and_then(|l| l.get(i).copied().flatten())
         } else {
@@ -1910,6 +1939,11 @@ impl<'a> Run<'a> {
     }
 
     fn named_get(&self, name: &str) -> Option<f64> {
+        if self.dialect == Dialect::Iso {
+            if let Some(i) = TOOL_PARAMETERS.iter().position(|&p| p == name) {
+                return Some(self.tool[i]);
+            }
+        }
         if name.starts_with('_') {
             self.named.get(name).copied()
         } else {
@@ -2088,6 +2122,9 @@ impl<'a> Run<'a> {
     fn store(&mut self, slot: Slot, v: Val, pc: usize, at: usize) -> Result<(), ExpandError> {
         let value = (!v.vacant).then_some(v.v);
         match slot {
+            Slot::Num(5400) if self.dialect == Dialect::Iso => {
+                Err(self.err(pc, at, "#5400 is read-only: the program's T and M6 set it"))
+            }
             Slot::Num(3000) if self.dialect == Dialect::Fanuc => {
                 let message = self.src[pc].comments.join(" ");
                 Err(self.err(
@@ -2113,6 +2150,11 @@ impl<'a> Run<'a> {
                 }
                 Ok(())
             }
+            Slot::Named(name) if TOOL_PARAMETERS.contains(&name.as_str()) => Err(self.err(
+                pc,
+                at,
+                format!("#<{name}> is read-only: the program's T and M6 set it"),
+            )),
             Slot::Named(name) => {
                 if name.starts_with('_') {
                     self.named.insert(name, v.v);
@@ -2968,6 +3010,35 @@ mod tests {
                     o<r> endsub [1]\no<r> call [-5]\nG00 X#<_value>\no<r> call [5]\n\
                     G00 X#<_value> Z#<_value_returned>\n";
         assert_eq!(texts(text, ISO), ["G00 X-1", "G01 X5", "G00 X1 Z1"]);
+    }
+
+    #[test]
+    fn linuxcnc_current_and_selected_tool_follow_t_and_m6() {
+        // A run starts with no tool in: LinuxCNC's 0, and none selected.
+        let change = "o<first> if [#<_current_tool> NE 2]\nG0 X150 Z300\nT02 M6\no<first> endif\n";
+        let text = format!(
+            "G00 X#<_current_tool> Z#<_selected_tool>\n{change}{change}\
+             T3\nG00 X#5400 Z#<_Selected_Tool>\nM06\nG00 X#<_current_tool>\n"
+        );
+        assert_eq!(
+            texts(&text, ISO),
+            [
+                "G00 X0 Z-1",
+                "G0 X150 Z300",
+                "T02 M6",
+                "T3",
+                "G00 X2 Z3",
+                "M06",
+                "G00 X3"
+            ]
+        );
+        refused("#<_current_tool> = 4\n", ISO, 1, 1, "read-only");
+        refused("#5400 = 4\n", ISO, 1, 1, "read-only");
+        // A T in a comment selects nothing.
+        assert_eq!(
+            texts("(T5 M6)\nG00 X#<_current_tool>\n", ISO),
+            ["(T5 M6)", "G00 X0"]
+        );
     }
 
     #[test]
