@@ -36,6 +36,12 @@ pub fn check(text: &str) -> Vec<Item> {
 /// the host does before streaming: what cannot be expanded is the one item
 /// then; otherwise a block an expression wrote is named as written.
 pub fn check_in(text: &str, dialect: Dialect) -> Vec<Item> {
+    check_read(text, dialect, false)
+}
+
+/// As [`check_in`], X words read as radii from the start when `radius`
+/// (LinuxCNC's G8, `run --radius`): the same reading as `run`'s.
+pub fn check_read(text: &str, dialect: Dialect, radius: bool) -> Vec<Item> {
     let source: Vec<&str> = text.split('\n').collect();
     let lines = match program_lines(text, dialect) {
         Ok(lines) => lines,
@@ -51,7 +57,7 @@ pub fn check_in(text: &str, dialect: Dialect) -> Vec<Item> {
         text,
         Options {
             dialect,
-            radius: false,
+            radius,
             optional_stop: false,
         },
     );

@@ -70,6 +70,10 @@ enum Command {
         /// G-code system A), or auto (from its words).
         #[arg(long, default_value = "auto")]
         dialect: String,
+        /// X words are radii at the start (as LinuxCNC's G8), not
+        /// diameters: read as `run --radius` reads it.
+        #[arg(long)]
+        radius: bool,
     },
     /// Draw a G-code program as an SVG picture (Z to the right, X up, equal
     /// scale, X ticks as diameters): the part as programmed, the tool tip
@@ -651,7 +655,11 @@ fn plot(
     )
 }
 
-fn check(file: &std::path::Path, dialect: &str) -> Result<ExitCode, Box<dyn std::error::Error>> {
+fn check(
+    file: &std::path::Path,
+    dialect: &str,
+    radius: bool,
+) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let bytes = std::fs::read(file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
     let text = String::from_utf8_lossy(&bytes);
     let (dialect, note) = host_sim::dialect::choose(dialect, &text)
@@ -659,7 +667,7 @@ fn check(file: &std::path::Path, dialect: &str) -> Result<ExitCode, Box<dyn std:
     if let Some(note) = note {
         println!("{}: {note}", file.display());
     }
-    let items = host_sim::check::check_in(&text, dialect);
+    let items = host_sim::check::check_read(&text, dialect, radius);
     for i in &items {
         println!("{}:{}:{}: {}", file.display(), i.line, i.column, i.what);
     }
@@ -697,7 +705,11 @@ fn main() -> ExitCode {
             radius,
             dialect,
         } => compensate(&file, rn, tip, !radius, &dialect),
-        Command::Check { file, dialect } => check(&file, &dialect),
+        Command::Check {
+            file,
+            dialect,
+            radius,
+        } => check(&file, &dialect, radius),
         Command::Plot {
             file,
             output,

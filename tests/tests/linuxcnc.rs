@@ -420,3 +420,83 @@ fn a_tool_offset_is_taken_up_only_by_an_axis_the_block_names() {
     assert!(near(theirs[2].x, ours[2].x) && near(theirs[2].z, ours[2].z));
     assert!(near(ours[2].x, 5.0 + 1.27), "{ours:?}");
 }
+
+/// LinuxCNC's own example `nc_files/lathe_pawn.ngc` (X on the radius, as
+/// LinuxCNC's default G8): both cut the same 91 moves up to its line 95,
+/// and both refuse that line, an arc whose end is 0.6447 mm from the
+/// centre its `K-2.428` gives, 2.428 mm from its start. The example is
+/// wrong there; the device refuses the same line, before it moves.
+#[test]
+fn linuxcncs_pawn_example_is_cut_alike_up_to_its_broken_arc() {
+    if !rs274_available() {
+        return;
+    }
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/linuxcnc/lathe_pawn.ngc"
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    let lines: Vec<&str> = text.split('\n').collect();
+    assert!(
+        lines[94].contains("G02 X5.058 Z-16.482 K-2.428"),
+        "{}",
+        lines[94]
+    );
+    // Up to the arc, ended there: the same path.
+    let head = format!("G8\n{}\nM2\n", lines[..94].join("\n"));
+    let theirs = linuxcnc("lathe_pawn.ngc to line 94", &head, None);
+    let ours = device("lathe_pawn.ngc to line 94", &head, None);
+    assert_eq!(
+        ours.len(),
+        theirs.len(),
+        "device {ours:#?}\nLinuxCNC {theirs:#?}"
+    );
+    assert_eq!(ours.len(), 91);
+    for (i, (a, b)) in ours.iter().zip(&theirs).enumerate() {
+        let near = |p: f64, q: f64| (p - q).abs() <= 0.0001 + 1e-9;
+        let centres = match (a.centre, b.centre) {
+            (Some(c), Some(d)) => near(c.0, d.0) && near(c.1, d.1),
+            (c, d) => c.is_none() && d.is_none(),
+        };
+        assert!(
+            a.g == b.g && near(a.x, b.x) && near(a.z, b.z) && centres,
+            "move {i}: device {a:?}, LinuxCNC {b:?}"
+        );
+    }
+    // The whole file: LinuxCNC stops at line 95, naming both radii.
+    let dir = std::env::temp_dir().join(format!("pawn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("tool.tbl"), "T1 P1 X0 Z0 Q0\n").unwrap();
+    let out = Command::new("rs274")
+        .current_dir(&dir)
+        .args(["-g", "-t", "tool.tbl", path])
+        .output()
+        .unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!said.contains("PROGRAM_END"), "{said}");
+    assert!(
+        said.contains("Radius to end of arc differs from radius to start")
+            && said.contains("r1=2.4280 r2=0.6447")
+            && said.contains("G02 X5.058 Z-16.482 K-2.428"),
+        "{said}"
+    );
+    // The device refuses the same line first, and moves nothing for it.
+    let options = Options {
+        dialect: Dialect::Iso,
+        radius: true,
+        optional_stop: false,
+    };
+    let report = host_sim::program::run(&text, options);
+    let first = report.refused.first().expect("a refusal");
+    assert_eq!(first.line, 95, "{:?}", report.refused);
+    assert!(
+        first.reply.contains("start and end radii differ"),
+        "{}",
+        first.reply
+    );
+}
