@@ -1517,15 +1517,12 @@ impl Reading {
                         once_at,
                     ));
                 };
-                let register = d.as_angstrom() / 10_000_000;
-                if d.as_angstrom() % 10_000_000 != 0
-                    || !(1..=TOOL_REGISTERS as i64).contains(&register)
-                {
+                let Some(register) = register_word(d).filter(|&n| n >= 1) else {
                     return Err((
                         BlockError::Form("D (the offset register) must be 1 to 32"),
                         at,
                     ));
-                }
+                };
                 b.position_offset = Some(PositionOffset {
                     times: match code {
                         450 => 1,
@@ -1533,7 +1530,7 @@ impl Reading {
                         470 => 2,
                         _ => -2,
                     },
-                    register: register as u8,
+                    register,
                 });
             }
             Some(530) => {
@@ -1633,15 +1630,13 @@ impl Reading {
                 }
                 (true, false) => {
                     // A tool number: whole, one of the table's registers.
-                    let a = d.as_angstrom();
-                    let unit = crate::length::ANGSTROM_PER_MM;
-                    if a % unit != 0 || a / unit > TOOL_REGISTERS as i64 {
+                    let Some(tool) = register_word(d) else {
                         return Err((
                             BlockError::Range(b'D', "with G41/G42 names a tool, 0 to 32"),
                             at,
                         ));
-                    }
-                    b.nose_tool = Some((a / unit) as u8);
+                    };
+                    b.nose_tool = Some(tool);
                 }
                 (false, true) => b.clamp = Some(d),
                 (false, false) => {
@@ -1656,6 +1651,17 @@ impl Reading {
         }
         Ok(self.block)
     }
+}
+
+/// A `D` word that names a register (or a tool) of the table: a whole
+/// number 0 … [`TOOL_REGISTERS`] (the reader takes no sign on `D`).
+fn register_word(d: Length) -> Option<u8> {
+    let a = d.as_angstrom();
+    let unit = crate::length::ANGSTROM_PER_MM;
+    if a % unit != 0 || !(0..=TOOL_REGISTERS as i64).contains(&(a / unit)) {
+        return None;
+    }
+    u8::try_from(a / unit).ok()
 }
 
 /// A `T` word: a whole number; Fanuc's `T0101` is tool 01 with offset

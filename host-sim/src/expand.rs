@@ -1808,7 +1808,9 @@ impl<'a> Run<'a> {
                 ),
             ));
         }
-        if self.dialect == Dialect::Iso {
+        if self.dialect == Dialect::Iso
+            && text.bytes().any(|b| matches!(b, b'T' | b't' | b'M' | b'm'))
+        {
             // `T` selects, `M6` puts the selected tool in (LinuxCNC).
             let (mut t, mut m6) = (None, false);
             scan_words(&text, |run, value| {
