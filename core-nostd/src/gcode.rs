@@ -1059,9 +1059,10 @@ impl Reading {
             // G74/G75: X, Z, U, W are the end point, read below; P and Q
             // are steps in the least input increment (0.001 mm, 0.0001
             // inch), I and K Haas' steps, R the first block's return or the
-            // second's relief, D Haas' relief.
+            // second's relief, D Haas' relief; S the spindle's speed for
+            // the cut (the session takes it with M03/M04).
             match letter {
-                b'X' | b'Z' | b'U' | b'W' | b'F' | b'N' => {}
+                b'X' | b'Z' | b'U' | b'W' | b'F' | b'N' | b'S' => {}
                 b'I' | b'K' | b'D' | b'R' => {
                     let v = Some(length()?);
                     match letter {
@@ -1094,7 +1095,7 @@ impl Reading {
                 }
                 _ => {
                     return Err(BlockError::Form(
-                        "a G74/G75 block takes X (U) Z (W) P Q R (Fanuc) or I K D (Haas), and F",
+                        "a G74/G75 block takes X (U) Z (W) P Q R (Fanuc) or I K D (Haas), F and S",
                     ))
                 }
             }

@@ -42,15 +42,33 @@ impl Session {
             x_half: b.x_half,
             incremental_x: b.incremental_x,
             incremental_z: b.incremental_z,
+            // The spindle started and the coolant switched on for the
+            // cut, as Haas programs write `G75 … M08`: at rest before the
+            // first peck.
+            spindle: b.spindle.filter(|s| *s != Spindle::Off),
+            coolant: b.coolant.filter(|c| *c != Coolant::Off),
+            s: b.s,
             ..Default::default()
         };
         if *b != own {
             return Err(Refusal::Missing(
-                "a cycle block takes its own words and F only: put M, S and other G codes on their own line",
+                "a grooving cycle block takes its own words, F, S, M03/M04 and M07/M08 only: put other M and G codes on their own line",
             ));
+        }
+        let aux = self.aux.after(b);
+        let spindle = aux.spindle.within(self.top_speed(&aux));
+        if aux.spindle.turning != Spindle::Off {
+            spindle
+                .rpm(self.prog[0], self.modal.units)
+                .map_err(|e| Refusal::Value("S", e.as_str()))?;
         }
         let has_end = b.x.is_some() || b.z.is_some();
         if !has_end && c.i.is_none() && c.k.is_none() && c.d.is_none() && b.f.is_none() {
+            if aux != self.aux {
+                return Err(Refusal::Missing(
+                    "G74/G75 with R alone sets the return: put S, M03/M04 and M07/M08 with the cut",
+                ));
+            }
             // Fanuc's first block: the return.
             let e = c.r.ok_or(Refusal::Missing(
                 "G74/G75 R (the return after each peck), or the end point X (U), Z (W)",
@@ -123,8 +141,8 @@ impl Session {
         if b.f.is_some() {
             modal.feed = b.f;
         }
-        let spindle = self.aux.spindle.within(self.top_speed(&self.aux));
         self.check_steps(&geom, s, &modal, &spindle, io)?;
+        self.take_aux(aux, io);
         self.run_steps(&geom, s, &modal, &spindle, crc, io)?;
         Ok(Block::Run)
     }

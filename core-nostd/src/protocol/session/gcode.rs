@@ -480,18 +480,10 @@ impl Session {
         // The spindle and the coolant switch with the axes at rest, before
         // the block's motion (as LinuxCNC orders a block); a dwell waits
         // there too.
-        if self.aux.needs_rest(&aux) || b.dwell.is_some() || b.tool_change {
+        if b.dwell.is_some() || b.tool_change {
             self.machine.flush(&mut Sink::new(io, self.drive));
         }
-        let outputs = self.outputs_for(&aux, modal.units);
-        if self.aux.needs_rest(&aux) {
-            let (was, now) = (self.outputs, outputs);
-            self.switch_outputs(now, io);
-            // A spindle that starts or changes speed gets up to it first.
-            if now.spindle != Spindle::Off && (was.spindle != now.spindle || was.rpm != now.rpm) {
-                io.dwell(self.spinup_us);
-            }
-        }
+        let outputs = self.switch_aux(&aux, modal.units, io);
         if let Some(us) = b.dwell {
             io.dwell(us);
         }
@@ -543,5 +535,29 @@ impl Session {
             self.switch_outputs(self.outputs_for(&self.aux, self.modal.units), io);
         }
         Ok(Block::Run)
+    }
+
+    /// Switches the spindle and the coolant to `aux` with the axes at rest
+    /// (nothing waits if they do not change; a spindle that starts or
+    /// changes speed gets up to it first); the outputs `aux` asks for.
+    pub(super) fn switch_aux<I: Io>(&mut self, aux: &Aux, units: Units, io: &mut I) -> Outputs {
+        let outputs = self.outputs_for(aux, units);
+        if self.aux.needs_rest(aux) {
+            self.machine.flush(&mut Sink::new(io, self.drive));
+            let (was, now) = (self.outputs, outputs);
+            self.switch_outputs(now, io);
+            if now.spindle != Spindle::Off && (was.spindle != now.spindle || was.rpm != now.rpm) {
+                io.dwell(self.spinup_us);
+            }
+        }
+        outputs
+    }
+
+    /// A cycle block's spindle and coolant words taken, before its first
+    /// move: switched at rest, then in force.
+    pub(super) fn take_aux<I: Io>(&mut self, aux: Aux, io: &mut I) {
+        let outputs = self.switch_aux(&aux, self.modal.units, io);
+        self.machine.set_spindle(outputs.rpm);
+        self.aux = aux;
     }
 }

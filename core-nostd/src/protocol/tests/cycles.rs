@@ -322,6 +322,42 @@ fn g74_and_g75_peck_as_their_blocks_written_out() {
     assert_eq!(haas, by_hand);
 }
 
+/// A grooving block that starts the spindle and the coolant (Haas'
+/// `G75 … M08`) switches them at rest before its first peck: the same
+/// events, times and outputs as the words on their own line before it.
+#[test]
+fn a_grooving_block_starts_the_spindle_and_the_coolant_before_it_cuts() {
+    let run = |program: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        for line in program {
+            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+        }
+        (
+            ask1(&mut dev, "SYNC"),
+            ask1(&mut dev, "POS"),
+            ask1(&mut dev, "STATUS"),
+        )
+    };
+    let head = ["G21 G18 G98", "G00 X42. Z-10.", "G75 R.5"];
+    let mut within = head.to_vec();
+    within.push("G75 X30. Z-14. P2500 Q2000 F50. S600 M03 M08");
+    let mut before = head.to_vec();
+    before.extend(["S600 M03 M08", "G75 X30. Z-14. P2500 Q2000 F50."]);
+    let (a, b) = (run(&within), run(&before));
+    assert_eq!(a, b);
+    assert!(
+        a.2.ends_with(" SPINDLE=CW S=600.000 COOLANT=FLOOD"),
+        "{}",
+        a.2
+    );
+    // Without them: not the same times (no spin-up before the pecks).
+    let mut bare = head.to_vec();
+    bare.push("G75 X30. Z-14. P2500 Q2000 F50.");
+    assert_ne!(run(&bare).0, a.0);
+}
+
 /// What a grooving cycle cannot take is refused before anything moves.
 #[test]
 fn g74_and_g75_refusals_change_nothing() {
@@ -331,7 +367,11 @@ fn g74_and_g75_refusals_change_nothing() {
             ("G75 Z-14. Q2000 F50.", "ERR SYNTAX G75 needs a depth: its X (U) away from the start point"),
             ("G75 X30. Z-14. P2500 F50.", "ERR SYNTAX G75 to another Z needs the step between grooves: Q (K)"),
             ("G75 X30. P2500 R.2 F50.", "ERR VALUE R a relief at the bottom is not supported: R0 (D0) or none"),
-            ("G75 X30. P2500 F50. M08", "ERR SYNTAX a cycle block takes its own words and F only: put M, S and other G codes on their own line"),
+            ("G75 X30. P2500 F50. M05", "ERR SYNTAX a grooving cycle block takes its own words, F, S, M03/M04 and M07/M08 only: put other M and G codes on their own line"),
+            ("G75 X30. P2500 F50. M09", "ERR SYNTAX a grooving cycle block takes its own words, F, S, M03/M04 and M07/M08 only: put other M and G codes on their own line"),
+            ("G75 X30. P2500 F50. G04", "ERR SYNTAX a grooving cycle block takes its own words, F, S, M03/M04 and M07/M08 only: put other M and G codes on their own line"),
+            ("G75 R1. M08", "ERR SYNTAX G74/G75 with R alone sets the return: put S, M03/M04 and M07/M08 with the cut"),
+            ("G75 X30. P2500 F50. G96 S300 M03", "ERR SYNTAX a grooving cycle block takes its own words, F, S, M03/M04 and M07/M08 only: put other M and G codes on their own line"),
             ("G75 X10. P1 F50.", "ERR RANGE a grooving cycle of more than 20000 moves"),
             ("G75 X30. P2500", "ERR VALUE F not programmed: a feed move needs F (mm/min)"),
             ("G75 X30. P2.5 F50.", "ERR VALUE P a step in the least increment, without a point (P2500: 2.5 mm)"),
