@@ -1399,8 +1399,9 @@ fn run_soak(args: &SoakArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
 /// The budgets `qemu-bench` holds the firmware to: the step interrupt's
 /// instructions per step in every phase and in its longest entry, the
 /// receive interrupt's per byte; the worst lateness of any event at
-/// 200 000 events a second, ticks.
-const STEP_PER_EVENT: f64 = 116.0;
+/// 200 000 events a second, ticks. The bench's figure a step has the
+/// board's pulse timer in it already.
+const STEP_PER_EVENT: f64 = 110.0;
 const STEP_ENTRY: u64 = 400;
 const RECEIVE_PER_BYTE: u64 = 300;
 const WORST_LATE_TICKS: u64 = 1;
@@ -1437,14 +1438,11 @@ fn within_budget(line: &str) -> bool {
         before.split_whitespace().last()?.parse().ok()
     };
     if line.starts_with("step interrupt,") {
+        // "… N instructions per step (+P for the board's pulse timer)":
+        // N counts P in.
         let per = number_after(" instructions per step").unwrap_or(f64::MAX);
-        let pulse = line
-            .split_once("(+")
-            .and_then(|(_, r)| r.split_whitespace().next())
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(0.0);
         let entry = number_after(" at most in one entry").unwrap_or(f64::MAX);
-        let ok = per + pulse <= STEP_PER_EVENT && entry <= STEP_ENTRY as f64;
+        let ok = per <= STEP_PER_EVENT && entry <= STEP_ENTRY as f64;
         if !ok {
             println!("  OVER BUDGET: {line}");
         }
@@ -1762,4 +1760,31 @@ fn trihedral_args(
         numbers::<2>("table", table)?,
         numbers::<3>("vertex", vertex)?,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::within_budget;
+
+    /// The bench's figure a step counts the pulse timer in: it is held to
+    /// the budget as printed, not with the pulse timer added again.
+    #[test]
+    fn a_step_figure_is_held_to_the_budget_as_printed() {
+        let line = |per: &str, entry: u32| {
+            format!("step interrupt, cruise: 6000 steps, {per} instructions per step (+9 for the board's pulse timer), {entry} at most in one entry")
+        };
+        assert!(within_budget(&line("104.02", 132)));
+        assert!(within_budget(&line("110.00", 400)));
+        assert!(!within_budget(&line("110.01", 132)));
+        assert!(!within_budget(&line("104.02", 401)));
+        assert!(within_budget(
+            "receive interrupt per byte, worst case: 300 instructions"
+        ));
+        assert!(!within_budget(
+            "receive interrupt per byte, worst case: 301 instructions"
+        ));
+        assert!(within_budget(
+            "prep per entry: cruise 331.63 instructions, ramps 697.55"
+        ));
+    }
 }
