@@ -56,12 +56,7 @@ impl Session {
             ));
         }
         let aux = self.aux.after(b);
-        let spindle = aux.spindle.within(self.top_speed(&aux));
-        if aux.spindle.turning != Spindle::Off {
-            spindle
-                .rpm(self.prog[0], self.modal.units)
-                .map_err(|e| Refusal::Value("S", e.as_str()))?;
-        }
+        let spindle = self.spindle_of(&aux, self.modal.units)?;
         let has_end = b.x.is_some() || b.z.is_some();
         if !has_end && c.i.is_none() && c.k.is_none() && c.d.is_none() && b.f.is_none() {
             if aux != self.aux {

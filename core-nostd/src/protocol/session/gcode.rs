@@ -92,16 +92,7 @@ impl Session {
         // 2. Spindle (S, M03–M05, G96/G97, G50/G92 S) within its top
         //    speed, coolant.
         let aux = self.aux.after(&b);
-        // The spindle speed where the block starts: the programmed X, the
-        // diameter the tool cuts at (X0 of every work system is the
-        // spindle's axis; offsets move the slide, not the part); within
-        // the spindle's top speed.
-        let spindle = aux.spindle.within(self.top_speed(&aux));
-        if aux.spindle.turning != Spindle::Off {
-            spindle
-                .rpm(self.prog[0], modal.units)
-                .map_err(|e| Refusal::Value("S", e.as_str()))?;
-        }
+        let spindle = self.spindle_of(&aux, modal.units)?;
         // 3. Offsets: the work system (G54–G59, G10), the tool (T, G43/G49),
         //    G92 (G50) and its kin.
         let diam = b.diameter.unwrap_or(self.cfg.diam);
@@ -535,6 +526,24 @@ impl Session {
             self.switch_outputs(self.outputs_for(&self.aux, self.modal.units), io);
         }
         Ok(Block::Run)
+    }
+
+    /// The spindle `aux` asks for, within its top speed, checked at the
+    /// speed where the block starts: the programmed X, the diameter the
+    /// tool cuts at (X0 of every work system is the spindle's axis;
+    /// offsets move the slide, not the part).
+    pub(super) fn spindle_of(
+        &self,
+        aux: &Aux,
+        units: Units,
+    ) -> Result<crate::interp::SpindleState, Refusal<'static>> {
+        let spindle = aux.spindle.within(self.top_speed(aux));
+        if aux.spindle.turning != Spindle::Off {
+            spindle
+                .rpm(self.prog[0], units)
+                .map_err(|e| Refusal::Value("S", e.as_str()))?;
+        }
+        Ok(spindle)
     }
 
     /// Switches the spindle and the coolant to `aux` with the axes at rest

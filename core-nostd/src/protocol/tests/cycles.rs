@@ -258,6 +258,17 @@ fn cycle_refusals_come_before_motion() {
     assert!(r.last().unwrap().starts_with("OK NX=200"), "{r:?}");
 }
 
+/// A device in the Fanuc dialect that has taken every line of `program`.
+fn fanuc_run(program: &[&str]) -> Device {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    for line in program {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+    }
+    dev
+}
+
 /// `G75` grooves and `G74` pecks as the blocks written out by hand: each
 /// peck in at the feed, back by the return at the rapid rate, out of the
 /// groove at the rapid rate, over by the step to the next groove, back to
@@ -266,12 +277,7 @@ fn cycle_refusals_come_before_motion() {
 #[test]
 fn g74_and_g75_peck_as_their_blocks_written_out() {
     let run = |program: &[&str]| {
-        let mut dev = Device::new();
-        ask1(&mut dev, "OPT DIALECT=fanuc");
-        for line in program {
-            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
-            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
-        }
+        let mut dev = fanuc_run(program);
         (ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"))
     };
     let fanuc = run(&[
@@ -328,12 +334,7 @@ fn g74_and_g75_peck_as_their_blocks_written_out() {
 #[test]
 fn a_grooving_block_starts_the_spindle_and_the_coolant_before_it_cuts() {
     let run = |program: &[&str]| {
-        let mut dev = Device::new();
-        ask1(&mut dev, "OPT DIALECT=fanuc");
-        for line in program {
-            let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
-            assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
-        }
+        let mut dev = fanuc_run(program);
         (
             ask1(&mut dev, "SYNC"),
             ask1(&mut dev, "POS"),
