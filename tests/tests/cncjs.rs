@@ -310,6 +310,84 @@ fn cncjs_streams_corpus_programs_to_serve() {
     }
 }
 
+/// Fanuc and Haas programs nobody here wrote (corpus programs that run to
+/// their end in the Fanuc dialect with no stop for the operator,
+/// `tests/data/SOURCES.md`), streamed by
+/// CNCjs to `serve` after one `$450=1` typed in its console, its clock 40
+/// times the wall's: every line answered `ok`, the job ended by CNCjs
+/// itself, `Idle`, and the carriage where `host-sim run --dialect fanuc`
+/// ends the same program. Without `$450=1` the first Fanuc word is an
+/// error, named.
+#[test]
+fn cncjs_streams_fanuc_programs_to_serve_after_450() {
+    if !cncjs_available() {
+        return;
+    }
+    for name in [
+        "hass-cnc-programs/Lathe-L8-Ex1.nc",
+        "basic-cnc-lathe/t24.gcode",
+    ] {
+        let program = root().join("tests/data").join(name);
+        let text = std::fs::read_to_string(&program).expect("program");
+        let options = host_sim::program::Options {
+            dialect: core_nostd::gcode::Dialect::Fanuc,
+            radius: false,
+            optional_stop: false,
+        };
+        let report = host_sim::program::run(&text, options);
+        assert!(report.refused.is_empty(), "{name}: {:?}", report.refused);
+        let end = report.path.last().expect("a move").to;
+        let want = (end[0] as f64 * 2e-7, end[1] as f64 * 1e-7);
+        let device = serve_at(40.0);
+        let json = cncjs(device.path(), &program, &["--console", "$450=1"]);
+        let s = summary(&json);
+        assert_eq!(actions(&json, "console").count(), 1, "{name}: {s}");
+        assert_eq!(json["errors"], Value::Array(vec![]), "{name}: {s}");
+        assert_eq!(json["alarms"], Value::Array(vec![]), "{name}: {s}");
+        assert!(
+            !strings(&json, "read")
+                .iter()
+                .any(|l| l.starts_with("error:")),
+            "{name}: {s}"
+        );
+        assert_eq!(json["finished"], true, "{name}: {s}");
+        assert_eq!(json["timed_out"], false, "{name}: {s}");
+        assert_eq!(json["not_done"], Value::Array(vec![]), "{name}: {s}");
+        let total = json["sender"]["total"].as_u64().expect("total");
+        assert_eq!(total as usize, program_lines(&program) + 1, "{name}: {s}");
+        assert_eq!(json["sender"]["received"], total, "{name}: {s}");
+        assert_eq!(json["state"], "Idle", "{name}: {s}");
+        let at = numbers(&json["mpos"]);
+        assert!(
+            at.len() == 3 && (at[0] - want.0).abs() < 1e-3 && (at[2] - want.1).abs() < 1e-3,
+            "{name}: CNCjs sees the carriage at {at:?}, the program ends at {want:?}: {s}"
+        );
+    }
+    // The same Haas program without the setting: ISO refuses its first
+    // Fanuc word, and says how to read it.
+    let program = root().join("tests/data/hass-cnc-programs/Lathe-L8-Ex1.nc");
+    let device = serve_at(40.0);
+    let json = cncjs(device.path(), &program, &[]);
+    let read = strings(&json, "read");
+    let s = summary(&json);
+    let first = read.iter().position(|l| l.starts_with("error:"));
+    let first = first.unwrap_or_else(|| panic!("no error without $450=1: {s}"));
+    // Its first line read, `N5 G18 G40 G54 G80 G99`: CNCjs shows the
+    // reason, then the error.
+    assert_eq!(
+        read.iter()
+            .position(|l| l.starts_with("[MSG:"))
+            .map(|i| &read[i]),
+        Some(&"[MSG:VALUE G99 belongs to the FANUC dialect ($450=1)]".to_string()),
+        "{s}"
+    );
+    assert!(
+        read.iter().position(|l| l.starts_with("[MSG:")) < Some(first),
+        "{s}"
+    );
+    assert_eq!(json["finished"], false, "{s}");
+}
+
 #[test]
 fn cncjs_ends_a_program_without_m30() {
     if !cncjs_available() {

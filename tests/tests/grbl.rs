@@ -450,6 +450,60 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     assert!(text(&mut dev, b"?").starts_with("<Idle|MPos:0.0000,0.0000,0.0000|"));
 }
 
+/// `$450`–`$452`, this controller's own: the dialect G-code lines are read
+/// in, block delete and the optional stop, as `OPT` sets them. A Fanuc
+/// program that ISO refuses is read once `$450=1`.
+#[test]
+fn a_sender_switches_the_dialect_block_delete_and_optional_stop() {
+    let mut dev = grbl_device();
+    let all = text(&mut dev, b"$$\n");
+    for want in ["$450=0\r\n", "$451=0\r\n", "$452=0\r\n"] {
+        assert!(all.contains(want), "{want}: {all}");
+    }
+    // U is Fanuc's incremental X: ISO refuses it.
+    let iso = text(&mut dev, b"G00 U4. W-2.\n");
+    // The refusal names the way to Fanuc in a grbl sender's words.
+    assert_eq!(
+        iso,
+        "[MSG:VALUE U belongs to the FANUC dialect ($450=1)]\r\nerror:20\r\n"
+    );
+    assert!(text(&mut dev, b"?").starts_with("<Idle|MPos:0.0000,0.0000,0.0000|"));
+    assert_eq!(text(&mut dev, b"$450=1\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"G00 U4. W-2.\n"), "ok\r\n");
+    let _ = text(&mut dev, b"G4 P0\n");
+    let at = text(&mut dev, b"?");
+    assert!(at.starts_with("<Idle|MPos:4.0000,0.0000,-2.0000|"), "{at}");
+    assert_eq!(text(&mut dev, b"$451=1\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"$452=1\n"), "ok\r\n");
+    let now = text(&mut dev, b"$$\n");
+    for want in ["$450=1\r\n", "$451=1\r\n", "$452=1\r\n"] {
+        assert!(now.contains(want), "{want}: {now}");
+    }
+    // A value with no word is refused by name, nothing changed.
+    for (line, why) in [
+        (
+            "$450=2",
+            "[MSG:$450: 0 to 1: 0 DIALECT=ISO, 1 DIALECT=FANUC]",
+        ),
+        ("$451=7", "[MSG:$451: 0 to 1: 0 BDEL=0, 1 BDEL=1]"),
+        ("$452=on", "[MSG:$452: 0 to 1: 0 OPTSTOP=0, 1 OPTSTOP=1]"),
+    ] {
+        let r = text(&mut dev, format!("{line}\n").as_bytes());
+        assert_eq!(r, format!("{why}\r\nerror:3\r\n"), "{line}");
+    }
+    assert_eq!(text(&mut dev, b"$$\n"), now);
+    // Back to ISO: U is refused again.
+    assert_eq!(text(&mut dev, b"$450=0\n"), "ok\r\n");
+    assert!(text(&mut dev, b"G00 U4.\n").ends_with("($450=1)]\r\nerror:20\r\n"));
+    // And in Fanuc, an ISO word names the way back.
+    assert_eq!(text(&mut dev, b"$450=1\n"), "ok\r\n");
+    let back = text(&mut dev, b"G95\n");
+    assert!(
+        back.ends_with("belongs to the ISO dialect ($450=0)]\r\nerror:20\r\n"),
+        "{back}"
+    );
+}
+
 /// `$C`: lines are read and checked as if run, a bad one refused as it
 /// would be, nothing moves; leaving it resets (grbl's banner) with the
 /// position where it was.

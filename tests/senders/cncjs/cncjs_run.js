@@ -19,6 +19,9 @@
 //   --jog LINE              a jog sent as CNCjs' `gcode` command before the
 //                           program, e.g. '$J=G91 G21 Z-1 F300' (repeatable);
 //                           it waits for the `ok` and the controller's Idle
+//   --console LINE          a line typed in CNCjs' console before the program
+//                           (its `gcode` command too, e.g. '$450=1'), in
+//                           order with the jogs; waited for as a jog
 //   --resume-after S        when the program pauses the job (M0, M1) and CNCjs
 //                           shows the controller held, press Resume
 //                           (`gcode:resume`) after S seconds (default 0.5;
@@ -103,7 +106,9 @@ function parseArgs(argv) {
             });
             opts.overrides.push({ when: parseWhen(v.slice(0, at)), clicks, done: false });
         } else if (a === '--jog') {
-            opts.jogs.push(value());
+            opts.jogs.push({ what: 'jog', line: value() });
+        } else if (a === '--console') {
+            opts.jogs.push({ what: 'console', line: value() });
         } else if (a === '--resume-after') {
             const v = value();
             opts.resumeAfter = v === 'never' ? null : Number(v);
@@ -386,9 +391,9 @@ async function run() {
     await waitFor(() => settingsSeen && stateName(controllerState) === 'Idle', 30, 'Idle and settings after opening');
     record('ready');
 
-    for (const line of opts.jogs) {
+    for (const { what, line } of opts.jogs) {
         const oks = seen.read.filter((l) => l === 'ok').length;
-        record('jog', { line });
+        record(what, { line });
         command('gcode', line);
         await waitFor(() => seen.read.filter((l) => l === 'ok' || l.startsWith('error:')).length > oks,
             30, `reply to ${line}`);

@@ -31,6 +31,15 @@ pub(super) enum Place {
     /// `$10`, the status report's mask: bit 0 machine (1) or work (0)
     /// positions. Bit 1 (`Bf:`) is not reported.
     ReportMask,
+    /// A key of a pendant request whose words grbl writes as numbers:
+    /// `$n=i` sends the key the `i`-th word (`$450=1` is `OPT
+    /// DIALECT=FANUC`). `$$` shows the number of the session's word.
+    Choice(
+        Command,
+        &'static str,
+        &'static [&'static str],
+        fn(&Session) -> usize,
+    ),
 }
 
 /// One grbl setting: its number and where it lives.
@@ -49,7 +58,7 @@ pub(super) const fn setting(n: u16, place: Place) -> Setting {
 /// this board to act on (inverted pins, limit and home switches) accept
 /// only the value that leaves the machine as it is; the rest of grbl's
 /// list is kept and read back.
-pub(super) const SETTINGS: [Setting; 30] = [
+pub(super) const SETTINGS: [Setting; 33] = [
     setting(
         0,
         Place::Request(Command::Drive, "PULSE", |s, l| {
@@ -151,6 +160,26 @@ pub(super) const SETTINGS: [Setting; 30] = [
     ),
     setting(130, Place::Kept(7, true)),
     setting(132, Place::Kept(8, true)),
+    // This controller's own, in the range grblHAL leaves to no public
+    // setting: how G-code lines are read, as `OPT` sets it.
+    setting(
+        450,
+        Place::Choice(Command::Opt, "DIALECT", &["ISO", "FANUC"], |s| {
+            usize::from(s.dialect() == crate::gcode::Dialect::Fanuc)
+        }),
+    ),
+    setting(
+        451,
+        Place::Choice(Command::Opt, "BDEL", &["0", "1"], |s| {
+            usize::from(s.block_delete())
+        }),
+    ),
+    setting(
+        452,
+        Place::Choice(Command::Opt, "OPTSTOP", &["0", "1"], |s| {
+            usize::from(s.optional_stop())
+        }),
+    ),
 ];
 
 pub(super) fn settings<I: Io + ?Sized>(
@@ -181,6 +210,9 @@ pub(super) fn settings<I: Io + ?Sized>(
             Place::Fixed(v, _, _) => l.push_bytes(v),
             Place::ReportMask => {
                 let _ = write!(l, "{}", u8::from(front.mpos));
+            }
+            Place::Choice(_, _, _, which) => {
+                let _ = write!(l, "{}", which(session));
             }
         }
         io.inner.send(finish(&mut l));
@@ -321,6 +353,32 @@ pub(super) fn set<I: Io + ?Sized>(
                 b"0 (work position) or 1 (machine position); Bf: is not reported",
             ),
         },
+        Place::Choice(command, key, words, _) => {
+            let word = parse_setting(v, false)
+                .and_then(|i| usize::try_from(i).ok())
+                .and_then(|i| words.get(i));
+            match word.map(|w| Request::command(command, &[(key, w)])) {
+                Some(Ok(request)) => session.request(&request, io),
+                Some(Err(_)) => refuse_setting(io, 3, s.n, b"not a key of its request"),
+                None => {
+                    io.outcome = Some(Err(3));
+                    io.message = ReplyLine::new();
+                    let _ = write!(
+                        io.message,
+                        "${}: 0 to {}",
+                        s.n,
+                        words.len().saturating_sub(1)
+                    );
+                    for (i, w) in words.iter().enumerate() {
+                        let _ = write!(
+                            io.message,
+                            "{} {i} {key}={w}",
+                            if i == 0 { ":" } else { "," }
+                        );
+                    }
+                }
+            }
+        }
         Place::Fixed(only, code, why) => {
             let same = parse_setting(v, true).is_some_and(|x| Some(x) == parse_setting(only, true));
             if same {

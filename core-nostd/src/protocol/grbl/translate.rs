@@ -6,6 +6,13 @@ use crate::protocol::io::{Io, Refused, StatusRecord, StatusView, Timing};
 use crate::protocol::reply::ReplyLine;
 use core::fmt::Write;
 
+/// A refusal's way to the other dialect, as the pendant protocol ends it
+/// and as a grbl sender sets it (`$450`).
+const DIALECT_HINTS: [(&[u8], &[u8]); 2] = [
+    (b"(OPT DIALECT=FANUC)", b"($450=1)"),
+    (b"(OPT DIALECT=ISO)", b"($450=0)"),
+];
+
 /// The one [`Io`] the session answers through (so that its code exists
 /// once on the board): on a pendant link every call passes through; on a
 /// grbl link motion passes through and reply lines turn into grbl's.
@@ -100,9 +107,19 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         if self.refusal_text {
             self.refusal_text = false;
             let text = body.iter().position(|&b| b == b' ');
+            let text = text.and_then(|i| body.get(i + 1..)).unwrap_or(b"");
             self.message = ReplyLine::new();
-            self.message
-                .push_bytes(text.and_then(|i| body.get(i + 1..)).unwrap_or(b""));
+            // The way to the other dialect, in a grbl sender's words.
+            let to_grbl = DIALECT_HINTS
+                .iter()
+                .find_map(|&(pendant, grbl)| Some((text.strip_suffix(pendant)?, grbl)));
+            match to_grbl {
+                Some((head, grbl)) => {
+                    self.message.push_bytes(head);
+                    self.message.push_bytes(grbl);
+                }
+                None => self.message.push_bytes(text),
+            }
         }
         // `DATA` lines and the rest: not grbl's.
     }

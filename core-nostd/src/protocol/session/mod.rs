@@ -252,6 +252,16 @@ impl Session {
         self.dialect
     }
 
+    /// Whether blocks starting with `/` are skipped (`OPT BDEL`).
+    pub const fn block_delete(&self) -> bool {
+        self.block_delete
+    }
+
+    /// Whether `M01` stops (`OPT OPTSTOP`).
+    pub const fn optional_stop(&self) -> bool {
+        self.optional_stop
+    }
+
     /// Exact commanded coordinates `(X radius, Z)` in machine coordinates
     /// (since power-on or `ZERO`; the offsets in effect included).
     pub const fn commanded(&self) -> (Length, Length) {
