@@ -8,7 +8,8 @@
 //! speed at the tool's X where the block starts.
 
 use crate::gcode::{
-    Block, Coolant, FeedMode, Motion, PathControl, Plane, Spindle, SpindleMode, ToolWord, Units,
+    Block, Coolant, Dialect, FeedMode, Motion, PathControl, Plane, Spindle, SpindleMode, ToolWord,
+    Units,
 };
 use crate::length::{Length, LENGTH_LIMIT};
 use crate::plan::Feed;
@@ -401,6 +402,52 @@ pub struct Offsets {
     pub reference: [[Length; 2]; 2],
     /// The machine's own M codes (kept with the table).
     pub mcodes: MCodes,
+    /// How G-code lines are read (`OPT`; kept with the table, as a
+    /// control keeps its parameters and panel switches).
+    pub reading: Reading,
+}
+
+/// How G-code lines are read: the dialect and the two panel switches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reading {
+    /// The dialect (`OPT DIALECT=`).
+    pub dialect: Dialect,
+    /// Blocks starting with `/` are skipped (`OPT BDEL=1`).
+    pub block_delete: bool,
+    /// `M01` stops (`OPT OPTSTOP=1`).
+    pub optional_stop: bool,
+}
+
+impl Reading {
+    /// Power-on: ISO, both switches off.
+    pub const DEFAULT: Reading = Reading {
+        dialect: Dialect::Iso,
+        block_delete: false,
+        optional_stop: false,
+    };
+
+    /// As one value: bit 0 Fanuc, bit 1 block delete, bit 2 optional stop.
+    pub const fn bits(self) -> u8 {
+        (matches!(self.dialect, Dialect::Fanuc) as u8)
+            | (self.block_delete as u8) << 1
+            | (self.optional_stop as u8) << 2
+    }
+
+    /// The reading of [`Reading::bits`]; `None` beyond its three bits.
+    pub const fn from_bits(b: u8) -> Option<Reading> {
+        if b > 7 {
+            return None;
+        }
+        Some(Reading {
+            dialect: if b & 1 != 0 {
+                Dialect::Fanuc
+            } else {
+                Dialect::Iso
+            },
+            block_delete: b & 2 != 0,
+            optional_stop: b & 4 != 0,
+        })
+    }
 }
 
 impl Offsets {
@@ -416,6 +463,7 @@ impl Offsets {
         kept_shift: [Length::ZERO; 2],
         reference: [[Length::ZERO; 2]; 2],
         mcodes: MCodes::new(),
+        reading: Reading::DEFAULT,
     };
 
     /// A register (1 … 32); `None` for 0 or beyond the table.

@@ -1,6 +1,7 @@
-//! The tool table, the work offsets and the stored reference positions as
-//! a record in two flash slots, so that they survive a power cut, one
-//! during a write included.
+//! The tool table, the work offsets, the stored reference positions, the
+//! machine's M codes and how lines are read (dialect, block delete,
+//! optional stop) as a record in two flash slots, so that they survive a
+//! power cut, one during a write included.
 //!
 //! A record is whole 32-bit words: a magic word, a sequence number, the
 //! payload's length, the payload, and last the CRC-32 of all before it. A
@@ -16,12 +17,15 @@
 //! one would be.
 
 use crate::crc32::Crc32;
-use crate::interp::{MAction, Offsets, ToolEntry, MCODES, TOOL_REGISTERS, WORK_SYSTEMS};
+use crate::interp::{MAction, Offsets, Reading, ToolEntry, MCODES, TOOL_REGISTERS, WORK_SYSTEMS};
 use crate::length::Length;
 
-/// `LTO2`: the record of this layout (the table, the offsets, the
-/// stored positions, the machine's M codes).
-const MAGIC: u32 = u32::from_le_bytes(*b"LTO2");
+/// `LTO3`: the record of this layout (the table, the offsets, the
+/// stored positions, the machine's M codes, how lines are read).
+const MAGIC: u32 = u32::from_le_bytes(*b"LTO3");
+/// `LTO2`: the layout before the reading, still read (read as at
+/// power-on: ISO, both switches off).
+const MAGIC_2: u32 = u32::from_le_bytes(*b"LTO2");
 /// `LTO1`: the layout before the M codes, still read (its M code table
 /// empty).
 const MAGIC_1: u32 = u32::from_le_bytes(*b"LTO1");
@@ -35,8 +39,11 @@ const LENGTHS: usize = WORK_SYSTEMS * 2 + TOOL_REGISTERS * 6 + 2 * 2;
 /// empty) and its action.
 const MCODE_VALUES: usize = MCODES * 2;
 
-/// Payload words: two per value.
-const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES) * 2;
+/// Payload words: two per value, the reading's bits last
+/// ([`crate::interp::Reading::bits`]).
+const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES + 1) * 2;
+/// Those of an `LTO2` record.
+const PAYLOAD_WORDS_2: usize = (LENGTHS + MCODE_VALUES) * 2;
 /// Those of an `LTO1` record.
 const PAYLOAD_WORDS_1: usize = LENGTHS * 2;
 
@@ -106,7 +113,11 @@ fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
         *slot = (i64::from(code), action_value(action));
     }
     let mcodes = slots.into_iter().flat_map(|(c, a)| [c, a]);
-    work.chain(tools).chain(reference).chain(mcodes)
+    let reading = core::iter::once(i64::from(o.reading.bits()));
+    work.chain(tools)
+        .chain(reference)
+        .chain(mcodes)
+        .chain(reading)
 }
 
 /// The words of the record of `offsets` with sequence number `seq`,
@@ -132,6 +143,7 @@ fn crc_of(words: impl Iterator<Item = u32>) -> u32 {
 fn layout<F: Flash>(flash: &mut F, slot: usize) -> Option<usize> {
     match (flash.read(slot, 0), flash.read(slot, 2)) {
         (MAGIC, n) if n == (PAYLOAD_WORDS * 4) as u32 => Some(PAYLOAD_WORDS),
+        (MAGIC_2, n) if n == (PAYLOAD_WORDS_2 * 4) as u32 => Some(PAYLOAD_WORDS_2),
         (MAGIC_1, n) if n == (PAYLOAD_WORDS_1 * 4) as u32 => Some(PAYLOAD_WORDS_1),
         _ => None,
     }
@@ -180,7 +192,9 @@ fn current<F: Flash>(flash: &mut F) -> Option<(usize, u32, Offsets)> {
 
 /// The offsets of the whole record in `slot`, if every value is in range.
 fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
-    let with_mcodes = layout(flash, slot) == Some(PAYLOAD_WORDS);
+    let words = layout(flash, slot);
+    let with_mcodes = matches!(words, Some(PAYLOAD_WORDS | PAYLOAD_WORDS_2));
+    let with_reading = words == Some(PAYLOAD_WORDS);
     let mut i = 3;
     let mut next = || {
         let lo = u64::from(flash.read(slot, i));
@@ -226,6 +240,9 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
                 return None;
             }
         }
+    }
+    if with_reading {
+        o.reading = u8::try_from(next()).ok().and_then(Reading::from_bits)?;
     }
     Some(o)
 }
@@ -325,6 +342,7 @@ mod tests {
         o.mcodes.set(160, MAction::Output(2, true));
         o.mcodes.set(310, MAction::Wait(4, false));
         o.mcodes.set(260 + 10 * (k as u16 % 3), MAction::Nothing);
+        o.reading = Reading::from_bits(k as u8 % 8).unwrap();
         o
     }
 
@@ -335,6 +353,7 @@ mod tests {
         let mut f = Nor::new();
         let mut o = table(1);
         o.mcodes = crate::interp::MCodes::new();
+        o.reading = Reading::DEFAULT;
         let lengths: Vec<i64> = lengths(&o).take(LENGTHS).collect();
         let mut words = std::vec![MAGIC_1, 7, (PAYLOAD_WORDS_1 * 4) as u32];
         for v in lengths {
@@ -353,6 +372,49 @@ mod tests {
         let seq = save(&mut f, &table(2), 7);
         assert_eq!(load(&mut f).offsets, kept(&table(2)));
         assert_eq!(load(&mut f).seq, seq);
+    }
+
+    #[test]
+    fn a_record_of_the_layout_before_the_reading_still_loads() {
+        // An LTO2 record: the lengths and the M codes; read as at
+        // power-on, ISO with both switches off.
+        let mut f = Nor::new();
+        let mut o = table(7);
+        assert_eq!(o.reading.bits(), 7);
+        let values: Vec<i64> = lengths(&o).take(LENGTHS + MCODE_VALUES).collect();
+        let mut words = std::vec![MAGIC_2, 9, (PAYLOAD_WORDS_2 * 4) as u32];
+        for v in values {
+            words.extend([v as u64 as u32, ((v as u64) >> 32) as u32]);
+        }
+        words.push(crc_of(words.iter().copied()));
+        f.slots[1][..words.len()].copy_from_slice(&words);
+        o.reading = Reading::DEFAULT;
+        assert_eq!(
+            load(&mut f),
+            Loaded {
+                offsets: kept(&o),
+                seq: 9
+            }
+        );
+        // Saved again in this layout, the reading comes back.
+        let seq = save(&mut f, &table(5), 9);
+        let got = load(&mut f);
+        assert_eq!((got.offsets, got.seq), (kept(&table(5)), seq));
+        assert_eq!(got.offsets.reading.bits(), 5);
+    }
+
+    #[test]
+    fn a_reading_beyond_its_three_bits_is_a_broken_record() {
+        let mut f = Nor::new();
+        let seq = save(&mut f, &table(1), 0);
+        let seq = save(&mut f, &table(2), seq);
+        // The newer record (slot 1) with the reading's word set to 8 and
+        // its CRC made whole: refused, the older one loads.
+        let last = RECORD_WORDS - 1;
+        f.slots[1][last - 2] = 8;
+        f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
+        assert_eq!(sequence(&mut f, 1), Some(seq));
+        assert_eq!(load(&mut f).offsets, kept(&table(1)));
     }
 
     fn kept(o: &Offsets) -> Offsets {

@@ -1,4 +1,5 @@
-//! The tool table, the work offsets and the stored reference positions
+//! The tool table, the work offsets, the stored reference positions, the
+//! machine's M codes and the `OPT` switches
 //! kept across power cuts, as [`core_nostd::store`] lays them out in two
 //! slots: sectors 10 and 11 of the STM32F405's flash (128 KiB each, at
 //! `0x080C_0000` and `0x080E_0000`, left out of the program by

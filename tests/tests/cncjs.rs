@@ -311,13 +311,14 @@ fn cncjs_streams_corpus_programs_to_serve() {
 }
 
 /// Fanuc and Haas programs nobody here wrote (corpus programs that run to
-/// their end in the Fanuc dialect with no stop for the operator,
-/// `tests/data/SOURCES.md`), streamed by
+/// their end in the Fanuc dialect, `tests/data/SOURCES.md`), streamed by
 /// CNCjs to `serve` after one `$450=1` typed in its console, its clock 40
 /// times the wall's: every line answered `ok`, the job ended by CNCjs
 /// itself, `Idle`, and the carriage where `host-sim run --dialect fanuc`
-/// ends the same program. Without `$450=1` the first Fanuc word is an
-/// error, named.
+/// ends the same program. Where a program stops for the operator (`M00`,
+/// and `M01`, which CNCjs pauses at and resumes; a machine's own `M31`, which the
+/// controller holds at with a message until Cycle Start), it goes on as the
+/// operator says. Without `$450=1` the first Fanuc word is an error, named.
 #[test]
 fn cncjs_streams_fanuc_programs_to_serve_after_450() {
     if !cncjs_available() {
@@ -326,6 +327,8 @@ fn cncjs_streams_fanuc_programs_to_serve_after_450() {
     for name in [
         "hass-cnc-programs/Lathe-L8-Ex1.nc",
         "basic-cnc-lathe/t24.gcode",
+        "enier290188-cnc/valve.nc",
+        "enier290188-cnc/lathe_hp_2.nc",
     ] {
         let program = root().join("tests/data").join(name);
         let text = std::fs::read_to_string(&program).expect("program");
@@ -339,9 +342,28 @@ fn cncjs_streams_fanuc_programs_to_serve_after_450() {
         let end = report.path.last().expect("a move").to;
         let want = (end[0] as f64 * 2e-7, end[1] as f64 * 1e-7);
         let device = serve_at(40.0);
-        let json = cncjs(device.path(), &program, &["--console", "$450=1"]);
+        let json = cncjs(
+            device.path(),
+            &program,
+            &["--console", "$450=1", "--operator", "0.3"],
+        );
         let s = summary(&json);
         assert_eq!(actions(&json, "console").count(), 1, "{name}: {s}");
+        // Each stop for the operator the controller asked for was held and
+        // answered with Cycle Start; CNCjs paused at each M00 and M01, and
+        // was resumed.
+        let own_m = text
+            .lines()
+            .filter(|l| l.contains("M31") || l.contains("M33"))
+            .count();
+        let m00 = text
+            .lines()
+            .filter(|l| l.contains("M00") || l.contains("M01"))
+            .count();
+        assert_eq!(actions(&json, "cyclestart").count(), own_m, "{name}: {s}");
+        // (CNCjs may pause twice at one M00: once when it reads the line
+        // ahead, once when Resume sends it.)
+        assert!(actions(&json, "gcode:resume").count() >= m00, "{name}: {s}");
         assert_eq!(json["errors"], Value::Array(vec![]), "{name}: {s}");
         assert_eq!(json["alarms"], Value::Array(vec![]), "{name}: {s}");
         assert!(

@@ -492,6 +492,10 @@ fn a_sender_switches_the_dialect_block_delete_and_optional_stop() {
         assert_eq!(r, format!("{why}\r\nerror:3\r\n"), "{line}");
     }
     assert_eq!(text(&mut dev, b"$$\n"), now);
+    // A reset (Ctrl-X) keeps them, as grbl keeps its settings.
+    let banner = text(&mut dev, &[0x18]);
+    assert!(banner.contains("Grbl 1.1h"), "{banner}");
+    assert_eq!(text(&mut dev, b"$$\n"), now);
     // Back to ISO: U is refused again.
     assert_eq!(text(&mut dev, b"$450=0\n"), "ok\r\n");
     assert!(text(&mut dev, b"G00 U4.\n").ends_with("($450=1)]\r\nerror:20\r\n"));

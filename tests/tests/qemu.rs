@@ -309,7 +309,8 @@ fn the_spindle_outputs_follow_the_program_on_the_board() {
     );
 }
 
-/// The tool table, the work offsets and the stored positions outlive a
+/// The tool table, the work offsets, the stored positions and how lines
+/// are read (`OPT`: the dialect, block delete, optional stop) outlive a
 /// power cycle (QEMU's `system_reset`; under QEMU the two flash slots are
 /// RAM that a reset keeps); what a power cycle forgets, the `G92` shift,
 /// is forgotten.
@@ -345,6 +346,7 @@ fn the_offsets_survive_a_power_cycle() {
         "G00 X10 Z5",
         "G28.1",
         "G92 X0 Z0",
+        "OPT DIALECT=FANUC OPTSTOP=1",
     ] {
         assert!(ask(&mut link, set).starts_with("OK"), "{set}");
     }
@@ -357,6 +359,8 @@ fn the_offsets_survive_a_power_cycle() {
     std::thread::sleep(Duration::from_secs(1));
     let after = [ask(&mut link, "TOOL N=7"), ask(&mut link, "WORK G=55")];
     assert_eq!(after, set);
+    assert_eq!(ask(&mut link, "OPT"), "OK BDEL=0 DIALECT=FANUC OPTSTOP=1");
+    assert!(ask(&mut link, "OPT DIALECT=ISO").starts_with("OK"));
     // The stored position is back (G28 returns to X10 Z5 from here); the
     // shift is not (the position reads in machine coordinates again).
     assert!(ask(&mut link, "POS").starts_with("OK PX=0 PZ=0 X=0.0000 Z=0.0000"));

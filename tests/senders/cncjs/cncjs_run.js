@@ -26,6 +26,12 @@
 //                           shows the controller held, press Resume
 //                           (`gcode:resume`) after S seconds (default 0.5;
 //                           `never` leaves it paused)
+//   --operator S            a program stop the controller asks the operator
+//                           for (`[MSG:… then cycle start]`, a machine's own
+//                           M code): once the controller shows Hold:0 after
+//                           the message, press Cycle Start (`cyclestart`)
+//                           after S seconds, as the operator at the machine
+//                           does when the job is done by hand
 //   --tool-change POLICY    CNCjs' M6 policy: `send` (default: the controller
 //                           changes the tool, the line goes out as written)
 //                           or `ignore` (CNCjs' own default: it comments the
@@ -75,6 +81,7 @@ function parseArgs(argv) {
         overrides: [],
         jogs: [],
         resumeAfter: 0.5,
+        operator: null,
         toolChange: 'send',
     };
     const positional = [];
@@ -107,6 +114,8 @@ function parseArgs(argv) {
             opts.overrides.push({ when: parseWhen(v.slice(0, at)), clicks, done: false });
         } else if (a === '--jog') {
             opts.jogs.push({ what: 'jog', line: value() });
+        } else if (a === '--operator') {
+            opts.operator = Number(value());
         } else if (a === '--console') {
             opts.jogs.push({ what: 'console', line: value() });
         } else if (a === '--resume-after') {
@@ -161,6 +170,8 @@ const seen = {
 };
 
 let controllerState = null; // the last `controller:state` status
+let stateAt = 0; // seconds (now()) it came at
+const operatorStops = []; // { t, msg }: stop messages for the operator read
 let senderStatus = null;
 let workflowState = null;
 let jobStarted = null; // seconds (now()) the job started at
@@ -277,7 +288,11 @@ function connect(httpPort) {
     const token = jwt.sign({ id: '', name: 'cncjs-pendant' }, secret, { expiresIn: '1h' });
     const socket = io.connect(`ws://127.0.0.1:${httpPort}`, { query: `token=${token}`, reconnection: false });
     socket.on('serialport:read', (line) => {
-        seen.read.push(String(line).replace(/\r$/, ''));
+        const text = String(line).replace(/\r$/, '');
+        seen.read.push(text);
+        if (text.startsWith('[MSG:') && text.endsWith('then cycle start]')) {
+            operatorStops.push({ t: now(), msg: text });
+        }
     });
     socket.on('serialport:write', (data, context) => {
         seen.written.push({ t: Number(now().toFixed(3)), data, bytes: hex(data),
@@ -290,6 +305,7 @@ function connect(httpPort) {
     });
     socket.on('controller:state', (type, state) => {
         controllerState = state.status;
+        stateAt = now();
         const name = stateName(controllerState);
         if (name && seen.states[seen.states.length - 1] !== name) {
             seen.states.push(name);
@@ -409,6 +425,7 @@ async function run() {
     jobStarted = now();
 
     let hold = null; // { at, held, done }
+    let answered = 0; // operator stops answered with Cycle Start
     let pause = null; // the program pause being handled
     const deadline = opts.timeout;
     for (;;) {
@@ -470,6 +487,14 @@ async function run() {
                 command('gcode:resume');
                 pause.done = true;
             }
+        }
+        // A stop for the operator: Cycle Start once held there.
+        const stop = operatorStops[answered];
+        if (opts.operator !== null && stop && stateName(controllerState) === 'Hold:0'
+            && stateAt > stop.t && now() - stop.t >= opts.operator) {
+            record('cyclestart', { operator: stop.msg });
+            command('cyclestart');
+            answered += 1;
         }
         // CNCjs ends the job itself (`gcode:stop`) once every line is
         // acknowledged and the machine has been Idle for half a second.

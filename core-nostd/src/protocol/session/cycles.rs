@@ -397,7 +397,7 @@ impl Session {
         let pending = match self.cycles.mode {
             Mode::Idle => return Ok(()),
             Mode::Refusing(p, q) => {
-                let n = parse(text, self.dialect, self.modal.units)
+                let n = parse(text, self.offsets.reading.dialect, self.modal.units)
                     .ok()
                     .and_then(|b| b.n);
                 if n == Some(q) {
@@ -445,7 +445,7 @@ impl Session {
                 }
             }
             Err(e) => {
-                let n = parse(text, self.dialect, self.modal.units)
+                let n = parse(text, self.offsets.reading.dialect, self.modal.units)
                     .ok()
                     .and_then(|b| b.n);
                 self.cycles.mode = if n == Some(pending.q) {
@@ -462,7 +462,8 @@ impl Session {
     /// Holds one profile block: its element, its text. `Some(count)` while
     /// more are to come, `None` once block `Q` is in.
     fn hold(&mut self, text: &str, pending: Pending) -> Result<Option<usize>, Refusal<'static>> {
-        let b = parse(text, self.dialect, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
+        let b = parse(text, self.offsets.reading.dialect, self.modal.units)
+            .map_err(|l| Refusal::Block(l.error))?;
         let first = self.cycles.ends.is_empty();
         if first && b.n != Some(pending.p) {
             return Err(refuse_profile(
@@ -687,7 +688,7 @@ impl Session {
         let mut motion = self.modal.motion;
         let mut unfed = false;
         for line in self.cycles.lines() {
-            if let Ok(pb) = parse(line, self.dialect, self.modal.units) {
+            if let Ok(pb) = parse(line, self.offsets.reading.dialect, self.modal.units) {
                 match pb.compensation {
                     Some(crate::gcode::Compensation::Off) => compensating = false,
                     Some(_) => compensating = true,

@@ -29,8 +29,9 @@ impl Session {
         crc: &mut Crc32,
         io: &mut I,
     ) -> Result<Block, Refusal<'a>> {
-        let b = parse(text, self.dialect, self.modal.units).map_err(|l| Refusal::Block(l.error))?;
-        if b.deleted && self.block_delete {
+        let b = parse(text, self.offsets.reading.dialect, self.modal.units)
+            .map_err(|l| Refusal::Block(l.error))?;
+        if b.deleted && self.offsets.reading.block_delete {
             return Ok(Block::Skipped);
         }
         if let Some(cycle) = b.cycle {
@@ -377,7 +378,7 @@ impl Session {
         }
         let pause = match b.stop {
             Some(Stop::Pause) => true,
-            Some(Stop::Optional) => self.optional_stop,
+            Some(Stop::Optional) => self.offsets.reading.optional_stop,
             _ => false,
         };
         if pause && contour.active() {

@@ -72,8 +72,6 @@ pub struct Session {
     pub(super) modal: Modal,
     /// The spindle, the coolant, the tool named.
     pub(super) aux: Aux,
-    /// The dialect G-code lines are read in (`OPT DIALECT=`).
-    pub(super) dialect: Dialect,
     /// Work offsets and the tool table.
     pub(super) offsets: Offsets,
     /// Which of them are in effect.
@@ -95,11 +93,6 @@ pub struct Session {
     pub(super) last_moves: Moves,
     /// The host's session token (`SESSION`); 0 after power-on.
     pub(super) token: u32,
-    /// The block delete switch (`OPT BDEL=`): blocks that begin with `/`
-    /// are skipped while it is on.
-    pub(super) block_delete: bool,
-    /// The optional stop switch: `M01` stops (`OPT OPTSTOP=`).
-    pub(super) optional_stop: bool,
     /// Changes of the table, the work offsets and the stored positions.
     pub(super) generation: u32,
     /// Check mode (grbl's `$C`): the registers where it began, put back
@@ -159,7 +152,6 @@ impl Session {
             drive: DriveTiming::DEFAULT,
             modal: Modal::POWER_ON,
             aux: Aux::POWER_ON,
-            dialect: Dialect::Iso,
             offsets: Offsets::ZERO,
             sel: Selection::POWER_ON,
             prog: [Length::ZERO; 2],
@@ -168,8 +160,6 @@ impl Session {
             spindle_override: 100,
             last_moves: Moves::new(),
             token: 0,
-            block_delete: false,
-            optional_stop: false,
             generation: 0,
             checking: None,
             reset_dropped: false,
@@ -249,17 +239,17 @@ impl Session {
 
     /// The dialect G-code lines are read in.
     pub const fn dialect(&self) -> Dialect {
-        self.dialect
+        self.offsets.reading.dialect
     }
 
     /// Whether blocks starting with `/` are skipped (`OPT BDEL`).
     pub const fn block_delete(&self) -> bool {
-        self.block_delete
+        self.offsets.reading.block_delete
     }
 
     /// Whether `M01` stops (`OPT OPTSTOP`).
     pub const fn optional_stop(&self) -> bool {
-        self.optional_stop
+        self.offsets.reading.optional_stop
     }
 
     /// Exact commanded coordinates `(X radius, Z)` in machine coordinates
@@ -473,29 +463,37 @@ impl Session {
     /// `OPT [BDEL=0|1] [DIALECT=ISO|FANUC] [OPTSTOP=0|1]`.
     fn opt_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
         let [bdel, dialect, optstop] = args.values();
+        let was = self.offsets.reading;
         let block_delete = match bdel {
             Some(v) => parse_flag("BDEL", v)?,
-            None => self.block_delete,
+            None => was.block_delete,
         };
         let optional_stop = match optstop {
             Some(v) => parse_flag("OPTSTOP", v)?,
-            None => self.optional_stop,
+            None => was.optional_stop,
         };
         let dialect = match dialect {
-            None => self.dialect,
+            None => was.dialect,
             Some(v) if v.eq_ignore_ascii_case("ISO") => Dialect::Iso,
             Some(v) if v.eq_ignore_ascii_case("FANUC") => Dialect::Fanuc,
             Some(_) => return Err(Refusal::Value("DIALECT", "must be ISO or FANUC")),
         };
-        (self.block_delete, self.dialect) = (block_delete, dialect);
-        self.optional_stop = optional_stop;
+        let mut offsets = self.offsets;
+        offsets.reading = crate::interp::Reading {
+            dialect,
+            block_delete,
+            optional_stop,
+        };
+        // Kept across power cycles with the table.
+        self.take_offsets(offsets);
+        let now = self.offsets.reading;
         send_ok(
             io,
             Some(format_args!(
                 "BDEL={} DIALECT={} OPTSTOP={}",
-                u8::from(self.block_delete),
-                self.dialect.as_str(),
-                u8::from(self.optional_stop)
+                u8::from(now.block_delete),
+                now.dialect.as_str(),
+                u8::from(now.optional_stop)
             )),
         );
         Ok(())

@@ -101,7 +101,7 @@ impl Session {
             sel.wcs = w;
         }
         let beyond = "offset register beyond the table's 32";
-        match self.dialect {
+        match self.offsets.reading.dialect {
             Dialect::Fanuc => {
                 if let Some(t) = b.tool {
                     sel.loaded = t.tool;
@@ -161,7 +161,7 @@ impl Session {
     /// (Fanuc: the offset register; ISO: the loaded tool's) when its nose
     /// is set, else the configured `RN` and `TIP`.
     pub(in crate::protocol) fn nose(&self, offsets: &Offsets, sel: &Selection) -> Tool {
-        let register = match self.dialect {
+        let register = match self.offsets.reading.dialect {
             Dialect::Fanuc => sel.register,
             Dialect::Iso => sel.loaded,
         };
@@ -197,7 +197,7 @@ impl Session {
 
     /// New offsets; what a board keeps of them changed or not.
     pub(super) fn take_offsets(&mut self, new: Offsets) {
-        let kept = |o: &Offsets| (o.work, o.tools, o.reference, o.mcodes);
+        let kept = |o: &Offsets| (o.work, o.tools, o.reference, o.mcodes, o.reading);
         if kept(&new) != kept(&self.offsets) {
             self.generation = self.generation.wrapping_add(1);
         }
