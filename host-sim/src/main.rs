@@ -351,6 +351,10 @@ enum Command {
         /// (default 1: real time, as a board runs).
         #[arg(long, value_name = "FACTOR", value_parser = parse_speed)]
         speed: Option<f64>,
+        /// How the board reads G-code lines at power-on, as one that kept
+        /// `OPT DIALECT=` (grbl `$450`) from before: iso or fanuc.
+        #[arg(long, default_value = "iso", value_parser = ["iso", "fanuc"])]
+        dialect: String,
     },
 }
 
@@ -886,16 +890,18 @@ fn main() -> ExitCode {
             grbl,
             instant,
             speed,
+            dialect,
         } => {
+            let fanuc = dialect == "fanuc";
             let pace = if instant {
                 host_sim::board::Pace::Unpaced
             } else {
                 host_sim::board::Pace::Wall(speed.unwrap_or(1.0))
             };
             if pty {
-                serve_pty(grbl, pace)
+                serve_pty(grbl, fanuc, pace)
             } else {
-                serve_stdio(grbl, pace)
+                serve_stdio(grbl, fanuc, pace)
             }
         }
     };
@@ -917,19 +923,26 @@ fn parse_speed(v: &str) -> Result<f64, String> {
 }
 
 /// A device at power-on, speaking grbl from the start when asked (its
-/// banner goes out when a sender opens the link).
-fn board_device(grbl: bool) -> core_nostd::protocol::Device {
+/// banner goes out when a sender opens the link), reading Fanuc when it
+/// kept that from before.
+fn board_device(grbl: bool, fanuc: bool) -> core_nostd::protocol::Device {
     struct Nowhere;
     impl core_nostd::protocol::Io for Nowhere {
         fn send(&mut self, _: &[u8]) {}
     }
     let mut device = core_nostd::protocol::Device::new();
+    if fanuc {
+        let mut kept = core_nostd::interp::Offsets::ZERO;
+        kept.reading.dialect = core_nostd::gcode::Dialect::Fanuc;
+        device.restore_offsets(kept);
+    }
     device.set_grbl(grbl, &mut Nowhere);
     device
 }
 
 fn serve_stdio(
     grbl: bool,
+    fanuc: bool,
     pace: host_sim::board::Pace,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
     if grbl {
@@ -945,8 +958,13 @@ fn serve_stdio(
             Err(e) => return Err(e),
         }
     };
-    let board =
-        host_sim::board::Board::serve(board_device(grbl), pace, read, std::io::stdout(), false);
+    let board = host_sim::board::Board::serve(
+        board_device(grbl, fanuc),
+        pace,
+        read,
+        std::io::stdout(),
+        false,
+    );
     board.wait();
     Ok(ExitCode::SUCCESS)
 }
@@ -1068,9 +1086,10 @@ fn send_program(args: &SendArgs) -> Result<ExitCode, Box<dyn std::error::Error>>
 
 fn serve_pty(
     grbl: bool,
+    fanuc: bool,
     pace: host_sim::board::Pace,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
-    let (path, board) = host_sim::board::serve_pty(board_device(grbl), pace)?;
+    let (path, board) = host_sim::board::serve_pty(board_device(grbl, fanuc), pace)?;
     let clock = match pace {
         host_sim::board::Pace::Unpaced => "motion at once".to_string(),
         host_sim::board::Pace::Wall(1.0) => "motion in real time".to_string(),

@@ -5,6 +5,52 @@ use std::process::{Command, Stdio};
 
 const BIN: &str = env!("CARGO_BIN_EXE_host-sim");
 
+/// `serve --dialect fanuc`: the board reads Fanuc from power-on, as one
+/// that kept `OPT DIALECT=FANUC` (grbl `$450=1`) from before; a dialect it
+/// has not is refused by name.
+#[test]
+fn serve_reads_the_dialect_it_is_given() {
+    let run = |args: &[&str], input: &[u8]| {
+        let mut child = Command::new(BIN)
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        child.stdin.take().unwrap().write_all(input).unwrap();
+        let out = child.wait_with_output().unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (ok, out, _) = run(
+        &["serve", "--stdio", "--instant", "--dialect", "fanuc"],
+        b"OPT\nG00 U4. W-2.\nPOS\n",
+    );
+    assert!(ok, "{out}");
+    assert!(
+        out.starts_with("OK BDEL=0 DIALECT=FANUC OPTSTOP=0*"),
+        "{out}"
+    );
+    assert!(
+        out.contains("\r\nOK PX=400 PZ=-200 X=4.0000 Z=-2.0000*"),
+        "{out}"
+    );
+    let (ok, out, _) = run(&["serve", "--stdio", "--instant"], b"OPT\nG00 U4.\n");
+    assert!(ok, "{out}");
+    assert!(out.starts_with("OK BDEL=0 DIALECT=ISO OPTSTOP=0*"), "{out}");
+    assert!(
+        out.contains("ERR VALUE U belongs to the FANUC dialect"),
+        "{out}"
+    );
+    let (ok, _, err) = run(&["serve", "--stdio", "--dialect", "haas"], b"");
+    assert!(!ok);
+    assert!(err.contains("invalid value 'haas' for '--dialect"), "{err}");
+}
+
 #[test]
 fn serve_stdio_answers_requests() {
     let mut child = Command::new(BIN)
