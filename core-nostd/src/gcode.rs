@@ -41,7 +41,7 @@
 //! | `P` | with G04: the dwell, seconds (ISO) or milliseconds (Fanuc) | 0 … 99 999.999999 |
 //! | `T` | ISO: the tool, 0 … 99; Fanuc: tool and offset register, `T0101` | whole number |
 //! | `M` | 02 30 (end of program), 03 04 05 (spindle cw, ccw, stop), 06 (ISO: tool change), 07 08 09 (mist, flood, off) | code |
-//! | `P`, `L` | with G10: the work offset 1 … 6 and L2 or L20 | whole number |
+//! | `P`, `L` | with G10: the work offset 1 … 6 (ISO also 0, the one in effect) and L2 or L20 | whole number |
 //! | `H` | ISO, with G43: the offset register | whole number |
 
 use crate::length::{gcode_scaled, Length, LengthError};
@@ -299,7 +299,8 @@ pub struct ToolWord {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SetWork {
-    /// 1 … 6: `G54` … `G59`.
+    /// 1 … 6: `G54` … `G59`; 0 (ISO): the system in effect once the
+    /// block's own `G54`–`G59` is taken.
     pub register: u8,
     /// `L20`: so that the current point has the coordinates `X`/`Z`;
     /// `L2`: to them.
@@ -1461,6 +1462,17 @@ impl Reading {
                 };
                 let register = match self.p {
                     Some((p @ 1..=6, _)) => p as u8,
+                    // ISO (LinuxCNC, grbl): the system in effect.
+                    Some((0, _)) if self.dialect == Dialect::Iso => 0,
+                    Some((0, at)) => {
+                        return Err((
+                            BlockError::Range(
+                                b'P',
+                                "0 is Fanuc's external offset, which this control has not: 1 to 6 (G54 to G59)",
+                            ),
+                            at,
+                        ))
+                    }
                     Some((_, at)) => {
                         return Err((BlockError::Range(b'P', "names G54 to G59: 1 to 6"), at))
                     }

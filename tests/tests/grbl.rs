@@ -508,6 +508,37 @@ fn a_sender_switches_the_dialect_block_delete_and_optional_stop() {
     );
 }
 
+/// The "zero" buttons of grbl senders: UGS and bCNC send `G10 P0 L20`
+/// (the work system in effect), CNCjs `G10 L20 P1` (G54 by number): the
+/// work position reads zero there, `$#` shows the offset.
+#[test]
+fn a_senders_zero_buttons_set_the_work_offset_in_effect() {
+    let mut dev = grbl_device();
+    assert_eq!(text(&mut dev, b"G21 G90 G00 X30 Z-12\n"), "ok\r\n");
+    let _ = text(&mut dev, b"G4 P0\n");
+    assert_eq!(text(&mut dev, b"G10 P0 L20 X0 Z0\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"$10=0\n"), "ok\r\n");
+    let at = text(&mut dev, b"?");
+    assert!(at.starts_with("<Idle|WPos:0.0000,0.0000,0.0000|"), "{at}");
+    let offsets = text(&mut dev, b"$#\n");
+    assert!(
+        offsets.contains("[G54:30.0000,0.0000,-12.0000]"),
+        "{offsets}"
+    );
+    // In G55, by number as CNCjs does; G54 stays.
+    assert_eq!(text(&mut dev, b"G55\n"), "ok\r\n");
+    assert_eq!(text(&mut dev, b"G10 L20 P2 Z5\n"), "ok\r\n");
+    let offsets = text(&mut dev, b"$#\n");
+    assert!(
+        offsets.contains("[G54:30.0000,0.0000,-12.0000]"),
+        "{offsets}"
+    );
+    assert!(
+        offsets.contains("[G55:0.0000,0.0000,-17.0000]"),
+        "{offsets}"
+    );
+}
+
 /// `$C`: lines are read and checked as if run, a bad one refused as it
 /// would be, nothing moves; leaving it resets (grbl's banner) with the
 /// position where it was.

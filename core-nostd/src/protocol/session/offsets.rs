@@ -137,7 +137,11 @@ impl Session {
                 .tool_offset(&sel)
                 .ok_or(Refusal::Range(RANGE_OFFSET))?;
             let values = [block_x(b, diam), b.z];
-            let register = usize::from(set.register).saturating_sub(1);
+            // P0: the system in effect after this block's G54–G59.
+            let register = match set.register {
+                0 => usize::from(sel.wcs),
+                p => usize::from(p).saturating_sub(1),
+            };
             let work = offsets
                 .work
                 .get_mut(register)

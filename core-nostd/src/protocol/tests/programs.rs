@@ -220,6 +220,10 @@ fn work_and_tool_offsets_move_the_machine_not_the_program() {
     let bad = [
         ("G10 L2 P7 X0", "ERR VALUE P names G54 to G59: 1 to 6"),
         (
+            "G10 L20 P0 Z0",
+            "ERR VALUE P 0 is Fanuc's external offset, which this control has not: 1 to 6 (G54 to G59)",
+        ),
+        (
             "G10 L3 P1 X0",
             "ERR SYNTAX G10 needs L2 or L20 (a work offset)",
         ),
@@ -234,6 +238,27 @@ fn work_and_tool_offsets_move_the_machine_not_the_program() {
         assert_eq!(ask1(&mut dev, line), want, "{line}");
     }
     assert_eq!(ask1(&mut dev, "POS"), before);
+}
+
+/// ISO `G10 L2`/`L20 P0` (LinuxCNC, grbl): the work system in effect, once
+/// the block's own `G54`–`G59` is taken; what grbl senders' "zero" buttons
+/// send (`G10 P0 L20 X0`).
+#[test]
+fn g10_p0_sets_the_work_system_in_effect() {
+    let mut dev = Device::new();
+    let r = ask(&mut dev, b"G00 X20 Z-4\n");
+    assert_eq!(r[0], "DATA G00 X20.0000 Z-4.0000");
+    // In G54: Z0 here.
+    ask1(&mut dev, "G10 P0 L20 Z0");
+    assert_eq!(ask1(&mut dev, "WORK G=54"), "OK G=54 X=0.0000 Z=-4.0000");
+    // G56 taken first in the same block, then set: X10 here.
+    ask1(&mut dev, "G56 G10 L20 P0 X10");
+    assert_eq!(ask1(&mut dev, "WORK G=56"), "OK G=56 X=10.0000 Z=0.0000");
+    assert_eq!(ask1(&mut dev, "WORK G=54"), "OK G=54 X=0.0000 Z=-4.0000");
+    assert!(ask1(&mut dev, "POS").contains(" X=10.0000 Z=-4.0000"));
+    // L2 P0: to the values, in G56 still.
+    ask1(&mut dev, "G10 L2 P0 Z-7.5");
+    assert_eq!(ask1(&mut dev, "WORK G=56"), "OK G=56 X=10.0000 Z=-7.5000");
 }
 
 /// Safety: an axis a block does not name never moves, whatever changed
