@@ -1545,6 +1545,9 @@ pub fn reference_block_in(
         }
         match p {
             Some(r @ 1..=6) => b.set_work = Some((r as u8, l == Some(20))),
+            // ISO: P0, the system in effect (docs/protocol.md §5.2); in
+            // Fanuc the external offset, which the control has not.
+            Some(0) if !fanuc => b.set_work = Some((0, l == Some(20))),
             Some(_) => return Err(RefBlockError::Range(b'P')),
             None => return Err(RefBlockError::Form),
         }

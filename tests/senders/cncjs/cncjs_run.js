@@ -544,6 +544,7 @@ run()
             seen.error = String(failure.message || failure);
             seen.server_log = serverLog.split('\n').filter((l) => /error|warn/i.test(l)).slice(-30);
         }
-        process.stdout.write(`${JSON.stringify(seen)}\n`);
-        process.exit(failure ? 1 : 0);
+        // Exit once the summary is out: to a pipe, a write is
+        // asynchronous, and exiting at once cuts it at 64 KiB.
+        process.stdout.write(`${JSON.stringify(seen)}\n`, () => process.exit(failure ? 1 : 0));
     });
