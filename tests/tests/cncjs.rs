@@ -238,6 +238,33 @@ fn program_lines(program: &Path) -> usize {
         .count()
 }
 
+/// A corpus program's job ran to its end as CNCjs sees it: no error or
+/// alarm, every line of the file sent and answered, CNCjs ended the job
+/// itself, `Idle`, and the carriage at `want` (X diameter, Z), to 0.001 mm.
+fn ended_at(json: &Value, name: &str, program: &Path, want: (f64, f64)) {
+    let s = summary(json);
+    assert_eq!(json["errors"], Value::Array(vec![]), "{name}: {s}");
+    assert_eq!(json["alarms"], Value::Array(vec![]), "{name}: {s}");
+    assert!(
+        !strings(json, "read")
+            .iter()
+            .any(|l| l.starts_with("error:")),
+        "{name}: {s}"
+    );
+    assert_eq!(json["finished"], true, "{name}: {s}");
+    assert_eq!(json["timed_out"], false, "{name}: {s}");
+    assert_eq!(json["not_done"], Value::Array(vec![]), "{name}: {s}");
+    let total = json["sender"]["total"].as_u64().expect("total");
+    assert_eq!(total as usize, program_lines(program) + 1, "{name}: {s}");
+    assert_eq!(json["sender"]["received"], total, "{name}: {s}");
+    assert_eq!(json["state"], "Idle", "{name}: {s}");
+    let at = numbers(&json["mpos"]);
+    assert!(
+        at.len() == 3 && (at[0] - want.0).abs() < 1e-3 && (at[2] - want.1).abs() < 1e-3,
+        "{name}: CNCjs sees the carriage at {at:?}, the program ends at {want:?}: {s}"
+    );
+}
+
 #[test]
 fn cncjs_streams_a_lathe_program_to_serve() {
     if !cncjs_available() {
@@ -286,27 +313,7 @@ fn cncjs_streams_corpus_programs_to_serve() {
         let want = tests::last_x_z(&text).expect("a last move");
         let device = serve_at(20.0);
         let json = cncjs(device.path(), &program, &[]);
-        let s = summary(&json);
-        assert_eq!(json["errors"], Value::Array(vec![]), "{name}: {s}");
-        assert_eq!(json["alarms"], Value::Array(vec![]), "{name}: {s}");
-        assert!(
-            !strings(&json, "read")
-                .iter()
-                .any(|l| l.starts_with("error:")),
-            "{name}: {s}"
-        );
-        assert_eq!(json["finished"], true, "{name}: {s}");
-        assert_eq!(json["timed_out"], false, "{name}: {s}");
-        assert_eq!(json["not_done"], Value::Array(vec![]), "{name}: {s}");
-        let total = json["sender"]["total"].as_u64().expect("total");
-        assert_eq!(total as usize, program_lines(&program) + 1, "{name}: {s}");
-        assert_eq!(json["sender"]["received"], total, "{name}: {s}");
-        assert_eq!(json["state"], "Idle", "{name}: {s}");
-        let at = numbers(&json["mpos"]);
-        assert!(
-            at.len() == 3 && (at[0] - want.0).abs() < 1e-3 && (at[2] - want.1).abs() < 1e-3,
-            "{name}: CNCjs sees the carriage at {at:?}, the program ends at {want:?}: {s}"
-        );
+        ended_at(&json, name, &program, want);
     }
 }
 
@@ -364,26 +371,7 @@ fn cncjs_streams_fanuc_programs_to_serve_after_450() {
         // (CNCjs may pause twice at one M00: once when it reads the line
         // ahead, once when Resume sends it.)
         assert!(actions(&json, "gcode:resume").count() >= m00, "{name}: {s}");
-        assert_eq!(json["errors"], Value::Array(vec![]), "{name}: {s}");
-        assert_eq!(json["alarms"], Value::Array(vec![]), "{name}: {s}");
-        assert!(
-            !strings(&json, "read")
-                .iter()
-                .any(|l| l.starts_with("error:")),
-            "{name}: {s}"
-        );
-        assert_eq!(json["finished"], true, "{name}: {s}");
-        assert_eq!(json["timed_out"], false, "{name}: {s}");
-        assert_eq!(json["not_done"], Value::Array(vec![]), "{name}: {s}");
-        let total = json["sender"]["total"].as_u64().expect("total");
-        assert_eq!(total as usize, program_lines(&program) + 1, "{name}: {s}");
-        assert_eq!(json["sender"]["received"], total, "{name}: {s}");
-        assert_eq!(json["state"], "Idle", "{name}: {s}");
-        let at = numbers(&json["mpos"]);
-        assert!(
-            at.len() == 3 && (at[0] - want.0).abs() < 1e-3 && (at[2] - want.1).abs() < 1e-3,
-            "{name}: CNCjs sees the carriage at {at:?}, the program ends at {want:?}: {s}"
-        );
+        ended_at(&json, name, &program, want);
     }
     // The same Haas program without the setting: ISO refuses its first
     // Fanuc word, and says how to read it.
