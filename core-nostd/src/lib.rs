@@ -37,6 +37,8 @@
 //!   them, and what it issued.
 //! - [`sync`]: motion locked to the spindle: a threading pass as an exact
 //!   function of the encoder counts, and its step events by count.
+//! - [`thread`]: LinuxCNC's threading cycle `G76`: the depth of each pass
+//!   and its moves, checked before the first.
 //! - [`store`]: the tool table and work offsets as a record in two flash
 //!   slots that a power cut during a write cannot break.
 //! - [`machine`]: the planner and the stepper behind one front, as the
@@ -84,6 +86,7 @@ pub mod stepper;
 pub mod store;
 pub mod sync;
 mod text;
+pub mod thread;
 pub mod trig;
 pub mod watch;
 mod wide;
