@@ -26,7 +26,7 @@ FUZZ_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 ROOT="$(dirname "$FUZZ_DIR")"
 cd "$ROOT" || exit 2
 
-ALL_TARGETS="request block protocol length gcode words contour sync"
+ALL_TARGETS="request block protocol length gcode words contour sync g76"
 TARGETS="${TARGETS:-$ALL_TARGETS}"
 
 # Longest input per target: sessions of many lines for the protocol and the

@@ -193,7 +193,8 @@ impl G76 {
             return Err(G76Error::TooManyPasses);
         }
         // Every pass is as long along Z: the thread less K·tan Q.
-        let tapers = i64::from(self.ends & 1) + i64::from(self.ends >> 1);
+        let ends = self.tapered();
+        let tapers = i64::from(ends & 1) + i64::from(ends >> 1);
         let length = (self.z_end - self.start[1]).abs() - self.shift(self.full);
         if length <= tapers * self.taper {
             return Err(G76Error::TooShort);
@@ -249,9 +250,10 @@ impl G76 {
         let xc = x0 + self.crest + s * d;
         let xt = xc - s * k;
         let e = self.taper;
+        let ends = self.tapered();
         let mut m = Moves::new();
         m.push(ThreadMove::Rapid([xr, zs]));
-        if self.ends & 1 != 0 {
+        if ends & 1 != 0 {
             // The plunge to the taper's start at the taper's rate, as
             // LinuxCNC runs it: its lead is the taper's path per turn.
             m.push(ThreadMove::Cut {
@@ -265,7 +267,7 @@ impl G76 {
         } else {
             m.push(ThreadMove::Rapid([xc, zs]));
         }
-        if self.ends & 2 != 0 {
+        if ends & 2 != 0 {
             m.push(ThreadMove::Cut {
                 to: [xc, ze - sz * e],
                 lead: self.pitch,
@@ -282,6 +284,16 @@ impl G76 {
         }
         m.push(ThreadMove::Rapid([xr, ze]));
         m
+    }
+
+    /// The ends that taper: `L`, or none when `E` is 0 (`E0 L3` cuts
+    /// straight, as LinuxCNC does).
+    const fn tapered(&self) -> u8 {
+        if self.taper > 0 {
+            self.ends
+        } else {
+            0
+        }
     }
 
     /// The taper's lead along its longer axis, so that Z advances `P` a

@@ -164,7 +164,8 @@ fn random_cycle(rng: &mut ChaCha8Rng) -> G76 {
         degression,
         angle,
         spring: rng.random_range(0..4),
-        taper: if ends == 0 {
+        // `E0` with an `L` cuts straight.
+        taper: if ends == 0 || rng.random_bool(0.1) {
             0
         } else {
             mm(rng.random_range(0.2..4.0), 4)
