@@ -101,9 +101,10 @@ pub enum ThreadMove {
     },
 }
 
-/// `n / d` rounded half away from zero (`d > 0`).
+/// `n / d` rounded half away from zero (`d > 0`; 0 for `d` 0, which
+/// the callers never pass).
 fn round_div(n: i128, d: i128) -> i128 {
-    let q = (2 * n.abs() + d) / (2 * d);
+    let q = (2 * n.abs() + d).checked_div(2 * d).unwrap_or(0);
     if n < 0 {
         -q
     } else {
@@ -128,18 +129,32 @@ fn log2_q64(n: u32) -> u128 {
     (u128::from(k) << 64) | frac
 }
 
-/// `2^y` in Q62 for `y` in Q64 below 2⁶, from the powers `2^(2^−i)`
-/// (each the square root of the one before), 48 bits of `y`'s fraction.
+/// `2^(2^−i)` in Q62 for `i` from 1 to 48, each the square root of the one
+/// before (truncated), computed once at build time.
+const ROOTS_OF_TWO: [u128; 48] = roots_of_two();
+
+const fn roots_of_two() -> [u128; 48] {
+    let mut t = [0u128; 48];
+    let mut c = isqrt(2 << 124) as u128;
+    let mut i = 0;
+    while i < 48 {
+        t[i] = c;
+        c = isqrt(c << 62) as u128;
+        i += 1;
+    }
+    t
+}
+
+/// `2^y` in Q62 for `y` in Q64 below 2⁶, from [`ROOTS_OF_TWO`]: 48 bits
+/// of `y`'s fraction.
 fn exp2_q62(y: u128) -> u128 {
     let whole = (y >> 64) as u32;
     let frac = y & ((1 << 64) - 1);
     let mut r: u128 = 1 << 62;
-    let mut c = u128::from(isqrt(2 << 124));
-    for i in 1..=48 {
-        if frac & (1 << (64 - i)) != 0 {
+    for (i, c) in ROOTS_OF_TWO.iter().enumerate() {
+        if frac & (1 << (63 - i)) != 0 {
             r = (r * c) >> 62;
         }
-        c = u128::from(isqrt(c << 62));
     }
     r << whole
 }
@@ -318,7 +333,9 @@ impl G76 {
         );
         // ⌊(2√v + E)/2E⌋ with v = P²(K² + E²): ⌊2√v⌋ = isqrt(4v).
         let v = p * p * (k * k + e * e);
-        ((u128::from(isqrt(4 * v)) + e) / (2 * e)) as i64
+        ((u128::from(isqrt(4 * v)) + e)
+            .checked_div(2 * e)
+            .unwrap_or(0)) as i64
     }
 
     /// The last move of the cycle: to the drive line at `Z`.

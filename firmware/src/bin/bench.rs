@@ -664,6 +664,7 @@ fn main() -> ! {
     calculators(tim);
     cycles(tim);
     threading(tim);
+    thread_cycle(tim);
     finish()
 }
 
@@ -709,6 +710,44 @@ fn threading(tim: &StepTimer) {
             per(u64::from(tr), u64::from(ramp.max(1))),
         ));
     }
+}
+
+/// LinuxCNC's `G76` (`docs/threading.md` §5): the check and every move of
+/// latheeasystep's M30×1.5 thread (R1.5, Q29.5, one spring pass, 45°
+/// tapers at both ends), per pass.
+fn thread_cycle(tim: &StepTimer) {
+    use core_nostd::thread::{ThreadMove, G76};
+    let c = G76 {
+        start: [150_000_000, 20_000_000],
+        z_end: -290_000_000,
+        pitch: 15_000_000,
+        crest: -2_300_000,
+        first: 450_000,
+        full: 4_600_000,
+        degression: 15_000,
+        angle: 29 * 3600 + 1800,
+        spring: 1,
+        taper: 4_600_000,
+        ends: 3,
+    };
+    let mut passes = 0u32;
+    let mut moves = 0u32;
+    let mut sink = 0i64;
+    let t = measure(tim, || {
+        if c.check().is_err() {
+            return;
+        }
+        passes = c.depths().count() as u32;
+        for m in c.moves() {
+            moves += 1;
+            let (ThreadMove::Rapid(to) | ThreadMove::Cut { to, .. }) = m;
+            sink = sink.wrapping_add(to[0] ^ to[1]);
+        }
+    });
+    Line::print(format_args!(
+        "cycle G76 (M30x1.5, R1.5, Q29.5, tapers): {passes} passes, {moves} moves, {t} instructions, {} per pass ({sink})",
+        per(u64::from(t), u64::from(passes.max(1))),
+    ));
 }
 
 /// Hundredths, as `a.bc`.
