@@ -4,10 +4,13 @@
 //! - [`modules`]: the module-level import graph of a crate and its cycles
 //!   (`tests/tests/module_cycles.rs`, `cargo run -p tests --bin
 //!   module-graph -- <crate>/src`).
+//! - [`rs274`]: LinuxCNC's `rs274` as a peer: whether it is here, the
+//!   numbers of its canonical calls (`linuxcnc.rs`, `g76.rs`).
 //! - [`last_x_z`]: where a program's last move naming X and Z ends (the
 //!   tests that stream corpus programs through real senders).
 
 pub mod modules;
+pub mod rs274;
 
 /// Where a program's last move naming both X and Z ends, as written (the
 /// last line whose code, comments left out, has an `X` and a `Z` word):

@@ -12,18 +12,7 @@ use core_nostd::thread::{G76Error, ThreadMove, G76};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::process::Command;
-
-fn rs274_available() -> bool {
-    let found = Command::new("rs274").arg("-h").output().is_ok();
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs rs274 (apt-get install linuxcnc-uspace)"
-        );
-        eprintln!("rs274 not found: the G76 comparison is skipped");
-    }
-    found
-}
+use tests::rs274::{self, args};
 
 /// A canonical move: rapid or fed, its end (X radius, Z, mm) and, when
 /// synchronised, the path's advance per revolution.
@@ -33,15 +22,6 @@ struct Move {
     x: f64,
     z: f64,
     feed: f64,
-}
-
-/// The numbers inside `NAME(…)`.
-fn args(line: &str) -> Vec<f64> {
-    let inner = line.split_once('(').unwrap().1.trim_end_matches(')');
-    inner
-        .split(',')
-        .map(|a| a.trim().parse().unwrap())
-        .collect()
 }
 
 /// `rs274`'s moves after the `G0` to the start.
@@ -200,7 +180,7 @@ fn compare(c: &G76, call: usize) {
 
 #[test]
 fn the_g76_passes_are_linuxcncs() {
-    if !rs274_available() {
+    if !rs274::available("the G76 comparison") {
         return;
     }
     let mut rng = ChaCha8Rng::seed_from_u64(76);

@@ -20,6 +20,7 @@
 use core_nostd::gcode::Dialect;
 use host_sim::program::Options;
 use std::process::Command;
+use tests::rs274::{self, args};
 
 /// One canonical move: its G code, X on the radius and Z (mm), the arc
 /// centre.
@@ -196,27 +197,6 @@ const PEERS: &[Peer] = &[
     },
 ];
 
-fn rs274_available() -> bool {
-    let found = Command::new("rs274").arg("-h").output().is_ok();
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs rs274 (apt-get install linuxcnc-uspace)"
-        );
-        eprintln!("rs274 not found: the LinuxCNC comparison is skipped");
-    }
-    found
-}
-
-/// The numbers inside `NAME(…)`.
-fn args(line: &str) -> Vec<f64> {
-    let inner = line.split_once('(').unwrap().1.trim_end_matches(')');
-    inner
-        .split(',')
-        .map(|a| a.trim().parse().unwrap())
-        .collect()
-}
-
 /// The numbers of a triple `a b c` inside a call's arguments.
 fn triple(text: &str) -> Vec<f64> {
     text.split_whitespace()
@@ -357,7 +337,7 @@ fn device(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
 #[test]
 fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
     let _one = one_at_a_time();
-    if !rs274_available() {
+    if !rs274::available("the LinuxCNC comparison") {
         return;
     }
     let (mut agreed, mut moves) = (0, 0);
@@ -410,7 +390,7 @@ fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
 #[test]
 fn a_tool_offset_is_taken_up_only_by_an_axis_the_block_names() {
     let _one = one_at_a_time();
-    if !rs274_available() {
+    if !rs274::available("the LinuxCNC comparison") {
         return;
     }
     let body = "G18 G21 G7 G90 G40\nG00 X10 Z-5\nT1 M6 G43\nG00 Z-1\nG00 X10 Z-2\nM2\n";
@@ -437,7 +417,7 @@ fn a_tool_offset_is_taken_up_only_by_an_axis_the_block_names() {
 #[test]
 fn linuxcncs_pawn_example_is_cut_alike_up_to_its_broken_arc() {
     let _one = one_at_a_time();
-    if !rs274_available() {
+    if !rs274::available("the LinuxCNC comparison") {
         return;
     }
     let path = concat!(
