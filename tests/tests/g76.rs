@@ -62,8 +62,10 @@ fn linuxcnc(program: &str, call: usize) -> Vec<Move> {
 }
 
 /// The core's moves, as canonical moves: a synchronised move's lead along
-/// its longer axis turned into the advance along its path.
-fn device(c: &G76) -> Vec<Move> {
+/// its longer axis turned into the advance along its path; lengths in
+/// units of `unit` mm (1, or 25.4 for an inch program).
+fn device(c: &G76, unit: f64) -> Vec<Move> {
+    let scale = 1e7 * unit;
     let mut at = c.start;
     c.moves()
         .map(|m| {
@@ -75,14 +77,14 @@ fn device(c: &G76) -> Vec<Move> {
             at = to;
             let along = dx.abs().max(dz.abs());
             let feed = if along > 0.0 {
-                lead as f64 * dx.hypot(dz) / along / 1e7
+                lead as f64 * dx.hypot(dz) / along / scale
             } else {
                 0.0
             };
             Move {
                 rapid,
-                x: to[0] as f64 / 1e7,
-                z: to[1] as f64 / 1e7,
+                x: to[0] as f64 / scale,
+                z: to[1] as f64 / scale,
                 feed,
             }
         })
@@ -154,10 +156,11 @@ fn random_cycle(rng: &mut ChaCha8Rng) -> G76 {
     }
 }
 
-fn compare(c: &G76, call: usize) {
-    let program = program(c);
-    let theirs = linuxcnc(&program, call);
-    let ours = device(c);
+/// The core's cycle `c` against `rs274` on `program`, whose lengths are in
+/// units of `unit` mm: to 0.0001 of them.
+fn compare(c: &G76, program: &str, call: usize, unit: f64) {
+    let theirs = linuxcnc(program, call);
+    let ours = device(c, unit);
     assert_eq!(
         ours.len(),
         theirs.len(),
@@ -228,7 +231,7 @@ fn the_g76_passes_are_linuxcncs() {
     for (call, c) in cycles.iter().enumerate() {
         match c.check() {
             Ok(()) => {
-                compare(c, call);
+                compare(c, &program(c), call, 1.0);
                 compared += 1;
                 moves += c.moves().count();
             }
@@ -240,4 +243,81 @@ fn the_g76_passes_are_linuxcncs() {
         "G76: {compared} cycles ({moves} moves) equal to rs274's; {refused} refused before a move"
     );
     assert!(compared >= 50, "only {compared} cycles compared");
+}
+
+/// A word's value as written in a block (`P1.5000` → 1.5), if it has it.
+fn word_of(block: &str, letter: char) -> Option<f64> {
+    let upper = block.to_ascii_uppercase();
+    let at = upper.find(letter)?;
+    let rest = &upper[at + 1..];
+    let end = rest
+        .find(|ch: char| !(ch.is_ascii_digit() || ch == '.' || ch == '-'))
+        .unwrap_or(rest.len());
+    rest[..end].parse().ok()
+}
+
+/// The `G76` lines of programs nobody here wrote, as written in their
+/// files, from where each file stands the tool before them, in each file's
+/// units and X mode: LinuxCNC's own `g76.ngc` and `g76only.ngc` (inch, X
+/// on the radius, the second with an exit taper), latheeasystep's
+/// `Test_Gewinde.ngc` and `Test_Gewinde_innen.ngc` (mm, X on the diameter,
+/// outside and inside).
+#[test]
+fn the_corpus_g76_lines_cut_as_linuxcnc_cuts_them() {
+    if !rs274::available("the G76 comparison") {
+        return;
+    }
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/data/");
+    // (file, header, the tool's place before the cycle as the file's
+    // moves leave it, inch, diameter)
+    let cases = [
+        ("linuxcnc/g76.ngc", "g20 g18", "g0 x.2 z.2", true, false),
+        ("linuxcnc/g76only.ngc", "g20 g18", "g0z.2x.2", true, false),
+        (
+            "latheeasystep/Test_Gewinde.ngc",
+            "G18 G7 G90 G21",
+            "G0 X10.000 Z5.000",
+            false,
+            true,
+        ),
+        (
+            "latheeasystep/Test_Gewinde_innen.ngc",
+            "G18 G7 G90 G21",
+            "G0 X8.160 Z5.000",
+            false,
+            true,
+        ),
+    ];
+    for (call, (file, header, approach, inch, diameter)) in cases.into_iter().enumerate() {
+        let text = std::fs::read_to_string(format!("{data}{file}")).unwrap();
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().to_ascii_uppercase().starts_with("G76"))
+            .unwrap();
+        let unit = if inch { 25.4 } else { 1.0 };
+        let len = |v: f64| (v * unit * 1e7).round() as i64;
+        let radius = |v: f64| len(if diameter { v / 2.0 } else { v });
+        let w = |l: char| word_of(line, l);
+        let a = |l: char| word_of(approach, l).unwrap();
+        let c = G76 {
+            start: [radius(a('X')), len(a('Z'))],
+            z_end: len(w('Z').unwrap()),
+            pitch: len(w('P').unwrap()),
+            crest: radius(w('I').unwrap()),
+            first: radius(w('J').unwrap()),
+            full: radius(w('K').unwrap()),
+            degression: (w('R').unwrap_or(1.0) * 1e4).round() as u32,
+            angle: (w('Q').unwrap_or(0.0) * 3600.0).round() as i64,
+            spring: w('H').unwrap_or(0.0) as u32,
+            taper: len(w('E').unwrap_or(0.0)),
+            ends: w('L').unwrap_or(0.0) as u8,
+        };
+        assert_eq!(c.check(), Ok(()), "{file}: {line}");
+        let program = format!("{header}\ns500 m3\n{approach}\n{line}\nm2\n");
+        compare(&c, &program, 100 + call, unit);
+        eprintln!(
+            "{file}: {line}: {} moves equal to rs274's",
+            c.moves().count()
+        );
+    }
 }
