@@ -26,3 +26,13 @@ pub fn args(line: &str) -> Vec<f64> {
         .map(|a| a.trim().parse().unwrap())
         .collect()
 }
+
+/// Two `rs274` run side by side by the tests of one file were seen to die
+/// (SIGBUS, or nothing printed) even each in its own working directory:
+/// each test that runs it holds this for its whole length, one at a time.
+static RS274: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Holds `rs274` for the caller until the guard is dropped.
+pub fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    RS274.lock().unwrap_or_else(|e| e.into_inner())
+}

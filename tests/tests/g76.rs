@@ -55,7 +55,12 @@ fn linuxcnc(program: &str, call: usize) -> Vec<Move> {
             });
         }
     }
-    assert!(!moves.is_empty(), "rs274 ran nothing:\n{program}\n{text}");
+    assert!(
+        !moves.is_empty(),
+        "rs274 ran nothing ({}):\n{program}\n{text}{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
     // The first is the G0 to the start.
     moves.remove(0);
     moves
@@ -183,6 +188,7 @@ fn compare(c: &G76, program: &str, call: usize, unit: f64) {
 
 #[test]
 fn the_g76_passes_are_linuxcncs() {
+    let _one = rs274::one_at_a_time();
     if !rs274::available("the G76 comparison") {
         return;
     }
@@ -264,6 +270,7 @@ fn word_of(block: &str, letter: char) -> Option<f64> {
 /// outside and inside).
 #[test]
 fn the_corpus_g76_lines_cut_as_linuxcnc_cuts_them() {
+    let _one = rs274::one_at_a_time();
     if !rs274::available("the G76 comparison") {
         return;
     }

@@ -210,15 +210,6 @@ fn triple(text: &str) -> Vec<f64> {
 /// effect. A traverse that does not move is left out: LinuxCNC sends the
 /// way point of `G28`/`G30` even where the tool already is, the device
 /// does not.
-/// rs274 keeps its parameter file in the working directory, and run beside
-/// the other tests of this file it was seen to die of SIGBUS: each test
-/// holds this for its whole length, one at a time.
-static RS274: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
-    RS274.lock().unwrap_or_else(|e| e.into_inner())
-}
-
 fn linuxcnc(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
     // One directory per call: the tests run side by side.
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -336,7 +327,7 @@ fn device(name: &str, program: &str, tool: Option<&str>) -> Vec<Move> {
 
 #[test]
 fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
-    let _one = one_at_a_time();
+    let _one = rs274::one_at_a_time();
     if !rs274::available("the LinuxCNC comparison") {
         return;
     }
@@ -389,7 +380,7 @@ fn the_iso_dialect_cuts_the_paths_linuxcnc_cuts() {
 /// is next named. Both then stand at the same machine point.
 #[test]
 fn a_tool_offset_is_taken_up_only_by_an_axis_the_block_names() {
-    let _one = one_at_a_time();
+    let _one = rs274::one_at_a_time();
     if !rs274::available("the LinuxCNC comparison") {
         return;
     }
@@ -416,7 +407,7 @@ fn a_tool_offset_is_taken_up_only_by_an_axis_the_block_names() {
 /// wrong there; the device refuses the same line, before it moves.
 #[test]
 fn linuxcncs_pawn_example_is_cut_alike_up_to_its_broken_arc() {
-    let _one = one_at_a_time();
+    let _one = rs274::one_at_a_time();
     if !rs274::available("the LinuxCNC comparison") {
         return;
     }
