@@ -18,6 +18,8 @@
 //!   ISO and the Fanuc dialect.
 //! - [`interp`]: the interpreter's state between blocks (modal codes, feed,
 //!   spindle, coolant, tool) and a block's feed and spindle speed.
+//! - [`inputs`]: the machine's switches (E-stop, limits, door, buttons,
+//!   probe, drive faults), their active level and filter.
 //! - [`outputs`]: the spindle's run, direction and speed (a PWM duty)
 //!   and the coolant, as the board drives them.
 //! - [`calc`]: the seeds' other calculators (deflection, wear, threading
@@ -72,6 +74,7 @@ pub mod crc32;
 pub mod cycle;
 pub mod gcode;
 pub mod impulse;
+pub mod inputs;
 pub mod interleave;
 pub mod interp;
 pub mod length;

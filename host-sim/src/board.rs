@@ -30,7 +30,7 @@ use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
 use core_nostd::stepper::{Aborted, AxesState, Item, Pulled, Stepper, AHEAD};
 use std::io::{Read, Write};
-use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU16, AtomicU8, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
@@ -111,12 +111,57 @@ struct Shared {
     /// grbl's overrides and jog cancel, in order, for the protocol to act
     /// on ahead of the lines queued before them.
     commands: Mutex<Vec<u8>>,
+    /// The simulated machine's switches: the inputs active now
+    /// (`core_nostd::inputs`), filtered.
+    panel: AtomicU16,
+    /// The wired inputs that stop the axes at once (the E-stop, limits,
+    /// drive faults), as the session last had them.
+    stops: AtomicU16,
+    /// X's and Z's impulse prices (Å) and whether X reads as a diameter, as
+    /// the session last had them (for the panel's `STATE?`).
+    prices: Mutex<(i64, i64, bool)>,
+}
+
+/// What the panel reads off the simulated machine (`STATE?`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PanelState {
+    /// The registers of the steps issued: where the carriage is.
+    pub issued: ImpulsePoint,
+    /// X's and Z's impulse prices, Å.
+    pub prices: (i64, i64),
+    /// X reads as a diameter.
+    pub diam: bool,
+    /// The active inputs.
+    pub inputs: u16,
+    /// The spindle's speed, 10⁻³ rpm (0: stopped).
+    pub spindle: u32,
+}
+
+impl PanelState {
+    /// `STATE X= Z= IN= S=`: the carriage (mm, X a diameter when the
+    /// session reads one), the active inputs (grbl's letters, `-` for
+    /// none), the spindle (rpm).
+    pub fn line(&self) -> String {
+        let mm = |n: i32, price: i64| n as f64 * price as f64 / 1e7;
+        let x = mm(self.issued.x.0, self.prices.0) * if self.diam { 2.0 } else { 1.0 };
+        let z = mm(self.issued.z.0, self.prices.1);
+        let mut letters = String::new();
+        let _ = core_nostd::inputs::write_letters(&mut letters, self.inputs);
+        if letters.is_empty() {
+            letters.push('-');
+        }
+        format!(
+            "STATE X={x:.4} Z={z:.4} IN={letters} S={:.3}",
+            f64::from(self.spindle) / 1000.0
+        )
+    }
 }
 
 const WANT_STATUS: u8 = 1;
 const WANT_RESET: u8 = 2;
 const WANT_BANNER: u8 = 4;
 const WANT_COMMAND: u8 = 8;
+const WANT_INPUTS: u8 = 16;
 
 impl Shared {
     fn axes(&self) -> MutexGuard<'_, Axes> {
@@ -161,6 +206,25 @@ impl Shared {
                 a.aborted = Some(found);
                 self.aborting.store(true, Ordering::Release);
             }
+        }
+    }
+
+    /// The switches changed: a stopping input that became active stops
+    /// the axes at once, as the board's input interrupt does (the
+    /// protocol then reports it and locks the session).
+    fn panel(&self, active: u16) {
+        let before = self.panel.swap(active, Ordering::AcqRel);
+        if active & !before & self.stops.load(Ordering::Acquire) != 0 {
+            let mut a = self.axes();
+            if a.aborted.is_none() {
+                let found = abort(&mut a);
+                a.aborted = Some(found);
+            }
+            self.aborting.store(true, Ordering::Release);
+        }
+        if active != before {
+            self.wanted.fetch_or(WANT_INPUTS, Ordering::AcqRel);
+            self.changed.notify_all();
         }
     }
 
@@ -362,6 +426,8 @@ impl<W: Write> Io for Protocol<W> {
 
     fn view(&mut self, view: &StatusView) {
         self.view = *view;
+        *self.shared.prices.lock().unwrap_or_else(|e| e.into_inner()) =
+            (view.hx, view.hz, view.diam);
     }
 
     fn pause(&mut self) {
@@ -573,6 +639,18 @@ fn protocol_loop<W: Write>(
     let shared = Arc::clone(&io.shared);
     let mut closed = false;
     loop {
+        let stops = core_nostd::inputs::Input::Estop.bit()
+            | core_nostd::inputs::LIMITS
+            | core_nostd::inputs::FAULTS;
+        shared
+            .stops
+            .store(device.wiring().used & stops, Ordering::Release);
+        // An input changed: the axes have already stopped if it stops them.
+        if shared.take(WANT_INPUTS) {
+            device.inputs(shared.panel.load(Ordering::Acquire), io);
+            io.grbl = device.grbl_extras();
+            continue;
+        }
         // Real-time requests the receiver acted on: the protocol's part.
         if shared.take(WANT_RESET) {
             shared
@@ -698,6 +776,9 @@ impl Board {
             grbl: AtomicBool::new(device.grbl()),
             stop: AtomicBool::new(false),
             commands: Mutex::new(Vec::new()),
+            panel: AtomicU16::new(0),
+            stops: AtomicU16::new(0),
+            prices: Mutex::new((50_000, 100_000, true)),
         });
         let (tx, rx) = mpsc::channel();
         let axes = {
@@ -731,6 +812,9 @@ impl Board {
                             starved: 0,
                             stop: None,
                             outputs: Outputs::OFF,
+                            pins: None,
+                            alarm: 0,
+                            lost: false,
                         },
                         queued: 0,
                     };
@@ -743,6 +827,96 @@ impl Board {
             threads: vec![axes, receiver],
             protocol: Some(protocol),
         }
+    }
+
+    /// The simulated machine's switches: `active` the inputs active now
+    /// (bits of `core_nostd::inputs::Input`, as the board's filter gives
+    /// them).
+    pub fn panel(&self, active: u16) {
+        self.shared.panel(active);
+    }
+
+    /// The switches as the panel last set them.
+    pub fn inputs(&self) -> u16 {
+        self.shared.panel.load(Ordering::Acquire)
+    }
+
+    /// What the panel reads off the machine.
+    pub fn state(&self) -> PanelState {
+        let (issued, spindle) = {
+            let a = self.shared.axes();
+            (issued_of(&a), a.outputs.rpm)
+        };
+        let (hx, hz, diam) = *self.shared.prices.lock().unwrap_or_else(|e| e.into_inner());
+        PanelState {
+            issued,
+            prices: (hx, hz),
+            diam,
+            inputs: self.inputs(),
+            spindle,
+        }
+    }
+
+    /// One line of the panel (`serve --pty`'s standard input): `ESTOP
+    /// 1|0`, `DOOR 1|0`, `PROBE 1|0`, `LIMIT X-|X+|Z-|Z+ 1|0`, `FAULT X|Z
+    /// 1|0`, `HOLD` and `START` (a press: on, then off), and `STATE?`.
+    /// Returns what to print (`STATE?`'s line), or why the line is not one.
+    pub fn panel_line(&self, line: &str) -> Result<Option<String>, String> {
+        use core_nostd::inputs::Input;
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let upper: Vec<String> = words.iter().map(|w| w.to_ascii_uppercase()).collect();
+        let u: Vec<&str> = upper.iter().map(String::as_str).collect();
+        let level = |w: Option<&&str>| match w {
+            Some(&"1") => Ok(true),
+            Some(&"0") => Ok(false),
+            _ => Err(format!("{line:?}: the level must be 1 or 0")),
+        };
+        let (input, on) = match u.as_slice() {
+            [] => return Ok(None),
+            ["STATE?"] => return Ok(Some(self.state().line())),
+            ["HOLD"] | ["START"] => {
+                let i = if u[0] == "HOLD" { Input::Hold } else { Input::Start };
+                let was = self.inputs();
+                self.panel(was | i.bit());
+                // A press lasts longer than any filter the board reads.
+                std::thread::sleep(Duration::from_millis(20));
+                self.panel(self.inputs() & !i.bit());
+                return Ok(None);
+            }
+            ["ESTOP", ..] => (Input::Estop, level(u.get(1))?),
+            ["DOOR", ..] => (Input::Door, level(u.get(1))?),
+            ["PROBE", ..] => (Input::Probe, level(u.get(1))?),
+            ["LIMIT", side, ..] => (
+                match *side {
+                    "X-" => Input::LimitXMinus,
+                    "X+" => Input::LimitXPlus,
+                    "Z-" => Input::LimitZMinus,
+                    "Z+" => Input::LimitZPlus,
+                    _ => return Err(format!("{line:?}: LIMIT takes X-, X+, Z- or Z+")),
+                },
+                level(u.get(2))?,
+            ),
+            ["FAULT", axis, ..] => (
+                match *axis {
+                    "X" => Input::FaultX,
+                    "Z" => Input::FaultZ,
+                    _ => return Err(format!("{line:?}: FAULT takes X or Z")),
+                },
+                level(u.get(2))?,
+            ),
+            _ => {
+                return Err(format!(
+                    "{line:?}: not a panel line (ESTOP, DOOR, PROBE 1|0; LIMIT X-|X+|Z-|Z+ 1|0; FAULT X|Z 1|0; HOLD; START; STATE?)"
+                ))
+            }
+        };
+        let was = self.inputs();
+        self.panel(if on {
+            was | input.bit()
+        } else {
+            was & !input.bit()
+        });
+        Ok(None)
     }
 
     /// How the step clock kept to the wall clock so far.

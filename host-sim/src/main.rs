@@ -334,7 +334,11 @@ enum Command {
         /// Serve on standard input and output.
         #[arg(long, conflicts_with = "pty")]
         stdio: bool,
-        /// Serve on a new pseudo-terminal and print its path.
+        /// Serve on a new pseudo-terminal and print its path; standard
+        /// input is then the machine's panel, a line each: `ESTOP 1|0`,
+        /// `DOOR 1|0`, `PROBE 1|0`, `LIMIT X-|X+|Z-|Z+ 1|0`, `FAULT X|Z
+        /// 1|0`, `HOLD`, `START`, and `STATE?` (the carriage, the inputs,
+        /// the spindle). Wire them first with the `INPUT` request.
         #[arg(long)]
         pty: bool,
         /// Speak the grbl 1.1 protocol from the start (for grbl senders:
@@ -1097,6 +1101,16 @@ fn serve_pty(
     };
     println!("device on {path} (115200 8N1, {clock}); Ctrl-C ends");
     std::io::stdout().flush()?;
+    // Standard input is the machine's panel: its switches, and STATE?.
+    for line in std::io::stdin().lines() {
+        let Ok(line) = line else { break };
+        match board.panel_line(&line) {
+            Ok(Some(answer)) => println!("{answer}"),
+            Ok(None) => {}
+            Err(e) => eprintln!("host-sim: panel: {e}"),
+        }
+        std::io::stdout().flush()?;
+    }
     board.wait();
     Ok(ExitCode::SUCCESS)
 }

@@ -28,7 +28,7 @@ pub const RADIUS_MISMATCH_MM: f64 = 0.002;
 /// Every error code the device may answer (`docs/protocol.md` §10), in the
 /// order that section lists them: the eight of the required minimum, then
 /// the extension `SESSION`.
-pub const ERROR_CODES: [&str; 9] = [
+pub const ERROR_CODES: [&str; 11] = [
     "CHECKSUM",
     "LINE_TOO_LONG",
     "EMPTY",
@@ -38,6 +38,8 @@ pub const ERROR_CODES: [&str; 9] = [
     "RANGE",
     "GEOMETRY",
     "SESSION",
+    "ESTOP",
+    "ALARM",
 ];
 
 /// How many of [`ERROR_CODES`] belong to the required minimum

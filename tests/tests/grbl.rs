@@ -818,3 +818,101 @@ fn a_stop_tells_the_operator_what_to_do_in_grbls_words() {
         "[MSG:VALUE F not programmed: a feed move needs F (mm/min)]\r\nerror:22\r\n"
     );
 }
+
+/// The lines up to and including the first that `done` accepts.
+fn lines_until(c: &mut host_sim::link::Client, done: impl Fn(&str) -> bool) -> Vec<String> {
+    let mut lines = Vec::new();
+    loop {
+        let l = c.read_line().expect("a line");
+        let end = done(&l);
+        lines.push(l);
+        if end {
+            return lines;
+        }
+    }
+}
+
+/// On the wall clock, the E-stop pressed mid-cut stops the carriage at
+/// once where it is (the panel reads the same place), the spindle stops,
+/// and a sender sees `ALARM:10`, `Alarm` with `Pn:E`, and `error:50`
+/// until the button is released, a reset comes and `$X` unlocks; a limit
+/// switch then stops a move with `ALARM:1`.
+#[test]
+fn the_estop_stops_a_cut_at_once_and_a_sender_sees_alarm_10() {
+    use core_nostd::inputs::Input;
+    let (board, mut c) = board(host_sim::board::Pace::Wall(1.0));
+    c.write_raw(b"INPUT USED=ESTOP,Z+ INVERT=ESTOP FILTER=2\n")
+        .expect("wiring");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    // 30 mm along Z at 600 mm/min: 3 s.
+    c.write_raw(b"G21 G90 M3 S500\nG01 Z-30 F600\n")
+        .expect("lines");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(1000));
+    assert!(report(&mut c).starts_with("<Run|"));
+    board.panel_line("ESTOP 1").expect("panel");
+    let lines = lines_until(&mut c, |l| l.starts_with("ALARM:"));
+    assert_eq!(
+        lines.last().map(String::as_str),
+        Some("ALARM:10"),
+        "{lines:?}"
+    );
+    let stopped = report(&mut c);
+    assert!(
+        stopped.starts_with("<Alarm|")
+            && stopped.contains("|Pn:E|")
+            && stopped.contains("|FS:0.0000,0.000|"),
+        "{stopped}"
+    );
+    let z = mpos(&stopped).1;
+    assert!(z < -3.0 && z > -20.0, "stopped part of the way: {stopped}");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(mpos(&report(&mut c)), mpos(&stopped), "and stays");
+    let state = board.panel_line("STATE?").expect("state").expect("a line");
+    assert_eq!(state, format!("STATE X=0.0000 Z={z:.4} IN=E S=0.000"));
+    // Locked: G-code and $X draw error 50 until released and reset.
+    c.write_raw(b"G00 Z0\n").expect("line");
+    let r = lines_until(&mut c, |l| l.starts_with("error"));
+    assert_eq!(r.last().map(String::as_str), Some("error:50"), "{r:?}");
+    board.panel_line("ESTOP 0").expect("panel");
+    c.write_raw(b"$X\n").expect("unlock");
+    let r = lines_until(&mut c, |l| l.starts_with("error") || l == "ok");
+    assert_eq!(
+        r,
+        [
+            "[MSG:ESTOP the E-stop was pressed: reset, then UNLOCK]",
+            "error:50"
+        ]
+    );
+    c.write_raw(&[0x18]).expect("reset");
+    let r = lines_until(&mut c, |l| l.starts_with("[MSG:'$H'"));
+    assert!(r.iter().any(|l| l.starts_with("Grbl 1.1h")), "{r:?}");
+    c.write_raw(b"$X\n").expect("unlock");
+    assert_eq!(
+        lines_until(&mut c, |l| l == "ok"),
+        ["[MSG:Caution: Unlocked]", "ok"]
+    );
+    // A feed back towards Z0 trips Z's plus limit on the way.
+    c.write_raw(b"G01 Z0 F600\n").expect("line");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(150));
+    board.panel(Input::LimitZPlus.bit());
+    let lines = lines_until(&mut c, |l| l.starts_with("ALARM:"));
+    assert_eq!(
+        lines.last().map(String::as_str),
+        Some("ALARM:1"),
+        "{lines:?}"
+    );
+    let tripped = report(&mut c);
+    assert!(
+        tripped.starts_with("<Alarm|") && tripped.contains("|Pn:Z|"),
+        "{tripped}"
+    );
+    assert!(mpos(&tripped).1 < 0.0, "stopped short of Z0: {tripped}");
+    c.write_raw(b"G00 Z0\n").expect("line");
+    let r = lines_until(&mut c, |l| l.starts_with("error"));
+    assert_eq!(r.last().map(String::as_str), Some("error:9"), "{r:?}");
+    assert!(board.panel_line("LIMIT Y+ 1").is_err());
+    assert!(board.panel_line("ESTOP on").is_err());
+}

@@ -70,7 +70,7 @@ fn the_references_do_not_depend_on_the_core() {
 
 /// The core's codes, every variant once; a variant added to the core and
 /// not here stops this file from compiling (the `match` below).
-const CORE: [ErrorCode; 9] = [
+const CORE: [ErrorCode; 11] = [
     ErrorCode::Checksum,
     ErrorCode::LineTooLong,
     ErrorCode::Empty,
@@ -80,6 +80,8 @@ const CORE: [ErrorCode; 9] = [
     ErrorCode::Range,
     ErrorCode::Geometry,
     ErrorCode::Session,
+    ErrorCode::Estop,
+    ErrorCode::Alarm,
 ];
 
 fn place(code: ErrorCode) -> usize {
@@ -93,6 +95,8 @@ fn place(code: ErrorCode) -> usize {
         ErrorCode::Range => 6,
         ErrorCode::Geometry => 7,
         ErrorCode::Session => 8,
+        ErrorCode::Estop => 9,
+        ErrorCode::Alarm => 10,
     }
 }
 

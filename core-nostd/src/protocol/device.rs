@@ -192,6 +192,25 @@ impl Device {
         self.session.realtime(rt, &mut grbl::Translate::pendant(io));
     }
 
+    /// The board's inputs changed (`active`: those active now, filtered;
+    /// see [`Session::inputs`]). On a grbl link an input's stop is
+    /// `ALARM:n`, and a hold or resume from a button answers nothing.
+    pub fn inputs<I: Io>(&mut self, active: u16, io: &mut I) {
+        let mut t = self.link(io);
+        t.statuses = false;
+        self.session.inputs(active, &mut t);
+        if self.session.alarm().is_some() {
+            // A jog in progress was dropped with everything else.
+            self.grbl.jogging = false;
+            self.grbl.cancel = false;
+        }
+    }
+
+    /// The inputs wired, for the board's filter.
+    pub const fn wiring(&self) -> crate::inputs::InputConfig {
+        self.session.wiring()
+    }
+
     /// Takes received bytes in order.
     ///
     /// ```

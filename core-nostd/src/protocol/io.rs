@@ -34,6 +34,12 @@ pub enum ErrorCode {
     /// A numbered request (`@id`) while no session token is set: the device
     /// was reset since the host set it (an extension).
     Session,
+    /// The E-stop was pressed and the machine is not cleared: release,
+    /// reset, `UNLOCK` (an extension).
+    Estop,
+    /// A hard limit or a drive's fault stopped the machine: `UNLOCK` (an
+    /// extension).
+    Alarm,
 }
 
 impl ErrorCode {
@@ -49,6 +55,8 @@ impl ErrorCode {
             ErrorCode::Range => "RANGE",
             ErrorCode::Geometry => "GEOMETRY",
             ErrorCode::Session => "SESSION",
+            ErrorCode::Estop => "ESTOP",
+            ErrorCode::Alarm => "ALARM",
         }
     }
 }
@@ -111,6 +119,14 @@ pub struct StatusView {
     /// The spindle and coolant outputs (` SPINDLE= S= COOLANT=`); a board
     /// puts in the speed it drives now.
     pub outputs: Outputs,
+    /// The active inputs (` PN=`), when any input is wired.
+    pub pins: Option<u16>,
+    /// What an input stopped, as grbl numbers its alarm (0: nothing):
+    /// `STATE=ESTOP` (10) or `STATE=ALARM`, ` ALARM=`.
+    pub alarm: u8,
+    /// The axes were stopped at once in motion since the last `UNLOCK`
+    /// (` LOST=1`).
+    pub lost: bool,
 }
 
 /// A refusal as a front numbers it, from the refusal itself (never from
@@ -234,6 +250,13 @@ pub trait Io {
         let _ = running;
     }
 
+    /// An input stopped the machine, grbl's alarm number `code` (1 a hard
+    /// limit, 10 the E-stop, 17 a drive's fault): its `!ALARM` line comes
+    /// next.
+    fn alarm(&mut self, code: u8) {
+        let _ = code;
+    }
+
     /// A run of motion begins: its tick 0 is now.
     fn run_start(&mut self) {}
 
@@ -349,7 +372,7 @@ macro_rules! forward_io {
 pub(crate) use forward_io;
 
 /// What the replies are ([`Io::refused`], [`Io::status`], [`Io::accepted`],
-/// [`Io::message`], [`Io::reset_done`]), handed to `inner` unchanged.
+/// [`Io::message`], [`Io::reset_done`], [`Io::alarm`]), handed to `inner` unchanged.
 macro_rules! forward_replies {
     () => {
         fn refused(&mut self, why: crate::protocol::io::Refused) {
@@ -366,6 +389,9 @@ macro_rules! forward_replies {
         }
         fn reset_done(&mut self, running: bool) {
             self.inner.reset_done(running);
+        }
+        fn alarm(&mut self, code: u8) {
+            self.inner.alarm(code);
         }
     };
 }

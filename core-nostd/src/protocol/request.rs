@@ -50,6 +50,10 @@ pub enum Command {
     Reset,
     /// `POS`: the position registers.
     Pos,
+    /// `UNLOCK`: clear what an input stopped.
+    Unlock,
+    /// `INPUT`: the inputs wired, their level, the filter.
+    Input,
     /// `TOOL`: a row of the tool table.
     Tool,
     /// `WORK`: a work offset.
@@ -102,7 +106,7 @@ const fn calc(mut s: Spec) -> Spec {
 
 /// Every request of the pendant protocol, in the order `docs/protocol.md`
 /// gives them.
-pub const REQUESTS: [Spec; 24] = [
+pub const REQUESTS: [Spec; 26] = [
     spec(Command::Ver, "VER"),
     spec(Command::Cfg, "CFG HX HZ DIAM RN TIP TOL PASS"),
     spec(Command::Cone, "CONE A RN"),
@@ -119,6 +123,8 @@ pub const REQUESTS: [Spec; 24] = [
     spec(Command::Sync, "SYNC"),
     spec(Command::Status, "STATUS"),
     spec(Command::Reset, "RESET"),
+    spec(Command::Unlock, "UNLOCK"),
+    spec(Command::Input, "INPUT USED INVERT FILTER"),
     spec(Command::Gear, "GEAR N TOP"),
     spec(Command::Mcode, "MCODE M DO N"),
     spec(Command::Session, "SESSION TOKEN"),
@@ -186,6 +192,8 @@ impl Command {
             Command::Sync => &["SYNC"],
             Command::Status => &["STATUS"],
             Command::Reset => &["RESET"],
+            Command::Unlock => &["UNLOCK"],
+            Command::Input => &["INPUT [USED=names|-] [INVERT=names|-] [FILTER=0..100]"],
             Command::Gear => &["GEAR [N=1..4 TOP=]"],
             Command::Mcode => &["MCODE [M= [DO=STOP|NONE|ON|OFF|HIGH|LOW] [N=1..4]]"],
             Command::Session => &["SESSION [TOKEN=n]"],

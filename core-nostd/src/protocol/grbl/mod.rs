@@ -286,7 +286,16 @@ pub fn line<I: Io + ?Sized>(
             }
             (Some(b'X'), 2) => {
                 front.alarm = None;
-                t.line(b"[MSG:Caution: Unlocked]");
+                if session.alarm().is_some() {
+                    // What an input stopped clears only once its way back
+                    // allows (the E-stop released and reset).
+                    if let Ok(request) = Request::command(Command::Unlock, &[]) {
+                        session.request(&request, &mut t);
+                    }
+                }
+                if t.outcome == Some(Ok(())) {
+                    t.line(b"[MSG:Caution: Unlocked]");
+                }
             }
             (Some(b'H'), 2) => {
                 t.outcome = Some(Err(5));
@@ -377,7 +386,7 @@ pub fn realtime<I: Io + ?Sized>(
                 t.line(b"ALARM:3");
             }
             t.inner.send(BANNER);
-            if front.alarm.is_some() {
+            if front.alarm.or(session.alarm()).is_some() {
                 t.line(b"[MSG:'$H'|'$X' to unlock]");
             }
         }
@@ -439,6 +448,9 @@ mod tests {
                     top: 0,
                     coolant: crate::gcode::Coolant::Off,
                 },
+                pins: None,
+                alarm: 0,
+                lost: false,
             },
         }
     }

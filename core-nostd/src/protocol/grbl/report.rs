@@ -62,7 +62,7 @@ impl Extras {
             diameter: session.config().diam,
             overrides: [front.feed, front.rapid, front.spindle],
             jogging: front.jogging,
-            alarm: front.alarm,
+            alarm: front.alarm.or(session.alarm()),
             check: front.check,
             mpos: front.mpos,
         }
@@ -107,6 +107,10 @@ pub fn status_report(record: &StatusRecord, extras: &Extras) -> ReplyLine {
     let _ = crate::length::write_mm4(&mut line, record.speed_mm4());
     line.push_bytes(b",");
     let _ = crate::outputs::write_rpm(&mut line, record.view.outputs.rpm);
+    if let Some(pins) = record.view.pins.filter(|&p| p != 0) {
+        line.push_bytes(b"|Pn:");
+        let _ = crate::inputs::write_letters(&mut line, pins);
+    }
     line.push_bytes(b"|WCO:");
     write_mm(&mut line, extras.wco[0], extras.diameter);
     line.push_bytes(b",0.0000,");
@@ -118,7 +122,8 @@ pub fn status_report(record: &StatusRecord, extras: &Extras) -> ReplyLine {
 
 /// The grbl error number of a refusal: expected command letter or bad
 /// number format (1), undefined feed rate (22), unsupported command (20),
-/// invalid target (33), line overflow (11), travel exceeded (15).
+/// invalid target (33), line overflow (11), travel exceeded (15), locked
+/// by an alarm (9), the E-stop (grblHAL's 50).
 pub fn error_number(why: Refused) -> u8 {
     use ErrorCode as E;
     match why.code {
@@ -128,5 +133,7 @@ pub fn error_number(why: Refused) -> u8 {
         E::Geometry => 33,
         E::LineTooLong => 11,
         E::Range => 15,
+        E::Alarm => 9,
+        E::Estop => 50,
     }
 }

@@ -149,6 +149,14 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         l.push_bytes(b"]");
         self.inner.send(finish(&mut l));
     }
+    fn alarm(&mut self, code: u8) {
+        if !self.grbl {
+            return self.inner.alarm(code);
+        }
+        let mut l = ReplyLine::new();
+        let _ = write!(l, "ALARM:{code}");
+        self.inner.send(finish(&mut l));
+    }
     fn reset_done(&mut self, running: bool) {
         if self.grbl {
             self.reset = Some(running);

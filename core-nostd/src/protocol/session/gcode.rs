@@ -7,6 +7,8 @@ impl Session {
     /// contour engine (compensation off: the block itself).
     #[inline(never)]
     pub(super) fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
+        // Nothing runs while an input holds the machine locked.
+        self.unlocked()?;
         if self.cycles.holding() {
             return self.profile_line(text, io);
         }

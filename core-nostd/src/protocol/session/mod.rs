@@ -36,6 +36,7 @@ mod cycle_moves;
 mod cycle_state;
 mod cycles;
 mod gcode;
+mod inputs;
 mod moves;
 mod offsets;
 mod realtime;
@@ -123,6 +124,15 @@ pub struct Session {
     pub(super) spinup_us: u64,
     /// The spindle and coolant outputs as last switched at rest.
     pub(super) outputs: Outputs,
+    /// The inputs wired, their level and filter (`INPUT`).
+    pub(super) wiring: crate::inputs::InputConfig,
+    /// The active inputs, filtered, as the board last gave them.
+    pub(super) levels: u16,
+    /// What an input stopped, until it is cleared (`UNLOCK`).
+    pub(super) halt: crate::inputs::Halt,
+    /// The axes were stopped at once in motion: a drive may have lost
+    /// steps, so the registers may no longer be where the carriage is.
+    pub(super) lost: bool,
     /// The BCK-5 tape read so far by `TAPE` requests.
     #[cfg(feature = "calc")]
     pub(super) tape: crate::calc::tape::Bck5Verifier,
@@ -169,6 +179,10 @@ impl Session {
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
+            wiring: crate::inputs::InputConfig::NONE,
+            levels: 0,
+            halt: crate::inputs::Halt::None,
+            lost: false,
             element_feed: None,
             top: None,
             spinup_us: 0,
@@ -376,6 +390,10 @@ impl Session {
             Request::Block(text) => return self.gcode(text, io),
             Request::Command(command, args) => (*command, args),
         };
+        if matches!(command, Command::Move | Command::Arc | Command::Sync) {
+            // Nothing moves while an input holds the machine locked.
+            self.unlocked()?;
+        }
         match command {
             Command::Ver => {
                 send_ok(
@@ -413,6 +431,8 @@ impl Session {
                 Ok(())
             }
             Command::Reset => self.reset_command(io),
+            Command::Unlock => self.unlock_command(io),
+            Command::Input => self.input_command(args, io),
             Command::Pos => {
                 self.pos_reply(io);
                 Ok(())
@@ -503,6 +523,7 @@ impl Session {
     /// where it stands (a cycle's profile being read with it). What is
     /// queued runs to its end; a waiting element is dropped.
     fn reset_command<'a, I: Io>(&mut self, io: &mut I) -> Outcome<'a> {
+        self.reset_halt();
         self.machine.flush(&mut Sink::new(io, self.drive));
         self.cycles.abandon();
         // The programmed feed stays, as on the controls machinists know.

@@ -32,6 +32,8 @@ impl Session {
         self.cmd = cmd;
         self.prog = work;
         self.pos = pos;
+        // The machinist has set where the carriage is.
+        self.lost = false;
         send_ok(io, None);
         Ok(())
     }

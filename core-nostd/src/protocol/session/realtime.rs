@@ -36,6 +36,9 @@ impl Session {
             starved: self.machine.starved(),
             stop: None,
             outputs: self.outputs,
+            pins: (self.wiring.used != 0).then_some(self.levels),
+            alarm: self.halt.alarm(),
+            lost: self.lost,
         }
     }
 
@@ -115,6 +118,8 @@ impl Session {
         match rt {
             Realtime::Status => {}
             Realtime::Hold => self.machine.hold(&mut Sink::new(io, self.drive)),
+            // Not while the guard door is open.
+            Realtime::Resume if self.levels & crate::inputs::Input::Door.bit() != 0 => {}
             Realtime::Resume => self.machine.resume(&mut Sink::new(io, self.drive)),
             Realtime::Reset => return self.reset(io),
         }
@@ -128,6 +133,26 @@ impl Session {
     /// limits kept. Answered `!RESET DONE= OF= PX= PZ=`: the events of the
     /// block that was running that were issued, of how many.
     pub(super) fn reset<I: Io>(&mut self, io: &mut I) {
+        let (found, issued) = self.restart(io);
+        self.reset_halt();
+        io.reset_done(found.of > 0);
+        let mut line = ReplyLine::new();
+        let _ = write!(
+            line,
+            "!RESET DONE={} OF={} PX={} PZ={}",
+            found.done,
+            found.of,
+            issued.x.get(),
+            issued.z.get()
+        );
+        io.send(line.finish());
+        self.share_view(io);
+    }
+
+    /// Everything dropped at once and the session restarted as after a
+    /// power cycle (a reset's, an input's stop): what was dropped, and the
+    /// registers.
+    pub(super) fn restart<I: Io>(&mut self, io: &mut I) -> (Aborted, ImpulsePoint) {
         let (found, issued) = self.drop_motion(io);
         self.reset_dropped = found.dropped;
         self.cycles.abandon();
@@ -141,18 +166,7 @@ impl Session {
         self.token = 0;
         self.last_id = None;
         self.last_final.clear();
-        io.reset_done(found.of > 0);
-        let mut line = ReplyLine::new();
-        let _ = write!(
-            line,
-            "!RESET DONE={} OF={} PX={} PZ={}",
-            found.done,
-            found.of,
-            issued.x.get(),
-            issued.z.get()
-        );
-        io.send(line.finish());
-        self.share_view(io);
+        (found, issued)
     }
 
     /// Everything queued and started dropped at once: the registers keep

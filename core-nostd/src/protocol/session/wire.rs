@@ -32,6 +32,8 @@ pub(in crate::protocol) enum Refusal<'a> {
     Block(BlockError),
     Contour(CompError),
     Busy(&'static str),
+    /// An input stopped the machine and it is not cleared.
+    Halted(crate::inputs::Halt),
     Crc,
     NoSession,
     /// A BCK-5 tape frame that cannot be read (`TAPE`).
@@ -127,7 +129,11 @@ pub fn status_line(prefix: &str, record: &StatusRecord) -> ReplyLine {
     let _ = write!(
         line,
         "{prefix} STATE={} PX={} PZ={} X=",
-        record.state().as_str(),
+        match record.view.alarm {
+            0 => record.state().as_str(),
+            10 => "ESTOP",
+            _ => "ALARM",
+        },
         record.issued.x.get(),
         record.issued.z.get()
     );
@@ -154,6 +160,19 @@ pub fn status_line(prefix: &str, record: &StatusRecord) -> ReplyLine {
     if let Some(code) = record.view.stop {
         // Waiting for cycle start after M00 or M01.
         let _ = write!(line, " STOP=M{code:02}");
+    }
+    if record.view.alarm != 0 {
+        let _ = write!(line, " ALARM={}", record.view.alarm);
+    }
+    if record.view.lost {
+        let _ = line.write_str(" LOST=1");
+    }
+    if let Some(pins) = record.view.pins {
+        let _ = line.write_str(" PN=");
+        if pins == 0 {
+            let _ = line.write_str("-");
+        }
+        let _ = crate::inputs::write_letters(&mut line, pins);
     }
     line
 }
@@ -448,6 +467,14 @@ pub(super) fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
         Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
         Refusal::Geometry(what) => send_error(io, E::Geometry, format_args!("{what}")),
         Refusal::Missing(what) => send_error(io, E::Syntax, format_args!("{what}")),
+        Refusal::Halted(halt @ crate::inputs::Halt::Estop(_)) => {
+            send_error(io, E::Estop, format_args!("{}", halt.next_step()))
+        }
+        Refusal::Halted(halt) => send_error(
+            io,
+            E::Alarm,
+            format_args!("{}: {}", halt.alarm(), halt.next_step()),
+        ),
         Refusal::Busy(what) => send_error(
             io,
             E::Geometry,

@@ -10,6 +10,7 @@ use std::vec::Vec;
 
 mod compensation;
 mod cycles;
+mod inputs;
 mod machine;
 mod programs;
 mod requests;
