@@ -226,6 +226,25 @@ impl Halt {
     }
 }
 
+/// Writes the names of the inputs of `bits`, comma-separated (`-` for
+/// none).
+pub fn write_names<W: core::fmt::Write>(out: &mut W, bits: u16) -> core::fmt::Result {
+    if bits == 0 {
+        return out.write_str("-");
+    }
+    let mut first = true;
+    for i in ALL {
+        if bits & i.bit() != 0 {
+            if !first {
+                out.write_str(",")?;
+            }
+            out.write_str(i.name())?;
+            first = false;
+        }
+    }
+    Ok(())
+}
+
 /// Writes the letters grbl's `Pn:` gives the active inputs: `X`, `Z` a
 /// limit of the axis, `P` the probe, `D` the door, `H` the hold button,
 /// `S` cycle start, `E` the E-stop, `M` a drive's fault (grblHAL's).

@@ -405,6 +405,9 @@ pub struct Offsets {
     /// How G-code lines are read (`OPT`; kept with the table, as a
     /// control keeps its parameters and panel switches).
     pub reading: Reading,
+    /// The machine's switches: which are wired, their level, the filter
+    /// (`INPUT`; kept with the table).
+    pub wiring: crate::inputs::InputConfig,
 }
 
 /// How G-code lines are read: the dialect and the two panel switches.
@@ -464,6 +467,7 @@ impl Offsets {
         reference: [[Length::ZERO; 2]; 2],
         mcodes: MCodes::new(),
         reading: Reading::DEFAULT,
+        wiring: crate::inputs::InputConfig::NONE,
     };
 
     /// A register (1 … 32); `None` for 0 or beyond the table.

@@ -1,7 +1,7 @@
 //! The tool table, the work offsets, the stored reference positions, the
-//! machine's M codes and how lines are read (dialect, block delete,
-//! optional stop) as a record in two flash slots, so that they survive a
-//! power cut, one during a write included.
+//! machine's M codes, how lines are read (dialect, block delete, optional
+//! stop) and the switches' wiring as a record in two flash slots, so that
+//! they survive a power cut, one during a write included.
 //!
 //! A record is whole 32-bit words: a magic word, a sequence number, the
 //! payload's length, the payload, and last the CRC-32 of all before it. A
@@ -20,9 +20,12 @@ use crate::crc32::Crc32;
 use crate::interp::{MAction, Offsets, Reading, ToolEntry, MCODES, TOOL_REGISTERS, WORK_SYSTEMS};
 use crate::length::Length;
 
-/// `LTO3`: the record of this layout (the table, the offsets, the
-/// stored positions, the machine's M codes, how lines are read).
-const MAGIC: u32 = u32::from_le_bytes(*b"LTO3");
+/// `LTO4`: the record of this layout (the table, the offsets, the
+/// stored positions, the machine's M codes, how lines are read, the
+/// switches' wiring).
+const MAGIC: u32 = u32::from_le_bytes(*b"LTO4");
+/// `LTO3`: the layout before the wiring, still read (nothing wired).
+const MAGIC_3: u32 = u32::from_le_bytes(*b"LTO3");
 /// `LTO2`: the layout before the reading, still read (read as at
 /// power-on: ISO, both switches off).
 const MAGIC_2: u32 = u32::from_le_bytes(*b"LTO2");
@@ -39,9 +42,11 @@ const LENGTHS: usize = WORK_SYSTEMS * 2 + TOOL_REGISTERS * 6 + 2 * 2;
 /// empty) and its action.
 const MCODE_VALUES: usize = MCODES * 2;
 
-/// Payload words: two per value, the reading's bits last
-/// ([`crate::interp::Reading::bits`]).
-const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES + 1) * 2;
+/// Payload words: two per value, the reading's bits
+/// ([`crate::interp::Reading::bits`]) and the wiring last.
+const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES + 2) * 2;
+/// Those of an `LTO3` record.
+const PAYLOAD_WORDS_3: usize = (LENGTHS + MCODE_VALUES + 1) * 2;
 /// Those of an `LTO2` record.
 const PAYLOAD_WORDS_2: usize = (LENGTHS + MCODE_VALUES) * 2;
 /// Those of an `LTO1` record.
@@ -114,10 +119,14 @@ fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
     }
     let mcodes = slots.into_iter().flat_map(|(c, a)| [c, a]);
     let reading = core::iter::once(i64::from(o.reading.bits()));
+    let w = o.wiring;
+    let wiring =
+        core::iter::once(i64::from(w.used) | i64::from(w.invert) << 16 | i64::from(w.filter) << 32);
     work.chain(tools)
         .chain(reference)
         .chain(mcodes)
         .chain(reading)
+        .chain(wiring)
 }
 
 /// The words of the record of `offsets` with sequence number `seq`,
@@ -143,6 +152,7 @@ fn crc_of(words: impl Iterator<Item = u32>) -> u32 {
 fn layout<F: Flash>(flash: &mut F, slot: usize) -> Option<usize> {
     match (flash.read(slot, 0), flash.read(slot, 2)) {
         (MAGIC, n) if n == (PAYLOAD_WORDS * 4) as u32 => Some(PAYLOAD_WORDS),
+        (MAGIC_3, n) if n == (PAYLOAD_WORDS_3 * 4) as u32 => Some(PAYLOAD_WORDS_3),
         (MAGIC_2, n) if n == (PAYLOAD_WORDS_2 * 4) as u32 => Some(PAYLOAD_WORDS_2),
         (MAGIC_1, n) if n == (PAYLOAD_WORDS_1 * 4) as u32 => Some(PAYLOAD_WORDS_1),
         _ => None,
@@ -193,8 +203,12 @@ fn current<F: Flash>(flash: &mut F) -> Option<(usize, u32, Offsets)> {
 /// The offsets of the whole record in `slot`, if every value is in range.
 fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
     let words = layout(flash, slot);
-    let with_mcodes = matches!(words, Some(PAYLOAD_WORDS | PAYLOAD_WORDS_2));
-    let with_reading = words == Some(PAYLOAD_WORDS);
+    let with_mcodes = matches!(
+        words,
+        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_3 | PAYLOAD_WORDS_2)
+    );
+    let with_reading = matches!(words, Some(PAYLOAD_WORDS | PAYLOAD_WORDS_3));
+    let with_wiring = words == Some(PAYLOAD_WORDS);
     let mut i = 3;
     let mut next = || {
         let lo = u64::from(flash.read(slot, i));
@@ -243,6 +257,21 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
     }
     if with_reading {
         o.reading = u8::try_from(next()).ok().and_then(Reading::from_bits)?;
+    }
+    if with_wiring {
+        let v = next();
+        let inputs = (1i64 << crate::inputs::INPUTS) - 1;
+        let filter = v >> 32;
+        if v & !(inputs | inputs << 16 | 0xFF << 32) != 0
+            || filter > i64::from(crate::inputs::MAX_FILTER)
+        {
+            return None;
+        }
+        o.wiring = crate::inputs::InputConfig {
+            used: (v & 0xFFFF) as u16,
+            invert: (v >> 16 & 0xFFFF) as u16,
+            filter: filter as u8,
+        };
     }
     Some(o)
 }
@@ -343,6 +372,11 @@ mod tests {
         o.mcodes.set(310, MAction::Wait(4, false));
         o.mcodes.set(260 + 10 * (k as u16 % 3), MAction::Nothing);
         o.reading = Reading::from_bits(k as u8 % 8).unwrap();
+        o.wiring = crate::inputs::InputConfig {
+            used: 0x7FF >> (k % 3),
+            invert: 1 | (k as u16 % 4) << 9,
+            filter: (k * 7 % 101) as u8,
+        };
         o
     }
 
@@ -354,6 +388,7 @@ mod tests {
         let mut o = table(1);
         o.mcodes = crate::interp::MCodes::new();
         o.reading = Reading::DEFAULT;
+        o.wiring = crate::inputs::InputConfig::NONE;
         let lengths: Vec<i64> = lengths(&o).take(LENGTHS).collect();
         let mut words = std::vec![MAGIC_1, 7, (PAYLOAD_WORDS_1 * 4) as u32];
         for v in lengths {
@@ -389,6 +424,7 @@ mod tests {
         words.push(crc_of(words.iter().copied()));
         f.slots[1][..words.len()].copy_from_slice(&words);
         o.reading = Reading::DEFAULT;
+        o.wiring = crate::inputs::InputConfig::NONE;
         assert_eq!(
             load(&mut f),
             Loaded {
@@ -404,6 +440,46 @@ mod tests {
     }
 
     #[test]
+    fn a_record_of_the_layout_before_the_wiring_still_loads() {
+        // An LTO3 record: up to the reading; nothing wired.
+        let mut f = Nor::new();
+        let mut o = table(4);
+        let values: Vec<i64> = lengths(&o).take(LENGTHS + MCODE_VALUES + 1).collect();
+        let mut words = std::vec![MAGIC_3, 11, (PAYLOAD_WORDS_3 * 4) as u32];
+        for v in values {
+            words.extend([v as u64 as u32, ((v as u64) >> 32) as u32]);
+        }
+        words.push(crc_of(words.iter().copied()));
+        f.slots[0][..words.len()].copy_from_slice(&words);
+        o.wiring = crate::inputs::InputConfig::NONE;
+        assert_eq!(
+            load(&mut f),
+            Loaded {
+                offsets: kept(&o),
+                seq: 11
+            }
+        );
+        let seq = save(&mut f, &table(4), 11);
+        let got = load(&mut f);
+        assert_eq!((got.offsets, got.seq), (kept(&table(4)), seq));
+        assert_ne!(got.offsets.wiring, crate::inputs::InputConfig::NONE);
+    }
+
+    #[test]
+    fn a_wiring_beyond_its_inputs_or_filter_is_a_broken_record() {
+        for bad in [1i64 << 11, 1 << 27, 101 << 32, 1 << 40] {
+            let mut f = Nor::new();
+            let seq = save(&mut f, &table(1), 0);
+            save(&mut f, &table(2), seq);
+            let last = RECORD_WORDS - 1;
+            f.slots[1][last - 2] = bad as u64 as u32;
+            f.slots[1][last - 1] = ((bad as u64) >> 32) as u32;
+            f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
+            assert_eq!(load(&mut f).offsets, kept(&table(1)), "{bad:#x}");
+        }
+    }
+
+    #[test]
     fn a_reading_beyond_its_three_bits_is_a_broken_record() {
         let mut f = Nor::new();
         let seq = save(&mut f, &table(1), 0);
@@ -411,7 +487,7 @@ mod tests {
         // The newer record (slot 1) with the reading's word set to 8 and
         // its CRC made whole: refused, the older one loads.
         let last = RECORD_WORDS - 1;
-        f.slots[1][last - 2] = 8;
+        f.slots[1][last - 4] = 8;
         f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
         assert_eq!(sequence(&mut f, 1), Some(seq));
         assert_eq!(load(&mut f).offsets, kept(&table(1)));

@@ -13,14 +13,15 @@
 //! | [`step`] | the step interrupt's state and work |
 //! | [`motion`] | the prep task, the real-time task, thread mode's motion |
 //! | [`serial`] | the receive interrupt |
+//! | [`inputs`] | the switches: sampled, filtered, a stop acted on at once |
 //! | [`supervisor`] | the watchdog and its supervisor |
 //! | [`storage`] | the offsets kept in flash |
 //! | [`Controller`] | the protocol's transport in thread mode |
 //!
 //! The tasks and their priorities are in `main.rs` (RTIC). `→` says what a
 //! module uses: `board` → nothing of ours; `step`, `serial`, `supervisor`,
-//! `storage` → `board`; `motion` → `step`, `serial`, `board`; the
-//! controller → all of them.
+//! `storage`, `inputs` → `board`; `motion` → `step`, `serial`, `board`,
+//! `inputs`; the controller → all of them.
 //!
 //! Release builds contain no panic path: their panic handler calls a symbol
 //! that does not exist, so the link fails if any panic survives optimisation.
@@ -29,6 +30,7 @@
 #![no_std]
 
 pub mod board;
+pub mod inputs;
 pub mod log;
 pub mod motion;
 pub mod serial;
@@ -111,6 +113,14 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Controller<P, S> {
     pub fn realtime(&mut self, device: &mut core_nostd::protocol::Device) -> bool {
         if motion::take_reset() {
             device.realtime(Realtime::Reset, self);
+        } else if inputs::take_changed() {
+            device.inputs(inputs::active(), self);
+            if motion::input_stop_unreported() {
+                // The session did not stop for it (its wiring changed in
+                // between): the motion dropped is reported as a reset's,
+                // never silently.
+                device.realtime(Realtime::Reset, self);
+            }
         } else if let Some(asked) = motion::take_status() {
             self.asked = Some(asked);
             device.realtime(Realtime::Status, self);

@@ -6,7 +6,8 @@
 //!
 //! | priority | task | bound to | timing contract |
 //! |---|---|---|---|
-//! | 5 | supervisor | TIM3, every 1 ms | judges and kicks the watchdog; shares atomics only |
+//! | 5 | supervisor | TIM3, every 1 ms | judges and kicks the watchdog, pends the sampler; shares atomics only |
+//! | 5 | inputs | EXTI2, pended every 1 ms (under QEMU by the panel on USART2) | samples and filters the switches; a stop drives the outputs low and masks the step interrupt at once |
 //! | 4 | step | TIM5 (alarm), pended | pops a ready entry, writes the pins, arms the next alarm: about 105 instructions a step |
 //! | 4 | pulse end | SysTick | STEP lines low: a few instructions (under paced QEMU SysTick is the step alarm) |
 //! | 3 | prep | EXTI0, pended | fills the ready queue (255 entries) from the stepper |
@@ -50,6 +51,8 @@ mod app {
         receiver: serial::Receiver,
         realtime: Consumer<'static, RtEvent>,
         supervisor: Supervisor,
+        sampler: firmware::inputs::Sampler,
+        panel: board::Panel,
     }
 
     #[init(local = [
@@ -91,6 +94,8 @@ mod app {
                 receiver: serial::Receiver::new(bytes_in, rt_in),
                 realtime: rt_out,
                 supervisor: supervisor::start(board.watchdog, per_tick),
+                sampler: firmware::inputs::Sampler::new(),
+                panel: board.panel,
             },
         )
     }
@@ -109,6 +114,8 @@ mod app {
             firmware::halt()
         };
         let mut io = Controller::new(serial, bytes, storage, cx.shared.prep, cx.shared.step);
+        // The wiring kept in flash, for the switches' sampler.
+        firmware::inputs::set_wiring(device.wiring());
         let mut heard = board::ticks();
         loop {
             supervisor::beat();
@@ -137,6 +144,7 @@ mod app {
                     if matches!(byte, b'\n' | b'\r') || byte >= 0x80 {
                         io.grbl = device.grbl_extras();
                         serial::set_grbl(io.grbl.is_some());
+                        firmware::inputs::set_wiring(device.wiring());
                     }
                 }
                 None if feed => {}
@@ -171,6 +179,21 @@ mod app {
     #[task(binds = TIM3, priority = 5, local = [supervisor])]
     fn supervise(cx: supervise::Context) {
         cx.local.supervisor.check();
+    }
+
+    /// The switches' sample: every 1 ms from the supervisor.
+    #[task(binds = EXTI2, priority = 5, local = [sampler])]
+    fn sample_inputs(cx: sample_inputs::Context) {
+        cx.local.sampler.sample();
+    }
+
+    /// The test harness's panel under QEMU: each sample it completes is
+    /// sampled at once (the board has no such port).
+    #[task(binds = USART2, priority = 5, local = [panel])]
+    fn panel(cx: panel::Context) {
+        if cx.local.panel.receive() {
+            rtic::pend(stm32f4::stm32f405::Interrupt::EXTI2);
+        }
     }
 
     /// The step interrupt: its alarm, or a pend when entries arrive.

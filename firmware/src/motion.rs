@@ -88,6 +88,9 @@ static ABORTING: AtomicBool = AtomicBool::new(false);
 static WANTED: AtomicU8 = AtomicU8::new(0);
 const WANT_STATUS: u8 = 1;
 const WANT_RESET: u8 = 2;
+/// An input stopped the motion and thread mode has not taken the report
+/// yet ([`Shared::abort`]).
+static INPUT_STOP: AtomicBool = AtomicBool::new(false);
 /// When the byte a wanted status line answers arrived (TIM2 count).
 static STATUS_ASKED: AtomicU32 = AtomicU32::new(0);
 /// Cycle start (0x81) came since a program stop began waiting.
@@ -102,6 +105,14 @@ pub fn realtime(
     prep: &mut impl Mutex<T = PrepStage>,
     step: &mut impl Mutex<T = StepIsr>,
 ) {
+    if crate::inputs::take_stop() {
+        // A switch stopped the outputs and masked the step interrupt: the
+        // motion dropped now, as a reset drops it, and the step interrupt
+        // free again for what comes after.
+        act(Realtime::Reset, prep, step);
+        crate::inputs::unmask_step();
+        INPUT_STOP.store(true, Ordering::Release);
+    }
     let mut next = next;
     while let Some(e) = next() {
         act(e.rt, prep, step);
@@ -199,19 +210,27 @@ pub fn clear_cycle_start() {
     CYCLE_START.store(false, Ordering::Release);
 }
 
-/// Whether a program stop's wait is over: cycle start came, or a reset.
+/// Whether a program stop's wait is over: cycle start came, a reset, or
+/// a switch stopped everything.
 pub fn stop_ended() -> bool {
-    CYCLE_START.load(Ordering::Acquire) || WANTED.load(Ordering::Acquire) & WANT_RESET != 0
+    CYCLE_START.load(Ordering::Acquire) || reset_wanted()
 }
 
-/// Whether a reset waits for thread mode.
+/// Whether a reset, or a switch's stop, waits for thread mode.
 pub fn reset_wanted() -> bool {
-    WANTED.load(Ordering::Acquire) & WANT_RESET != 0
+    WANTED.load(Ordering::Acquire) & WANT_RESET != 0 || ABORTING.load(Ordering::Acquire)
 }
 
-/// Whether a real-time request waits for thread mode.
+/// Whether a switch's stop dropped the motion and the session has not
+/// taken it (through [`Shared::abort`]).
+pub fn input_stop_unreported() -> bool {
+    INPUT_STOP.load(Ordering::Acquire)
+}
+
+/// Whether a real-time request, or a change of the switches, waits for
+/// thread mode.
 pub fn wanted() -> bool {
-    WANTED.load(Ordering::Acquire) != 0
+    WANTED.load(Ordering::Acquire) != 0 || crate::inputs::changed()
 }
 
 /// The two resources, as thread mode holds them.
@@ -336,6 +355,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Shared<P, S> {
             None => reset(&mut self.prep, &mut self.step),
         };
         ABORTING.store(false, Ordering::Release);
+        INPUT_STOP.store(false, Ordering::Release);
         found
     }
 

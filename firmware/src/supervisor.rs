@@ -151,6 +151,8 @@ impl Supervisor {
     pub fn check(&mut self) {
         // SAFETY: writing 0 clears TIM3's update flag.
         self.tim3.sr().write(|w| unsafe { w.bits(0) });
+        // The switches' sample, every 1 ms, at this priority.
+        pac::NVIC::pend(Interrupt::EXTI2);
         let now = crate::board::ticks();
         let beat = BEAT.load(Ordering::Relaxed);
         if FLASHING.load(Ordering::Acquire) {

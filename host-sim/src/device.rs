@@ -208,6 +208,12 @@ impl LocalDevice {
         self.with_io(None, |dev, io| dev.quiet(io))
     }
 
+    /// The switches changed: `active` the inputs active now, filtered
+    /// ([`Device::inputs`]); returns the reply bytes (an `!ALARM` line).
+    pub fn inputs(&mut self, active: u16) -> Vec<u8> {
+        self.with_io(None, |dev, io| dev.inputs(active, io))
+    }
+
     /// Switches the link to the grbl 1.1 protocol (or back); returns the
     /// banner it sends.
     pub fn set_grbl(&mut self, on: bool) -> Vec<u8> {

@@ -115,6 +115,15 @@ impl Qemu {
         Self::boot_full(elf, true, "pty", &monitor)
     }
 
+    /// Boots `elf` (`icount` as [`Qemu::boot`], or paced) with USART1 on a
+    /// pty and USART2, the switches' panel, on a unix socket that
+    /// [`Panel::connect`] opens.
+    pub fn boot_with_panel(elf: &Path, icount: bool, socket: &Path) -> Result<Qemu, LinkError> {
+        let panel = format!("unix:{},server=on,wait=off", socket.display());
+        let icount = icount.then_some("shift=0,sleep=off");
+        Self::boot_args(elf, icount, "pty", "none", &["-serial", &panel])
+    }
+
     /// Boots `elf` with USART1 on `serial` (`pty` or `null`).
     pub fn boot_with(elf: &Path, icount: bool, serial: &str) -> Result<Qemu, LinkError> {
         Self::boot_full(elf, icount, serial, "none")
@@ -130,6 +139,16 @@ impl Qemu {
         serial: &str,
         monitor: &str,
     ) -> Result<Qemu, LinkError> {
+        Self::boot_args(elf, icount, serial, monitor, &[])
+    }
+
+    fn boot_args(
+        elf: &Path,
+        icount: Option<&str>,
+        serial: &str,
+        monitor: &str,
+        more: &[&str],
+    ) -> Result<Qemu, LinkError> {
         let mut cmd = Command::new(QEMU);
         cmd.args([
             "-machine",
@@ -143,6 +162,7 @@ impl Qemu {
             "-semihosting-config",
             "enable=on,target=native",
         ]);
+        cmd.args(more);
         if let Some(icount) = icount {
             cmd.args(["-icount", icount]);
         }
@@ -348,5 +368,38 @@ impl crate::reliable::ByteLink for QemuLink {
         self.monitor.flush()?;
         self.resets += 1;
         Ok(true)
+    }
+}
+
+/// The switches' panel of a firmware booted with
+/// [`Qemu::boot_with_panel`]: each sample of the pin levels goes to USART2
+/// as two bytes (pins 0–6 with bit 7 set, then pins 7–13); the firmware
+/// filters the samples as it filters its pins' every millisecond.
+pub struct Panel(std::os::unix::net::UnixStream);
+
+impl Panel {
+    /// Opens the panel's socket (QEMU listens on it).
+    pub fn connect(socket: &Path) -> Result<Panel, LinkError> {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            match std::os::unix::net::UnixStream::connect(socket) {
+                Ok(s) => return Ok(Panel(s)),
+                Err(e) if Instant::now() > deadline => {
+                    return Err(other(format!("{}: {e}", socket.display())))
+                }
+                Err(_) => std::thread::sleep(Duration::from_millis(20)),
+            }
+        }
+    }
+
+    /// Sends `n` samples of `pins` (bit set: the pin reads high).
+    pub fn sample(&mut self, pins: u16, n: usize) -> Result<(), LinkError> {
+        use std::io::Write as _;
+        let one = [0x80 | (pins & 0x7F) as u8, ((pins >> 7) & 0x7F) as u8];
+        for _ in 0..n {
+            self.0.write_all(&one)?;
+        }
+        self.0.flush()?;
+        Ok(())
     }
 }

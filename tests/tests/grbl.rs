@@ -385,8 +385,8 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     let mut dev = grbl_device();
     let all = text(&mut dev, b"$$\n");
     for n in [
-        0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, 100, 102,
-        110, 112, 120, 122, 130, 132,
+        0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 14, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, 100,
+        102, 110, 112, 120, 122, 130, 132,
     ] {
         assert!(
             all.contains(&format!("\r\n${n}=")) || all.starts_with(&format!("${n}=")),
@@ -425,7 +425,10 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     // Refused with grbl's codes, nothing changed.
     for (line, code) in [
         ("$20=1", "error:10"),
-        ("$21=1", "error:3"),
+        ("$21=2", "error:3"),
+        ("$5=2", "error:3"),
+        ("$14=1", "error:3"),
+        ("$6=3", "error:3"),
         ("$22=1", "error:3"),
         ("$13=1", "error:3"),
         ("$32=1", "error:3"),
@@ -448,6 +451,51 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     assert!(text(&mut dev, b"?").starts_with("<Idle|WPos:0.0000,0.0000,100.0000|"));
     assert_eq!(text(&mut dev, b"$10=1\n"), "ok\r\n");
     assert!(text(&mut dev, b"?").starts_with("<Idle|MPos:0.0000,0.0000,0.0000|"));
+}
+
+/// `$5`, `$6`, `$14` and `$21` as grblHAL numbers them set the switches'
+/// wiring (`INPUT`): limit pins inverted per axis, the probe inverted, the
+/// control inputs inverted, hard limits on; each is read back in `$$` and
+/// in `INPUT`, and a bit this lathe has no input for is refused by name.
+#[test]
+fn a_sender_wires_the_switches_with_grbls_settings() {
+    let mut dev = grbl_device();
+    for line in ["$21=1", "$5=4", "$6=1", "$14=72"] {
+        assert_eq!(
+            text(&mut dev, format!("{line}\n").as_bytes()),
+            "ok\r\n",
+            "{line}"
+        );
+    }
+    let all = text(&mut dev, b"$$\n");
+    for back in ["$5=4\r\n", "$6=1\r\n", "$14=72\r\n", "$21=1\r\n"] {
+        assert!(all.contains(back), "{back}: {all}");
+    }
+    // The pendant's view of the same wiring.
+    let r = text(&mut dev, b"INPUT\n");
+    assert_eq!(r, "ok\r\n", "a pendant request answers ok on a grbl link");
+    assert_eq!(text(&mut dev, b"$PENDANT\n"), "ok\r\n");
+    let r = text(&mut dev, b"INPUT\n");
+    assert!(
+        r.starts_with("OK USED=X-,X+,Z-,Z+ INVERT=ESTOP,Z-,Z+,DOOR,PROBE FILTER=0"),
+        "{r}"
+    );
+    assert!(text(&mut dev, b"GRBL\n").contains("Grbl 1.1h"));
+    // A Y bit, a reset input: refused, saying why; nothing changed.
+    let r = text(&mut dev, b"$5=2\n");
+    assert_eq!(
+        r,
+        "[MSG:$5: bit 0 X, bit 2 Z: a lathe has no Y]\r\nerror:3\r\n"
+    );
+    let r = text(&mut dev, b"$14=1\n");
+    assert!(
+        r.contains("no reset, block delete") && r.ends_with("error:3\r\n"),
+        "{r}"
+    );
+    assert_eq!(text(&mut dev, b"$$\n"), all);
+    // Hard limits off again: the other inputs stay as they were.
+    assert_eq!(text(&mut dev, b"$21=0\n"), "ok\r\n");
+    assert!(text(&mut dev, b"$$\n").contains("$21=0\r\n$22="));
 }
 
 /// `$450`–`$452`, this controller's own: the dialect G-code lines are read

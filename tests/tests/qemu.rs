@@ -309,11 +309,11 @@ fn the_spindle_outputs_follow_the_program_on_the_board() {
     );
 }
 
-/// The tool table, the work offsets, the stored positions and how lines
-/// are read (`OPT`: the dialect, block delete, optional stop) outlive a
-/// power cycle (QEMU's `system_reset`; under QEMU the two flash slots are
-/// RAM that a reset keeps); what a power cycle forgets, the `G92` shift,
-/// is forgotten.
+/// The tool table, the work offsets, the stored positions, how lines are
+/// read (`OPT`: the dialect, block delete, optional stop) and the
+/// switches' wiring (`INPUT`) outlive a power cycle (QEMU's
+/// `system_reset`; under QEMU the two flash slots are RAM that a reset
+/// keeps); what a power cycle forgets, the `G92` shift, is forgotten.
 #[test]
 fn the_offsets_survive_a_power_cycle() {
     use host_sim::qemu::QemuLink;
@@ -347,6 +347,7 @@ fn the_offsets_survive_a_power_cycle() {
         "G28.1",
         "G92 X0 Z0",
         "OPT DIALECT=FANUC OPTSTOP=1",
+        "INPUT USED=ESTOP,Z+,DOOR INVERT=DOOR FILTER=4",
     ] {
         assert!(ask(&mut link, set).starts_with("OK"), "{set}");
     }
@@ -360,6 +361,10 @@ fn the_offsets_survive_a_power_cycle() {
     let after = [ask(&mut link, "TOOL N=7"), ask(&mut link, "WORK G=55")];
     assert_eq!(after, set);
     assert_eq!(ask(&mut link, "OPT"), "OK BDEL=0 DIALECT=FANUC OPTSTOP=1");
+    assert_eq!(
+        ask(&mut link, "INPUT"),
+        "OK USED=ESTOP,Z+,DOOR INVERT=DOOR FILTER=4"
+    );
     assert!(ask(&mut link, "OPT DIALECT=ISO").starts_with("OK"));
     // The stored position is back (G28 returns to X10 Z5 from here); the
     // shift is not (the position reads in machine coordinates again).

@@ -665,6 +665,7 @@ fn main() -> ! {
     cycles(tim);
     threading(tim);
     thread_cycle(tim);
+    switches(tim);
     finish()
 }
 
@@ -1094,6 +1095,38 @@ fn requests(tim: &StepTimer, block: &LinearBlock, n: u32) {
         dev.receive_bytes(b"CFG HX=0.001 HZ=0.002 DIAM=1\r\n", &mut quiet)
     });
     Line::print(format_args!("CFG request: {t} instructions"));
+}
+
+/// The switches' sampler (the 1 ms interrupt's work): a sample that
+/// changes nothing, and the one that stops everything, from the sample's
+/// pin levels to the STEP outputs and the spindle low and the step
+/// interrupt masked.
+fn switches(tim: &StepTimer) {
+    use core_nostd::inputs::{Input, InputConfig, LIMITS};
+    firmware::inputs::set_wiring(InputConfig {
+        used: Input::Estop.bit() | LIMITS | Input::Door.bit(),
+        invert: Input::Estop.bit(),
+        filter: 0,
+    });
+    let mut sampler = firmware::inputs::Sampler::new();
+    let quiet = Input::Estop.bit();
+    sampler.sample_pins(quiet);
+    let idle = measure(tim, || {
+        core::hint::black_box(sampler.sample_pins(core::hint::black_box(quiet)));
+    });
+    let stop = measure(tim, || {
+        core::hint::black_box(sampler.sample_pins(core::hint::black_box(0)));
+    });
+    // µs at 168 MHz, two decimals.
+    let centi_us = u64::from(stop) * 100 / 168;
+    Line::print(format_args!(
+        "switches' sample: {idle} instructions with nothing changed; an E-stop from its sample to the outputs low: at most {stop} instructions ({}.{:02} us at 168 MHz)",
+        centi_us / 100,
+        centi_us % 100
+    ));
+    // The step interrupt was masked by the stop: free again.
+    firmware::inputs::unmask_step();
+    let _ = firmware::inputs::take_stop();
 }
 
 /// Ends the run: QEMU exits.

@@ -7,6 +7,10 @@
 //! | X STEP / X DIR | PC0 / PC1 | push-pull |
 //! | Z STEP / Z DIR | PC2 / PC3 | push-pull |
 //! | spindle and coolant | PB6 … PB10 | [`spindle`] |
+//! | E-stop, X−, X+, Z−, Z+ | PA0, PA1, PA4, PA5, PA6 | inputs, pull-up ([`input_pins`]) |
+//! | door, feed hold | PA7, PA8 | inputs, pull-up |
+//! | cycle start, probe, X fault, Z fault | PC4, PC5, PC6, PC7 | inputs, pull-up |
+//! | the test harness's panel (`qemu` builds) | USART2 | [`Panel`] |
 //!
 //! Two configurations. The real board runs from an 8 MHz crystal through the
 //! PLL at 168 MHz (APB2 84 MHz, APB1 42 MHz, timers 84 MHz). QEMU 7.2's
@@ -135,6 +139,41 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
             .bits(0b10)
     });
 
+    // The switches: inputs (their reset mode), pulled up, so a switch to
+    // ground reads low when closed.
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    gpioa.pupdr().modify(|_, w| unsafe {
+        w.pupdr0()
+            .bits(0b01)
+            .pupdr1()
+            .bits(0b01)
+            .pupdr4()
+            .bits(0b01)
+            .pupdr5()
+            .bits(0b01)
+            .pupdr6()
+            .bits(0b01)
+            .pupdr7()
+            .bits(0b01)
+            .pupdr8()
+            .bits(0b01)
+    });
+    // SAFETY: as above.
+    gpioc.pupdr().modify(|_, w| unsafe {
+        w.pupdr4()
+            .bits(0b01)
+            .pupdr5()
+            .bits(0b01)
+            .pupdr6()
+            .bits(0b01)
+            .pupdr7()
+            .bits(0b01)
+    });
+    #[cfg(feature = "qemu")]
+    let panel = Panel::start(&dp.RCC, dp.USART2);
+    #[cfg(not(feature = "qemu"))]
+    let panel = Panel {};
+
     let usart = dp.USART1;
     // Both boards give a divider well below 2^16.
     let brr = ((PCLK2_HZ + BAUD / 2) / BAUD) as u16;
@@ -169,6 +208,7 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
             dbgmcu: dp.DBGMCU,
         },
         flash: dp.FLASH,
+        panel,
     }
 }
 
@@ -241,6 +281,83 @@ pub struct Board {
     pub watchdog: Watchdog,
     /// The flash interface, for the offsets kept across power cuts.
     pub flash: pac::FLASH,
+    /// Where the switches' samples come from under QEMU.
+    pub panel: Panel,
+}
+
+/// The switches' pin levels as the bits of `core_nostd::inputs::Input`
+/// (set: the pin reads high): PA0 E-stop, PA1 X−, PA4 X+, PA5 Z−, PA6 Z+,
+/// PA7 door, PA8 feed hold, PC4 cycle start, PC5 probe, PC6 X's fault, PC7
+/// Z's fault. Under QEMU, which has no GPIO, the last sample the panel
+/// gave.
+#[inline(always)]
+pub fn input_pins() -> u16 {
+    #[cfg(feature = "qemu")]
+    {
+        PANEL_PINS.load(core::sync::atomic::Ordering::Acquire)
+    }
+    #[cfg(not(feature = "qemu"))]
+    {
+        // SAFETY: reads of the input registers, which nothing writes.
+        let (a, c) = unsafe {
+            (
+                (*pac::GPIOA::ptr()).idr().read().bits(),
+                (*pac::GPIOC::ptr()).idr().read().bits(),
+            )
+        };
+        ((a & 0b11) | ((a >> 4) & 0b1_1111) << 2 | ((c >> 4) & 0b1111) << 7) as u16
+    }
+}
+
+/// The last sample the panel gave (`qemu` builds).
+#[cfg(feature = "qemu")]
+static PANEL_PINS: core::sync::atomic::AtomicU16 = core::sync::atomic::AtomicU16::new(0);
+
+/// The test harness's panel under QEMU: USART2 receives samples of the
+/// switches' pin levels, two bytes each (the first with bit 7 set and pins
+/// 0–6, the second with pins 7–13). The board reads its pins instead.
+pub struct Panel {
+    #[cfg(feature = "qemu")]
+    usart: pac::USART2,
+    #[cfg(feature = "qemu")]
+    low: Option<u8>,
+}
+
+impl Panel {
+    #[cfg(feature = "qemu")]
+    fn start(rcc: &pac::RCC, usart: pac::USART2) -> Panel {
+        rcc.apb1enr().modify(|_, w| w.usart2en().set_bit());
+        usart
+            .cr1()
+            .write(|w| w.ue().set_bit().re().set_bit().rxneie().set_bit());
+        Panel { usart, low: None }
+    }
+
+    /// USART2's interrupt: takes a received byte; whether it completed a
+    /// sample (then [`input_pins`] gives it).
+    #[inline(always)]
+    pub fn receive(&mut self) -> bool {
+        #[cfg(feature = "qemu")]
+        {
+            let sr = self.usart.sr().read();
+            if sr.rxne().bit_is_clear() && sr.ore().bit_is_clear() {
+                return false;
+            }
+            let b = self.usart.dr().read().bits() as u8;
+            if b & 0x80 != 0 {
+                self.low = Some(b & 0x7F);
+                return false;
+            }
+            let Some(low) = self.low.take() else {
+                return false;
+            };
+            let pins = u16::from(low) | u16::from(b) << 7;
+            PANEL_PINS.store(pins, core::sync::atomic::Ordering::Release);
+            true
+        }
+        #[cfg(not(feature = "qemu"))]
+        false
+    }
 }
 
 /// What [`crate::supervisor::start`] takes.

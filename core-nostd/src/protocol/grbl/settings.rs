@@ -3,6 +3,7 @@
 use super::front::*;
 use super::report::*;
 use super::translate::*;
+use crate::inputs::{write_names, Input};
 use crate::length::Length;
 use crate::protocol::io::Io;
 use crate::protocol::reply::ReplyLine;
@@ -40,7 +41,20 @@ pub(super) enum Place {
         &'static [&'static str],
         fn(&Session) -> usize,
     ),
+    /// A mask of grbl's over the switches' wiring (`INPUT`): each bit
+    /// it knows stands for inputs; `used` sets which are wired (`$21`),
+    /// else which read active low (`$5`, `$6`, `$14`). A bit it does not
+    /// know is refused with the reason.
+    Inputs {
+        used: bool,
+        bits: &'static [(u8, u16)],
+        other: &'static str,
+    },
 }
+
+/// The limit switches of X and of Z.
+const LIMITS_X: u16 = Input::LimitXMinus.bit() | Input::LimitXPlus.bit();
+const LIMITS_Z: u16 = Input::LimitZMinus.bit() | Input::LimitZPlus.bit();
 
 /// One grbl setting: its number and where it lives.
 #[derive(Clone, Copy)]
@@ -58,7 +72,7 @@ pub(super) const fn setting(n: u16, place: Place) -> Setting {
 /// this board to act on (inverted pins, limit and home switches) accept
 /// only the value that leaves the machine as it is; the rest of grbl's
 /// list is kept and read back.
-pub(super) const SETTINGS: [Setting; 33] = [
+pub(super) const SETTINGS: [Setting; 34] = [
     setting(
         0,
         Place::Request(Command::Drive, "PULSE", |s, l| {
@@ -78,11 +92,23 @@ pub(super) const SETTINGS: [Setting; 33] = [
         4,
         Place::Fixed(b"0", 3, "this board has no stepper enable output"),
     ),
+    // grblHAL's masks: $5 bit 0 X, bit 2 Z (a lathe has no Y).
     setting(
         5,
-        Place::Fixed(b"0", 3, "this board has no limit switch inputs"),
+        Place::Inputs {
+            used: false,
+            bits: &[(0, LIMITS_X), (2, LIMITS_Z)],
+            other: "bit 0 X, bit 2 Z: a lathe has no Y",
+        },
     ),
-    setting(6, Place::Fixed(b"0", 3, "this board has no probe input")),
+    setting(
+        6,
+        Place::Inputs {
+            used: false,
+            bits: &[(0, Input::Probe.bit())],
+            other: "0 or 1",
+        },
+    ),
     setting(10, Place::ReportMask),
     setting(
         11,
@@ -97,6 +123,21 @@ pub(super) const SETTINGS: [Setting; 33] = [
         }),
     ),
     setting(13, Place::Fixed(b"0", 3, "reports are in mm")),
+    // grblHAL's control inputs: bit 1 feed hold, 2 cycle start, 3 door,
+    // 6 E-stop.
+    setting(
+        14,
+        Place::Inputs {
+            used: false,
+            bits: &[
+                (1, Input::Hold.bit()),
+                (2, Input::Start.bit()),
+                (3, Input::Door.bit()),
+                (6, Input::Estop.bit()),
+            ],
+            other: "bits 1 hold, 2 cycle start, 3 door, 6 E-stop: this board has no reset, block delete, optional stop or probe-connected input",
+        },
+    ),
     setting(
         20,
         Place::Fixed(
@@ -107,11 +148,15 @@ pub(super) const SETTINGS: [Setting; 33] = [
     ),
     setting(
         21,
-        Place::Fixed(b"0", 3, "this board has no limit switch inputs"),
+        Place::Inputs {
+            used: true,
+            bits: &[(0, LIMITS_X | LIMITS_Z)],
+            other: "0 or 1 (hard limits on all four switches; INPUT USED= wires fewer)",
+        },
     ),
     setting(
         22,
-        Place::Fixed(b"0", 3, "this board has no home switch inputs"),
+        Place::Fixed(b"0", 3, "this controller has no homing cycle yet"),
     ),
     setting(23, Place::Kept(2, false)),
     setting(24, Place::Kept(3, true)),
@@ -213,6 +258,15 @@ pub(super) fn settings<I: Io + ?Sized>(
             }
             Place::Choice(_, _, _, which) => {
                 let _ = write!(l, "{}", which(session));
+            }
+            Place::Inputs { used, bits, .. } => {
+                let w = session.wiring();
+                let field = if used { w.used } else { w.invert };
+                let mask = bits
+                    .iter()
+                    .filter(|(_, inputs)| field & inputs != 0)
+                    .fold(0u32, |m, (bit, _)| m | 1 << bit);
+                let _ = write!(l, "{mask}");
             }
         }
         io.inner.send(finish(&mut l));
@@ -377,6 +431,27 @@ pub(super) fn set<I: Io + ?Sized>(
                         );
                     }
                 }
+            }
+        }
+        Place::Inputs { used, bits, other } => {
+            let known = bits.iter().fold(0u32, |m, (bit, _)| m | 1 << bit);
+            let Some(mask) = parse_setting(v, false).filter(|m| m & !known == 0) else {
+                return refuse_setting(io, 3, s.n, other.as_bytes());
+            };
+            let w = session.wiring();
+            let all = bits.iter().fold(0u16, |m, (_, inputs)| m | inputs);
+            let chosen = bits
+                .iter()
+                .filter(|(bit, _)| mask & 1 << bit != 0)
+                .fold(0u16, |m, (_, inputs)| m | inputs);
+            let field = if used { w.used } else { w.invert };
+            let mut names = ReplyLine::new();
+            let _ = write_names(&mut names, field & !all | chosen);
+            let names = core::str::from_utf8(names.as_bytes()).unwrap_or("-");
+            let key = if used { "USED" } else { "INVERT" };
+            match Request::command(Command::Input, &[(key, names)]) {
+                Ok(request) => session.request(&request, io),
+                Err(_) => refuse_setting(io, 3, s.n, b"not a key of INPUT"),
             }
         }
         Place::Fixed(only, code, why) => {

@@ -4,26 +4,9 @@
 //! wires them; `UNLOCK` clears what they stopped.
 
 use super::*;
-use crate::inputs::{EstopStage, Halt, Input, InputConfig, ALL, FAULTS, LIMITS, MAX_FILTER};
-
-/// Writes the names of the inputs of `bits`, comma-separated (`-` for
-/// none).
-fn write_names<W: Write>(out: &mut W, bits: u16) -> fmt::Result {
-    if bits == 0 {
-        return out.write_str("-");
-    }
-    let mut first = true;
-    for i in ALL {
-        if bits & i.bit() != 0 {
-            if !first {
-                out.write_str(",")?;
-            }
-            out.write_str(i.name())?;
-            first = false;
-        }
-    }
-    Ok(())
-}
+use crate::inputs::{
+    write_names, EstopStage, Halt, Input, InputConfig, FAULTS, LIMITS, MAX_FILTER,
+};
 
 /// Reads a list of input names (`ESTOP,X-,DOOR`, or `-` for none).
 fn parse_names(key: &'static str, v: &str) -> Result<u16, Refusal<'static>> {
@@ -50,7 +33,7 @@ fn parse_names(key: &'static str, v: &str) -> Result<u16, Refusal<'static>> {
 impl Session {
     /// The inputs wired, for the board's filter.
     pub const fn wiring(&self) -> InputConfig {
-        self.wiring
+        self.offsets.wiring
     }
 
     /// What an input stopped (grbl's alarm number), if anything.
@@ -69,7 +52,7 @@ impl Session {
     /// and the machine is locked (`!ALARM CODE= INPUT= DONE= OF= PX= PZ=`).
     /// The door and the hold button hold the feed; cycle start resumes.
     pub fn inputs<I: Io>(&mut self, active: u16, io: &mut I) {
-        let active = active & self.wiring.used;
+        let active = active & self.offsets.wiring.used;
         let rose = active & !self.levels;
         let fell = self.levels & !active;
         self.levels = active;
@@ -154,7 +137,7 @@ impl Session {
     /// of them read active low, and the filter in ms.
     pub(super) fn input_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
         let [used, invert, filter] = args.values();
-        let mut wiring = self.wiring;
+        let mut wiring = self.offsets.wiring;
         if let Some(v) = used {
             wiring.used = parse_names("USED", v)?;
         }
@@ -168,7 +151,10 @@ impl Session {
                 .filter(|&f| f <= MAX_FILTER)
                 .ok_or(Refusal::Value("FILTER", "must be 0 to 100 (ms)"))?;
         }
-        self.wiring = wiring;
+        // Kept across power cycles with the table.
+        let mut offsets = self.offsets;
+        offsets.wiring = wiring;
+        self.take_offsets(offsets);
         // An input no longer wired is no longer active.
         self.levels &= wiring.used;
         let mut line = ReplyLine::new();

@@ -124,8 +124,6 @@ pub struct Session {
     pub(super) spinup_us: u64,
     /// The spindle and coolant outputs as last switched at rest.
     pub(super) outputs: Outputs,
-    /// The inputs wired, their level and filter (`INPUT`).
-    pub(super) wiring: crate::inputs::InputConfig,
     /// The active inputs, filtered, as the board last gave them.
     pub(super) levels: u16,
     /// What an input stopped, until it is cleared (`UNLOCK`).
@@ -179,7 +177,6 @@ impl Session {
             last_id: None,
             last_final: heapless::Vec::new(),
             machine: Machine::with_window(window),
-            wiring: crate::inputs::InputConfig::NONE,
             levels: 0,
             halt: crate::inputs::Halt::None,
             lost: false,

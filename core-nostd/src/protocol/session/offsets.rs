@@ -203,7 +203,7 @@ impl Session {
 
     /// New offsets; what a board keeps of them changed or not.
     pub(super) fn take_offsets(&mut self, new: Offsets) {
-        let kept = |o: &Offsets| (o.work, o.tools, o.reference, o.mcodes, o.reading);
+        let kept = |o: &Offsets| (o.work, o.tools, o.reference, o.mcodes, o.reading, o.wiring);
         if kept(&new) != kept(&self.offsets) {
             self.generation = self.generation.wrapping_add(1);
         }

@@ -36,7 +36,7 @@ impl Session {
             starved: self.machine.starved(),
             stop: None,
             outputs: self.outputs,
-            pins: (self.wiring.used != 0).then_some(self.levels),
+            pins: (self.offsets.wiring.used != 0).then_some(self.levels),
             alarm: self.halt.alarm(),
             lost: self.lost,
         }

@@ -1,0 +1,137 @@
+//! The machine's switches on the board (`docs/inputs.md`): sampled once a
+//! millisecond, filtered ([`core_nostd::inputs::Filter`]), and a stopping
+//! input (the E-stop, a limit, a drive's fault) acted on in the sampling
+//! interrupt itself: the STEP outputs and the spindle and coolant go low
+//! and the step interrupt is masked before anything else runs. The
+//! real-time task then drops the motion as a reset does
+//! ([`crate::motion`]), and thread mode tells the session, which locks.
+//!
+//! It uses the board only; the real-time task takes its stop
+//! ([`take_stop`]), thread mode its changes ([`take_changed`]).
+//!
+//! The sampler runs at the supervisor's priority, above the step
+//! interrupt. On the board the supervisor pends it every 1 ms; under QEMU,
+//! which has no GPIO, every sample comes from the test harness over
+//! USART2 ([`crate::board::Panel`]).
+
+use crate::board;
+use core::sync::atomic::{AtomicBool, AtomicU16, AtomicU8, Ordering};
+use core_nostd::inputs::{Filter, Input, InputConfig, FAULTS, LIMITS};
+use stm32f4::stm32f405::{Interrupt, NVIC};
+
+/// The wiring thread mode last set: the inputs used, those inverted, the
+/// filter.
+static USED: AtomicU16 = AtomicU16::new(0);
+static INVERT: AtomicU16 = AtomicU16::new(0);
+static FILTER: AtomicU8 = AtomicU8::new(0);
+/// The active inputs, filtered.
+static ACTIVE: AtomicU16 = AtomicU16::new(0);
+/// A stopping input acted; the real-time task has not yet dropped the
+/// motion.
+static STOPPED: AtomicBool = AtomicBool::new(false);
+/// The filtered inputs changed since thread mode last looked.
+static CHANGED: AtomicBool = AtomicBool::new(false);
+
+/// The inputs that stop everything at once.
+const STOPS: u16 = Input::Estop.bit() | LIMITS | FAULTS;
+
+/// Sets the wiring the sampler reads with (thread mode, after a request).
+pub fn set_wiring(cfg: InputConfig) {
+    USED.store(cfg.used, Ordering::Relaxed);
+    INVERT.store(cfg.invert, Ordering::Relaxed);
+    FILTER.store(cfg.filter, Ordering::Relaxed);
+}
+
+fn wiring() -> InputConfig {
+    InputConfig {
+        used: USED.load(Ordering::Relaxed),
+        invert: INVERT.load(Ordering::Relaxed),
+        filter: FILTER.load(Ordering::Relaxed),
+    }
+}
+
+/// The active inputs, filtered.
+pub fn active() -> u16 {
+    ACTIVE.load(Ordering::Acquire)
+}
+
+/// Whether the inputs changed since thread mode last looked (taken: it
+/// tells the session).
+pub fn take_changed() -> bool {
+    CHANGED.swap(false, Ordering::AcqRel)
+}
+
+/// Whether the inputs changed and thread mode has not looked.
+pub fn changed() -> bool {
+    CHANGED.load(Ordering::Acquire)
+}
+
+/// Whether a stopping input acted and the motion is still to be dropped
+/// (taken: the real-time task drops it).
+pub fn take_stop() -> bool {
+    STOPPED.swap(false, Ordering::AcqRel)
+}
+
+/// The sampler's state: the filter.
+pub struct Sampler {
+    filter: Filter,
+}
+
+impl Default for Sampler {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Sampler {
+    /// Every input inactive.
+    pub const fn new() -> Sampler {
+        Sampler {
+            filter: Filter::new(),
+        }
+    }
+
+    /// One sample of the pins (the sampling interrupt).
+    #[inline(always)]
+    pub fn sample(&mut self) {
+        self.sample_pins(board::input_pins());
+    }
+
+    /// One sample of `pins` (bit set: the pin reads high): a stopping input
+    /// that becomes active stops the outputs here and now; any change is
+    /// handed to the real-time task and thread mode. Returns the inputs
+    /// that changed.
+    #[inline(always)]
+    pub fn sample_pins(&mut self, pins: u16) -> u16 {
+        let changed = self.filter.sample(&wiring(), pins);
+        if changed == 0 {
+            return 0;
+        }
+        let active = self.filter.state();
+        if changed & active & STOPS != 0 {
+            stop_now();
+        }
+        ACTIVE.store(active, Ordering::Release);
+        CHANGED.store(true, Ordering::Release);
+        changed
+    }
+}
+
+/// The outputs low, the step interrupt masked, the real-time task pended
+/// to drop the motion.
+#[inline(always)]
+fn stop_now() {
+    board::step_outputs_low();
+    board::spindle::all_low();
+    NVIC::mask(Interrupt::TIM5);
+    STOPPED.store(true, Ordering::Release);
+    NVIC::pend(Interrupt::EXTI1);
+}
+
+/// After the real-time task has stopped the step interrupt and dropped its
+/// queue: it runs again for the next motion.
+pub fn unmask_step() {
+    // SAFETY: the step interrupt shares only RTIC resources and atomics,
+    // its priority set by the scheduler at start; masking it was ours.
+    unsafe { NVIC::unmask(Interrupt::TIM5) };
+}

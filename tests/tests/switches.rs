@@ -1,0 +1,209 @@
+//! The machine's switches on the firmware in QEMU (`docs/inputs.md`): QEMU
+//! has no GPIO, so the test drives the pins through the panel port
+//! (USART2), one sample of every pin's level at a time, and the firmware
+//! filters them as it filters its pins every millisecond on the board.
+//! Every line the firmware sends equals the in-process device's, given the
+//! same requests and the same filtered inputs.
+
+use core_nostd::inputs::Input;
+use host_sim::device::LocalDevice;
+use host_sim::link::Client;
+use host_sim::qemu::{build_firmware, qemu_or_skip, Panel, Qemu};
+use std::time::{Duration, Instant};
+
+/// Pin levels: the E-stop loop whole (its pin high, read inverted), every
+/// other pin low.
+const QUIET: u16 = Input::Estop.bit();
+
+fn socket(name: &str) -> std::path::PathBuf {
+    let s = std::env::temp_dir().join(format!("lathe-{name}-{}.sock", std::process::id()));
+    let _ = std::fs::remove_file(&s);
+    s
+}
+
+/// A `!STATUS` line without the board's ` LAT= LATE=`, checksum redone.
+fn board_line(line: &str) -> String {
+    let line = line.trim_end();
+    let Some(body) = line.strip_prefix("!STATUS ") else {
+        return line.to_string();
+    };
+    let body = body.rsplit_once('*').expect("a checksum").0;
+    let common = body.split_once(" LAT=").map_or(body, |(c, _)| c);
+    host_sim::link::with_checksum(&format!("!STATUS {common}"))
+}
+
+fn lines(bytes: &[u8]) -> Vec<String> {
+    String::from_utf8_lossy(bytes)
+        .split_terminator("\r\n")
+        .map(String::from)
+        .collect()
+}
+
+/// The firmware's next `n` lines.
+fn read(client: &mut Client, n: usize) -> Vec<String> {
+    (0..n)
+        .map(|_| board_line(&client.read_line().expect("a line")))
+        .collect()
+}
+
+/// Asks `STATUS` until its `PN=` reads `pn` (the samples sent before have
+/// been filtered), then returns the line.
+fn status_with(client: &mut Client, pn: &str) -> String {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        client.write_raw(b"STATUS\n").expect("status");
+        let l = board_line(&client.read_line().expect("status"));
+        if l.contains(&format!(" PN={pn}*")) || Instant::now() > deadline {
+            return l;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn the_switches_stop_and_lock_the_firmware_as_in_process() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let sock = socket("switches");
+    let elf = build_firmware("qemu").unwrap();
+    let mut qemu = Qemu::boot_with_panel(&elf, true, &sock).unwrap();
+    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let mut panel = Panel::connect(&sock).unwrap();
+    let mut local = LocalDevice::new();
+    let same = |client: &mut Client, local: &mut LocalDevice, bytes: &[u8]| {
+        let want = lines(&local.feed(bytes));
+        client.write_raw(bytes).unwrap();
+        let got = read(client, want.len());
+        assert_eq!(got, want, "after {:?}", String::from_utf8_lossy(bytes));
+    };
+    for request in [
+        &b"INPUT USED=ESTOP,X-,DOOR,START,FAULTZ INVERT=ESTOP FILTER=3\n"[..],
+        b"M03 S500\n",
+        b"MOVE X=10 F=100\n",
+        b"SYNC\n",
+        b"MOVE Z=-5 F=100\n",
+    ] {
+        same(&mut client, &mut local, request);
+    }
+    panel.sample(QUIET, 10).unwrap();
+    // A limit glitch of 3 samples: not longer than the 3 ms filter.
+    panel.sample(QUIET | Input::LimitXMinus.bit(), 3).unwrap();
+    panel.sample(QUIET, 5).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    same(&mut client, &mut local, b"STATUS\n");
+    // The E-stop's loop breaks: 4 samples pass the filter; the queued
+    // move is dropped, the registers kept, the machine locked.
+    panel.sample(0, 4).unwrap();
+    let want = lines(&local.inputs(Input::Estop.bit()));
+    assert_eq!(
+        want,
+        [host_sim::link::with_checksum(
+            "!ALARM CODE=10 INPUT=ESTOP DONE=0 OF=0 PX=1000 PZ=0"
+        )]
+    );
+    assert_eq!(read(&mut client, 1), want);
+    for request in [
+        &b"STATUS\n"[..],
+        b"MOVE X=1 F=100\n",
+        b"G01 Z-1 F100\n",
+        b"UNLOCK\n",
+        b"POS\n",
+    ] {
+        same(&mut client, &mut local, request);
+    }
+    // Released: a reset, then UNLOCK.
+    panel.sample(QUIET, 4).unwrap();
+    assert!(local.inputs(0).is_empty());
+    let status = status_with(&mut client, "-");
+    assert!(status.starts_with("OK STATE=ESTOP"), "{status}");
+    same(&mut client, &mut local, b"UNLOCK\n");
+    same(&mut client, &mut local, b"\x18");
+    for request in [
+        &b"UNLOCK\n"[..],
+        b"MOVE X=1 F=100\n",
+        b"SYNC\n",
+        b"STATUS\n",
+    ] {
+        same(&mut client, &mut local, request);
+    }
+    // Z's drive reports a fault: alarm 17 until it clears.
+    let fault = QUIET | Input::FaultZ.bit();
+    panel.sample(fault, 4).unwrap();
+    let want = lines(&local.inputs(Input::FaultZ.bit()));
+    assert_eq!(read(&mut client, 1), want);
+    same(&mut client, &mut local, b"UNLOCK\n");
+    panel.sample(QUIET, 4).unwrap();
+    assert!(local.inputs(0).is_empty());
+    status_with(&mut client, "-");
+    same(&mut client, &mut local, b"UNLOCK\n");
+    same(&mut client, &mut local, b"STATUS\n");
+}
+
+/// In real time (the paced build): the E-stop mid-cut stops the carriage
+/// part of the way and it stays there; unlocked, a move to the end of the
+/// cut lands exactly there.
+#[test]
+fn the_estop_stops_a_cut_mid_way_on_the_paced_firmware() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let sock = socket("estop-paced");
+    let elf = build_firmware("qemu-paced").unwrap();
+    let mut qemu = Qemu::boot_with_panel(&elf, false, &sock).unwrap();
+    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let mut panel = Panel::connect(&sock).unwrap();
+    // The final line of a request (a block's `DATA` lines skipped).
+    let ask = |client: &mut Client, line: &str| -> String {
+        client.write_raw(format!("{line}\n").as_bytes()).unwrap();
+        loop {
+            let l = board_line(&client.read_line().unwrap());
+            if !l.starts_with("DATA") {
+                return l;
+            }
+        }
+    };
+    assert!(ask(&mut client, "INPUT USED=ESTOP INVERT=ESTOP FILTER=2").starts_with("OK"));
+    panel.sample(QUIET, 5).unwrap();
+    // 30 mm of Z at 600 mm/min: 3 s; SYNC starts it and waits.
+    let cut = ask(&mut client, "G01 Z-30 F600");
+    assert!(cut.starts_with("OK"), "{cut}");
+    client.write_raw(b"SYNC\n").unwrap();
+    std::thread::sleep(Duration::from_millis(1200));
+    client.write_raw(b"\x80").unwrap();
+    let running = board_line(&client.read_line().unwrap());
+    assert!(running.starts_with("!STATUS STATE=RUN"), "{running}");
+    panel.sample(0, 3).unwrap();
+    // The SYNC's wait ends with the motion; then the alarm.
+    let sync = board_line(&client.read_line().unwrap());
+    assert!(sync.starts_with("OK EV="), "{sync}");
+    let alarm = board_line(&client.read_line().unwrap());
+    assert!(alarm.starts_with("!ALARM CODE=10 INPUT=ESTOP "), "{alarm}");
+    let pz: i64 = alarm
+        .split(" PZ=")
+        .nth(1)
+        .and_then(|s| s.split('*').next())
+        .and_then(|s| s.parse().ok())
+        .expect(&alarm);
+    assert!((-2_500..=-500).contains(&pz), "part of the way: {alarm}");
+    std::thread::sleep(Duration::from_millis(300));
+    let stopped = ask(&mut client, "STATUS");
+    assert!(
+        stopped.starts_with(&format!("OK STATE=ESTOP PX=0 PZ={pz} ")),
+        "{stopped}"
+    );
+    assert!(stopped.contains(" SPINDLE=OFF ") && stopped.contains(" LOST=1 PN=E"));
+    panel.sample(QUIET, 3).unwrap();
+    status_with(&mut client, "-");
+    client.write_raw(b"\x18").unwrap();
+    let reset = board_line(&client.read_line().unwrap());
+    assert!(reset.starts_with("!RESET DONE=0 OF=0"), "{reset}");
+    assert!(ask(&mut client, "UNLOCK").starts_with("OK LOST=1"));
+    let moved = ask(&mut client, "G01 Z-30 F3000");
+    assert!(
+        moved.starts_with(&format!("OK NX=0 NZ={} ", -3_000 - pz)),
+        "the rest of the cut, exactly: {moved}"
+    );
+    assert!(ask(&mut client, "SYNC").starts_with("OK EV="));
+    assert!(ask(&mut client, "POS").starts_with("OK PX=0 PZ=-3000 "));
+}
