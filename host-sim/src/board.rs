@@ -73,6 +73,10 @@ struct Axes {
     user_outputs: [bool; 4],
     /// The user inputs a machine's M code waits for (nothing wired: low).
     user_inputs: [bool; 4],
+    /// The lathe whose carriages the axes move (`--machine FILE`), and the
+    /// impulse prices (Å; X on the radius) that place them.
+    lathe: Option<crate::lathe::Lathe>,
+    prices: (i64, i64),
 }
 
 /// How far the wall clock ran from the step clock over the runs.
@@ -123,7 +127,7 @@ struct Shared {
 }
 
 /// What the panel reads off the simulated machine (`STATE?`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PanelState {
     /// The registers of the steps issued: where the carriage is.
     pub issued: ImpulsePoint,
@@ -135,16 +139,23 @@ pub struct PanelState {
     pub inputs: u16,
     /// The spindle's speed, 10⁻³ rpm (0: stopped).
     pub spindle: u32,
+    /// Where the lathe's carriages are, mm (X on the radius), the play of
+    /// the leadscrews in it, when a machine file is behind the board.
+    pub carriage: Option<[f64; 2]>,
 }
 
 impl PanelState {
     /// `STATE X= Z= IN= S=`: the carriage (mm, X a diameter when the
-    /// session reads one), the active inputs (grbl's letters, `-` for
+    /// session reads one; the lathe's, play included, with a machine
+    /// file), the active inputs (grbl's letters, `-` for
     /// none), the spindle (rpm).
     pub fn line(&self) -> String {
         let mm = |n: i32, price: i64| n as f64 * price as f64 / 1e7;
-        let x = mm(self.issued.x.0, self.prices.0) * if self.diam { 2.0 } else { 1.0 };
-        let z = mm(self.issued.z.0, self.prices.1);
+        let [x, z] = self.carriage.unwrap_or([
+            mm(self.issued.x.0, self.prices.0),
+            mm(self.issued.z.0, self.prices.1),
+        ]);
+        let x = x * if self.diam { 2.0 } else { 1.0 };
         let mut letters = String::new();
         let _ = core_nostd::inputs::write_letters(&mut letters, self.inputs);
         if letters.is_empty() {
@@ -213,11 +224,16 @@ impl Shared {
     /// the axes at once, as the board's input interrupt does (the
     /// protocol then reports it and locks the session).
     fn panel(&self, active: u16) {
+        let mut a = self.axes();
+        self.panel_locked(&mut a, active);
+    }
+
+    /// [`Shared::panel`] with the axes at hand.
+    fn panel_locked(&self, a: &mut Axes, active: u16) {
         let before = self.panel.swap(active, Ordering::AcqRel);
         if active & !before & self.stops.load(Ordering::Acquire) != 0 {
-            let mut a = self.axes();
             if a.aborted.is_none() {
-                let found = abort(&mut a);
+                let found = abort(a);
                 a.aborted = Some(found);
             }
             self.aborting.store(true, Ordering::Release);
@@ -225,6 +241,23 @@ impl Shared {
         if active != before {
             self.wanted.fetch_or(WANT_INPUTS, Ordering::AcqRel);
             self.changed.notify_all();
+        }
+    }
+
+    /// An event was issued: the lathe's carriages follow, and the switches
+    /// they hold change with them (the panel's own switches kept).
+    fn carriage_moved(&self, a: &mut Axes) {
+        let p = issued_of(a);
+        let (hx, hz) = a.prices;
+        let Some(lathe) = a.lathe.as_mut() else {
+            return;
+        };
+        let before = lathe.active();
+        let mm = |n: i32, h: i64| n as f64 * h as f64 / 1e7;
+        let now = lathe.moved([mm(p.x.0, hx), mm(p.z.0, hz)]);
+        if now != before {
+            let panel = self.panel.load(Ordering::Acquire) & !before | now;
+            self.panel_locked(a, panel);
         }
     }
 
@@ -283,6 +316,7 @@ fn axes_thread(shared: Arc<Shared>) {
             }
             let _ = event;
             a.next = None;
+            shared.carriage_moved(&mut a);
         }
         match a.stepper.pull() {
             None => {
@@ -428,6 +462,7 @@ impl<W: Write> Io for Protocol<W> {
         self.view = *view;
         *self.shared.prices.lock().unwrap_or_else(|e| e.into_inner()) =
             (view.hx, view.hz, view.diam);
+        self.shared.axes().prices = (view.hx, view.hz);
     }
 
     fn pause(&mut self) {
@@ -766,6 +801,8 @@ impl Board {
                 drift: Drift::default(),
                 user_outputs: [false; 4],
                 user_inputs: [false; 4],
+                lathe: None,
+                prices: (50_000, 100_000),
             }),
             work: Condvar::new(),
             changed: Condvar::new(),
@@ -836,6 +873,14 @@ impl Board {
         self.shared.panel(active);
     }
 
+    /// Puts the lathe of `file` behind the axes: from now on its
+    /// carriages follow the steps issued and trip its switches.
+    pub fn set_lathe(&self, file: crate::lathe::MachineFile) {
+        let mut a = self.shared.axes();
+        a.lathe = Some(crate::lathe::Lathe::new(file));
+        self.shared.carriage_moved(&mut a);
+    }
+
     /// The switches as the panel last set them.
     pub fn inputs(&self) -> u16 {
         self.shared.panel.load(Ordering::Acquire)
@@ -843,9 +888,13 @@ impl Board {
 
     /// What the panel reads off the machine.
     pub fn state(&self) -> PanelState {
-        let (issued, spindle) = {
+        let (issued, spindle, carriage) = {
             let a = self.shared.axes();
-            (issued_of(&a), a.outputs.rpm)
+            (
+                issued_of(&a),
+                a.outputs.rpm,
+                a.lathe.as_ref().map(crate::lathe::Lathe::carriage),
+            )
         };
         let (hx, hz, diam) = *self.shared.prices.lock().unwrap_or_else(|e| e.into_inner());
         PanelState {
@@ -854,6 +903,7 @@ impl Board {
             diam,
             inputs: self.inputs(),
             spindle,
+            carriage,
         }
     }
 

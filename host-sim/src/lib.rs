@@ -7,7 +7,8 @@
 //! - [`device`]: the core's protocol handler in this process;
 //! - [`board`]: the simulated board `serve` runs: the device behind a
 //!   receiver, the axes on the wall clock and the protocol, as the firmware
-//!   runs them;
+//!   runs them; [`lathe`]: the machine behind it (`--machine FILE`), whose
+//!   carriages trip its switches;
 //! - [`link`]: the virtual serial link (a pseudo-terminal pair driven through
 //!   the `serialport` crate) and the host side of the protocol;
 //! - [`qemu`]: the firmware booted in QEMU, reached over its serial pty;
@@ -48,6 +49,7 @@ pub mod contour;
 pub mod device;
 pub mod dialect;
 pub mod expand;
+pub mod lathe;
 pub mod link;
 pub mod plot;
 pub mod program;

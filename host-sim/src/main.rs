@@ -359,6 +359,11 @@ enum Command {
         /// `OPT DIALECT=` (grbl `$450`) from before: iso or fanuc.
         #[arg(long, default_value = "iso", value_parser = ["iso", "fanuc"])]
         dialect: String,
+        /// The lathe behind the board (TOML: each axis' travel, switches
+        /// and leadscrew play; `examples/machine.toml`): its carriages trip
+        /// the switches as the steps move them.
+        #[arg(long, value_name = "FILE")]
+        machine: Option<std::path::PathBuf>,
     },
 }
 
@@ -895,17 +900,35 @@ fn main() -> ExitCode {
             instant,
             speed,
             dialect,
+            machine,
         } => {
             let fanuc = dialect == "fanuc";
+            let lathe = match machine {
+                Some(path) => {
+                    let text = std::fs::read_to_string(&path)
+                        .map_err(|e| format!("cannot read {}: {e}", path.display()));
+                    match text.and_then(|t| {
+                        host_sim::lathe::MachineFile::parse(&t)
+                            .map_err(|e| format!("{}: {e}", path.display()))
+                    }) {
+                        Ok(m) => Some(m),
+                        Err(e) => {
+                            eprintln!("host-sim: {e}");
+                            return ExitCode::from(2);
+                        }
+                    }
+                }
+                None => None,
+            };
             let pace = if instant {
                 host_sim::board::Pace::Unpaced
             } else {
                 host_sim::board::Pace::Wall(speed.unwrap_or(1.0))
             };
             if pty {
-                serve_pty(grbl, fanuc, pace)
+                serve_pty(grbl, fanuc, pace, lathe)
             } else {
-                serve_stdio(grbl, fanuc, pace)
+                serve_stdio(grbl, fanuc, pace, lathe)
             }
         }
     };
@@ -948,6 +971,7 @@ fn serve_stdio(
     grbl: bool,
     fanuc: bool,
     pace: host_sim::board::Pace,
+    lathe: Option<host_sim::lathe::MachineFile>,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
     if grbl {
         let mut out = std::io::stdout();
@@ -969,6 +993,9 @@ fn serve_stdio(
         std::io::stdout(),
         false,
     );
+    if let Some(m) = lathe {
+        board.set_lathe(m);
+    }
     board.wait();
     Ok(ExitCode::SUCCESS)
 }
@@ -1092,8 +1119,12 @@ fn serve_pty(
     grbl: bool,
     fanuc: bool,
     pace: host_sim::board::Pace,
+    lathe: Option<host_sim::lathe::MachineFile>,
 ) -> Result<ExitCode, Box<dyn std::error::Error>> {
     let (path, board) = host_sim::board::serve_pty(board_device(grbl, fanuc), pace)?;
+    if let Some(m) = lathe {
+        board.set_lathe(m);
+    }
     let clock = match pace {
         host_sim::board::Pace::Unpaced => "motion at once".to_string(),
         host_sim::board::Pace::Wall(1.0) => "motion in real time".to_string(),

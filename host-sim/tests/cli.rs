@@ -130,6 +130,30 @@ fn bad_command_line_is_refused_clearly() {
     assert_eq!(out.status.code(), Some(2));
 }
 
+/// A machine file with a mistake is refused before anything is served,
+/// naming the file and the field.
+#[test]
+fn serve_refuses_a_bad_machine_file_by_name() {
+    let path = std::env::temp_dir().join(format!("lathe-bad-{}.toml", std::process::id()));
+    std::fs::write(
+        &path,
+        "[z]\nbacklash = 0.1\n[[z.switch]]\ninput = \"X+\"\nat = 3\n",
+    )
+    .unwrap();
+    let out = Command::new(BIN)
+        .args(["serve", "--stdio", "--machine"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("lathe-bad-") && err.contains("z.switch input \"X+\": Z- or Z+"),
+        "{err}"
+    );
+}
+
 #[test]
 fn compensate_prints_the_tool_tip_program_or_refuses_it() {
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/krylenko-fig12.nc");

@@ -964,3 +964,52 @@ fn the_estop_stops_a_cut_at_once_and_a_sender_sees_alarm_10() {
     assert!(board.panel_line("LIMIT Y+ 1").is_err());
     assert!(board.panel_line("ESTOP on").is_err());
 }
+
+/// A simulated lathe behind the board (`serve --machine`): a jog towards
+/// Z+ runs the carriage onto its limit switch, which stops it there at
+/// once with `ALARM:1` and `Pn:Z`; unlocked, a jog the other way leaves the
+/// switch, which releases past its hysteresis. The example machine file
+/// is read as it is.
+#[test]
+fn the_simulated_carriage_trips_its_limit_switch() {
+    let text = std::fs::read_to_string(root().join("examples/machine.toml")).expect("file");
+    let file = host_sim::lathe::MachineFile::parse(&text).expect("the example parses");
+    let (board, mut c) = board(host_sim::board::Pace::Wall(4.0));
+    board.set_lathe(file);
+    c.write_raw(b"$21=1\n").expect("hard limits");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    // Z+ trips at 4 mm: a 10 mm jog stops there.
+    c.write_raw(b"$J=G91 G21 Z10 F1200\n").expect("jog");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    let lines = lines_until(&mut c, |l| l.starts_with("ALARM:"));
+    assert_eq!(
+        lines.last().map(String::as_str),
+        Some("ALARM:1"),
+        "{lines:?}"
+    );
+    let tripped = report(&mut c);
+    assert!(
+        tripped.starts_with("<Alarm|") && tripped.contains("|Pn:Z|"),
+        "{tripped}"
+    );
+    let z = mpos(&tripped).1;
+    // The play of the screw: the carriage lags the nut by up to 0.15 mm.
+    assert!(
+        (4.0..=4.0 + 0.15 + 0.011).contains(&z),
+        "stopped on the switch: {tripped}"
+    );
+    let state = board.panel_line("STATE?").expect("state").expect("a line");
+    assert!(state.contains(" IN=Z "), "{state}");
+    c.write_raw(b"$X\n").expect("unlock");
+    assert_eq!(
+        lines_until(&mut c, |l| l == "ok"),
+        ["[MSG:Caution: Unlocked]", "ok"]
+    );
+    // Off the switch: 1 mm back releases it (hysteresis 0.3).
+    c.write_raw(b"$J=G91 G21 Z-1 F600\n").expect("jog");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(400));
+    let off = report(&mut c);
+    assert!(off.starts_with("<Idle|") && !off.contains("Pn:"), "{off}");
+    assert!((mpos(&off).1 - (z - 1.0)).abs() < 1e-9, "{off}");
+}
