@@ -327,7 +327,8 @@ enum Command {
     /// not finish, the tool taken back along its path). Exit status 0 when
     /// every line ran, 1 when the program cannot run (a refused line, a
     /// reply not the model's), 3 when the link failed, 4 when aborted, 5
-    /// when the board lost its position.
+    /// when the board lost its position, 6 when a switch stopped it (the
+    /// E-stop, a limit, a drive's fault).
     Send(SendArgs),
     /// Serve the in-process device for a terminal or another program.
     Serve {
@@ -1109,6 +1110,7 @@ fn send_program(args: &SendArgs) -> Result<ExitCode, Box<dyn std::error::Error>>
                 Halt::Link(_) | Halt::Board(_) => 3,
                 Halt::Aborted(_) => 4,
                 Halt::PowerLost => 5,
+                Halt::Stopped(_) => 6,
             }
         }
     };

@@ -541,6 +541,20 @@ pub enum Halt {
     Aborted((i64, i64)),
     /// The board restarted without a reset report.
     PowerLost,
+    /// A switch stopped the board (`!ALARM`): the E-stop, a limit, a
+    /// drive's fault; it is locked until cleared.
+    Stopped(Stopped),
+}
+
+/// What an `!ALARM` line told.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Stopped {
+    /// grbl's alarm number: 10 the E-stop, 1 a limit, 17 a drive's fault.
+    pub code: u8,
+    /// The inputs that tripped (`INPUT` names).
+    pub input: String,
+    /// Where the axes stopped: the registers.
+    pub at: (i64, i64),
 }
 
 impl From<LinkError> for Halt {
@@ -566,6 +580,18 @@ impl std::fmt::Display for Halt {
                 f,
                 "the board restarted without a reset report (power lost?): where the axes stand is unknown; set the machine's position and run the program again"
             ),
+            Halt::Stopped(s) => {
+                let (what, clear) = match s.code {
+                    10 => ("the E-stop", "release it, reset, then UNLOCK"),
+                    1 => ("a limit switch", "UNLOCK and move off the switch"),
+                    _ => ("a drive's fault", "UNLOCK once the drive is well"),
+                };
+                write!(
+                    f,
+                    "{what} stopped the board (alarm {}, input {}) with the axes at PX={} PZ={}: {clear}, check where the axes stand, and run the program again",
+                    s.code, s.input, s.at.0, s.at.1
+                )
+            }
         }
     }
 }
@@ -607,6 +633,7 @@ pub struct Sender<L> {
     last_poll: Instant,
     busy_at: Option<Instant>,
     reset_seen: Option<(i64, i64)>,
+    alarm_seen: Option<Stopped>,
     progress: Progress,
     retries: u64,
     dropped: u64,
@@ -632,6 +659,7 @@ impl<L: ByteLink> Sender<L> {
             last_poll: Instant::now(),
             busy_at: None,
             reset_seen: None,
+            alarm_seen: None,
             progress: Progress::default(),
             retries: 0,
             dropped: 0,
@@ -730,7 +758,7 @@ impl<L: ByteLink> Sender<L> {
         Ok(())
     }
 
-    /// A `!STATUS` or `!RESET` line.
+    /// A `!STATUS`, `!RESET` or `!ALARM` line.
     fn on_realtime(&mut self, line: &[u8], plan: Option<&Plan>, op: &mut dyn Operator) {
         let text = String::from_utf8_lossy(line);
         let Ok(body) = crate::link::check_reply_line(&text) else {
@@ -741,6 +769,19 @@ impl<L: ByteLink> Sender<L> {
         if body.starts_with("!RESET") {
             if let (Some(px), Some(pz)) = (reg("PX"), reg("PZ")) {
                 self.reset_seen = Some((px, pz));
+            }
+            return;
+        }
+        if body.starts_with("!ALARM") {
+            let code = words_value(body, "CODE").and_then(|v| v.parse().ok());
+            if let (Some(code), Some(px), Some(pz)) = (code, reg("PX"), reg("PZ")) {
+                let input = words_value(body, "INPUT").unwrap_or("").to_owned();
+                op.say(&format!("alarm {code}: input {input}"));
+                self.alarm_seen = Some(Stopped {
+                    code,
+                    input,
+                    at: (px, pz),
+                });
             }
             return;
         }
@@ -810,8 +851,9 @@ impl<L: ByteLink> Sender<L> {
         };
         let r = self.stream(plan, op, &mut report);
         report.halt = r.err();
-        if matches!(report.halt, Some(Halt::Aborted(_))) {
-            // The reset ended the session: a new one, to ask where it stands.
+        if matches!(report.halt, Some(Halt::Aborted(_) | Halt::Stopped(_))) {
+            // The reset (or the switch's stop, which acts as one) ended the
+            // session: a new one, to ask where it stands.
             let _ = self.session();
         }
         if !matches!(report.halt, Some(Halt::Link(_) | Halt::PowerLost)) {
@@ -854,6 +896,9 @@ impl<L: ByteLink> Sender<L> {
         let mut next = 0usize;
         let mut prefix = None;
         loop {
+            if let Some(s) = self.alarm_seen.take() {
+                return Err(Halt::Stopped(s));
+            }
             if self.reset_seen.is_some() {
                 let j = self.restart(plan, next, op)?;
                 next = j;
@@ -862,7 +907,7 @@ impl<L: ByteLink> Sender<L> {
             }
             if next == plan.lines.len() {
                 let r = self.exchange("SYNC", op, Some(plan))?;
-                if self.reset_seen.is_some() {
+                if self.reset_seen.is_some() || self.alarm_seen.is_some() {
                     continue;
                 }
                 if !r.is_ok() {
@@ -878,6 +923,10 @@ impl<L: ByteLink> Sender<L> {
             };
             let r = self.exchange(&text, op, Some(plan))?;
             report.requests += 1;
+            if let Some(s) = self.alarm_seen.take() {
+                // Its motion, if any, was dropped with the rest.
+                return Err(Halt::Stopped(s));
+            }
             if r.last.starts_with("ERR SESSION") {
                 if self.reset_seen.is_none() {
                     // Wait briefly for a reset report still on its way.

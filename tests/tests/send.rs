@@ -348,3 +348,49 @@ fn the_firmware_holds_resumes_and_restarts_after_a_reset() {
     assert_eq!(report.registers, Some(plan.end()));
     assert_eq!(report.starved, Some(0));
 }
+
+/// The E-stop pressed while `send` streams to a board in real time: the
+/// sender stops at once, says what stopped it and where the axes stand (on
+/// the program's path), and sends nothing more.
+#[test]
+fn an_estop_stops_the_stream_and_says_where() {
+    use core_nostd::inputs::Input;
+    struct Nowhere;
+    impl core_nostd::protocol::Io for Nowhere {
+        fn send(&mut self, _: &[u8]) {}
+    }
+    let mut device = core_nostd::protocol::Device::new();
+    device.receive_bytes(b"INPUT USED=ESTOP FILTER=0\n", &mut Nowhere);
+    let (path, board) =
+        host_sim::board::serve_pty(device, host_sim::board::Pace::Wall(4.0)).expect("pty");
+    let client = Client::open(&path, Duration::from_secs(5)).expect("open");
+    let mut sender = Sender::new(client, Duration::from_millis(300), 87).expect("session");
+    let plan = plan_for(&mut sender, &program(), ISO);
+    let board = std::sync::Arc::new(board);
+    let presser = {
+        let board = std::sync::Arc::clone(&board);
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(1500));
+            board.panel(Input::Estop.bit());
+        })
+    };
+    let mut op = Script::default();
+    let report = sender.send(&plan, &mut op);
+    presser.join().expect("pressed");
+    let Some(host_sim::send::Halt::Stopped(s)) = &report.halt else {
+        panic!("{:?}", report.halt);
+    };
+    assert_eq!((s.code, s.input.as_str()), (10, "ESTOP"));
+    assert_eq!(report.registers, Some(s.at));
+    assert_ne!(Some(plan.end()), report.registers);
+    assert!(plan.positions.contains(&s.at), "on the program's path");
+    let said = report
+        .halt
+        .as_ref()
+        .map(ToString::to_string)
+        .unwrap_or_default();
+    assert!(
+        said.contains("the E-stop stopped the board (alarm 10, input ESTOP)"),
+        "{said}"
+    );
+}
