@@ -31,6 +31,11 @@ static ACTIVE: AtomicU16 = AtomicU16::new(0);
 static STOPPED: AtomicBool = AtomicBool::new(false);
 /// The filtered inputs changed since thread mode last looked.
 static CHANGED: AtomicBool = AtomicBool::new(false);
+/// The door opened or the hold button was pressed; cycle start was
+/// pressed with the door closed: for the real-time task, as the bytes
+/// 0x82 and 0x81 are.
+static HOLD: AtomicBool = AtomicBool::new(false);
+static RESUME: AtomicBool = AtomicBool::new(false);
 
 /// The inputs that stop everything at once.
 const STOPS: u16 = Input::Estop.bit() | LIMITS | FAULTS;
@@ -64,6 +69,21 @@ pub fn take_changed() -> bool {
 /// Whether the inputs changed and thread mode has not looked.
 pub fn changed() -> bool {
     CHANGED.load(Ordering::Acquire)
+}
+
+/// Whether the door or the hold button asks for a feed hold (taken).
+pub fn take_hold() -> bool {
+    HOLD.swap(false, Ordering::AcqRel)
+}
+
+/// Whether cycle start asks to resume (taken).
+pub fn take_resume() -> bool {
+    RESUME.swap(false, Ordering::AcqRel)
+}
+
+/// Whether the guard door is open: nothing resumes meanwhile.
+pub fn door_open() -> bool {
+    active() & Input::Door.bit() != 0
 }
 
 /// Whether a stopping input acted and the motion is still to be dropped
@@ -108,11 +128,21 @@ impl Sampler {
             return 0;
         }
         let active = self.filter.state();
-        if changed & active & STOPS != 0 {
+        let rose = changed & active;
+        if rose & STOPS != 0 {
             stop_now();
         }
         ACTIVE.store(active, Ordering::Release);
         CHANGED.store(true, Ordering::Release);
+        // The door and the buttons act as their bytes do, in the
+        // real-time task.
+        if rose & (Input::Door.bit() | Input::Hold.bit()) != 0 {
+            HOLD.store(true, Ordering::Release);
+            NVIC::pend(Interrupt::EXTI1);
+        } else if rose & Input::Start.bit() != 0 && active & Input::Door.bit() == 0 {
+            RESUME.store(true, Ordering::Release);
+            NVIC::pend(Interrupt::EXTI1);
+        }
         changed
     }
 }

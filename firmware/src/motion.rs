@@ -113,6 +113,22 @@ pub fn realtime(
         crate::inputs::unmask_step();
         INPUT_STOP.store(true, Ordering::Release);
     }
+    // The door, the hold and cycle-start buttons: as their bytes, a
+    // status line asked but on a grbl link.
+    for (taken, rt) in [
+        (crate::inputs::take_hold(), Realtime::Hold),
+        (crate::inputs::take_resume(), Realtime::Resume),
+    ] {
+        if taken {
+            act(rt, prep, step);
+            if rt == Realtime::Resume {
+                CYCLE_START.store(true, Ordering::Release);
+            }
+            if !crate::serial::grbl() {
+                WANTED.fetch_or(WANT_STATUS, Ordering::AcqRel);
+            }
+        }
+    }
     let mut next = next;
     while let Some(e) = next() {
         act(e.rt, prep, step);
@@ -140,6 +156,8 @@ pub fn act(rt: Realtime, prep: &mut impl Mutex<T = PrepStage>, step: &mut impl M
     match rt {
         Realtime::Status => {}
         Realtime::Hold => prep.lock(|p| p.prep.hold()),
+        // Nothing resumes while the guard door is open.
+        Realtime::Resume if crate::inputs::door_open() => {}
         Realtime::Resume => {
             prep.lock(|p| {
                 let _ = p.prep.resume(&mut p.tx);

@@ -35,6 +35,11 @@ pub fn set_grbl(on: bool) {
     GRBL.store(on, Ordering::Relaxed);
 }
 
+/// Whether the link speaks grbl (which answers no hold or resume).
+pub fn grbl() -> bool {
+    GRBL.load(Ordering::Relaxed)
+}
+
 /// A reset came: the bytes put in the queue before it are dropped unread
 /// ([`DROP_TO`] counts them), as grbl empties its receive buffer.
 static FLUSH: AtomicBool = AtomicBool::new(false);

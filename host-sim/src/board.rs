@@ -118,9 +118,10 @@ struct Shared {
     /// The simulated machine's switches: the inputs active now
     /// (`core_nostd::inputs`), filtered.
     panel: AtomicU16,
-    /// The wired inputs that stop the axes at once (the E-stop, limits,
-    /// drive faults), as the session last had them.
-    stops: AtomicU16,
+    /// The inputs wired, as the session last had them: the E-stop, limits
+    /// and drive faults stop the axes at once, the door and the buttons
+    /// hold and resume them.
+    wired: AtomicU16,
     /// X's and Z's impulse prices (Å) and whether X reads as a diameter, as
     /// the session last had them (for the panel's `STATE?`).
     prices: Mutex<(i64, i64, bool)>,
@@ -200,6 +201,18 @@ impl Shared {
 
     fn act(&self, rt: Realtime) {
         let mut a = self.axes();
+        self.act_locked(&mut a, rt);
+    }
+
+    /// [`Shared::act`] with the axes at hand. Nothing resumes while the
+    /// guard door is open.
+    fn act_locked(&self, a: &mut Axes, rt: Realtime) {
+        let door = core_nostd::inputs::Input::Door.bit();
+        if rt == Realtime::Resume
+            && self.panel.load(Ordering::Acquire) & self.wired.load(Ordering::Acquire) & door != 0
+        {
+            return;
+        }
         match rt {
             Realtime::Status => {}
             Realtime::Hold => a.stepper.hold(),
@@ -213,7 +226,7 @@ impl Shared {
                 }
             }
             Realtime::Reset => {
-                let found = abort(&mut a);
+                let found = abort(a);
                 a.aborted = Some(found);
                 self.aborting.store(true, Ordering::Release);
             }
@@ -230,13 +243,35 @@ impl Shared {
 
     /// [`Shared::panel`] with the axes at hand.
     fn panel_locked(&self, a: &mut Axes, active: u16) {
+        use core_nostd::inputs::{Input, FAULTS, LIMITS};
         let before = self.panel.swap(active, Ordering::AcqRel);
-        if active & !before & self.stops.load(Ordering::Acquire) != 0 {
+        let wired = self.wired.load(Ordering::Acquire);
+        let rose = active & !before & wired;
+        if rose & (Input::Estop.bit() | LIMITS | FAULTS) != 0 {
             if a.aborted.is_none() {
                 let found = abort(a);
                 a.aborted = Some(found);
             }
             self.aborting.store(true, Ordering::Release);
+        } else {
+            // The door and the buttons, as their bytes (a status line
+            // asked, but on a grbl link).
+            let rt = if rose & (Input::Door.bit() | Input::Hold.bit()) != 0 {
+                Some(Realtime::Hold)
+            } else if rose & Input::Start.bit() != 0 {
+                Some(Realtime::Resume)
+            } else {
+                None
+            };
+            if let Some(rt) = rt {
+                self.act_locked(a, rt);
+                if rt == Realtime::Resume {
+                    self.cycle_start.store(true, Ordering::Release);
+                }
+                if !self.grbl.load(Ordering::Acquire) {
+                    self.wanted.fetch_or(WANT_STATUS, Ordering::AcqRel);
+                }
+            }
         }
         if active != before {
             self.wanted.fetch_or(WANT_INPUTS, Ordering::AcqRel);
@@ -674,12 +709,7 @@ fn protocol_loop<W: Write>(
     let shared = Arc::clone(&io.shared);
     let mut closed = false;
     loop {
-        let stops = core_nostd::inputs::Input::Estop.bit()
-            | core_nostd::inputs::LIMITS
-            | core_nostd::inputs::FAULTS;
-        shared
-            .stops
-            .store(device.wiring().used & stops, Ordering::Release);
+        shared.wired.store(device.wiring().used, Ordering::Release);
         // An input changed: the axes have already stopped if it stops them.
         if shared.take(WANT_INPUTS) {
             device.inputs(shared.panel.load(Ordering::Acquire), io);
@@ -814,7 +844,7 @@ impl Board {
             stop: AtomicBool::new(false),
             commands: Mutex::new(Vec::new()),
             panel: AtomicU16::new(0),
-            stops: AtomicU16::new(0),
+            wired: AtomicU16::new(0),
             prices: Mutex::new((50_000, 100_000, true)),
         });
         let (tx, rx) = mpsc::channel();

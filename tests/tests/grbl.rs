@@ -1013,3 +1013,39 @@ fn the_simulated_carriage_trips_its_limit_switch() {
     assert!(off.starts_with("<Idle|") && !off.contains("Pn:"), "{off}");
     assert!((mpos(&off).1 - (z - 1.0)).abs() < 1e-9, "{off}");
 }
+
+/// On the wall clock the door opened mid-cut holds the feed at once, as
+/// `!` does (grbl answers neither with a line); cycle start, the button or
+/// `~`, resumes nothing while it is open; closed, the cycle-start button
+/// resumes and the cut ends where it should.
+#[test]
+fn the_door_holds_until_closed_and_cycle_start_resumes() {
+    use core_nostd::inputs::Input;
+    let (board, mut c) = board(host_sim::board::Pace::Wall(1.0));
+    c.write_raw(b"INPUT USED=DOOR,START\n").expect("wiring");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    c.write_raw(b"G21 G90 G01 Z-20 F600\n").expect("line");
+    assert_eq!(c.read_line().expect("ok"), "ok");
+    std::thread::sleep(Duration::from_millis(700));
+    board.panel(Input::Door.bit());
+    std::thread::sleep(Duration::from_millis(400));
+    let held = report(&mut c);
+    assert!(
+        held.starts_with("<Hold:0|") && held.contains("|Pn:D|"),
+        "{held}"
+    );
+    c.write_raw(b"~").expect("resume");
+    board.panel_line("START").expect("panel");
+    std::thread::sleep(Duration::from_millis(300));
+    let still = report(&mut c);
+    assert!(still.starts_with("<Hold:0|"), "{still}");
+    assert_eq!(mpos(&still), mpos(&held));
+    board.panel(0);
+    board.panel_line("START").expect("panel");
+    std::thread::sleep(Duration::from_millis(200));
+    assert!(report(&mut c).starts_with("<Run|"));
+    std::thread::sleep(Duration::from_millis(2000));
+    let end = report(&mut c);
+    assert!(end.starts_with("<Idle|"), "{end}");
+    assert_eq!(mpos(&end), (0.0, -20.0));
+}

@@ -207,3 +207,68 @@ fn the_estop_stops_a_cut_mid_way_on_the_paced_firmware() {
     assert!(ask(&mut client, "SYNC").starts_with("OK EV="));
     assert!(ask(&mut client, "POS").starts_with("OK PX=0 PZ=-3000 "));
 }
+
+/// In real time (the paced build): the door opened mid-cut holds the feed
+/// to rest; cycle start does nothing while it is open; closed, cycle start
+/// resumes and the cut ends exactly where it should.
+#[test]
+fn the_door_holds_a_cut_until_closed_and_cycle_start_on_the_paced_firmware() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let sock = socket("door-paced");
+    let elf = build_firmware("qemu-paced").unwrap();
+    let mut qemu = Qemu::boot_with_panel(&elf, false, &sock).unwrap();
+    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let mut panel = Panel::connect(&sock).unwrap();
+    let line = |client: &mut Client| board_line(&client.read_line().unwrap());
+    let door = Input::Door.bit();
+    let start = Input::Start.bit();
+    client
+        .write_raw(b"INPUT USED=DOOR,START FILTER=1\n")
+        .unwrap();
+    assert!(line(&mut client).starts_with("OK USED=DOOR,START"));
+    panel.sample(0, 3).unwrap();
+    // 30 mm of Z at 600 mm/min: 3 s; SYNC starts it and waits.
+    client.write_raw(b"G01 Z-30 F600\n").unwrap();
+    while line(&mut client).starts_with("DATA") {}
+    client.write_raw(b"SYNC\n").unwrap();
+    std::thread::sleep(Duration::from_millis(800));
+    panel.sample(door, 3).unwrap();
+    let held = line(&mut client);
+    assert!(held.starts_with("!STATUS STATE=HOLD"), "{held}");
+    std::thread::sleep(Duration::from_millis(600));
+    client.write_raw(b"\x80").unwrap();
+    let rest = line(&mut client);
+    assert!(
+        rest.starts_with("!STATUS STATE=HOLD") && rest.contains(" V=0.0000 "),
+        "{rest}"
+    );
+    // Cycle start, the door open: nothing.
+    panel.sample(door | start, 3).unwrap();
+    panel.sample(door, 3).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    client.write_raw(b"\x80").unwrap();
+    let still = line(&mut client);
+    let at = |l: &str| {
+        l.split(" PZ=")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .map(String::from)
+    };
+    assert!(still.starts_with("!STATUS STATE=HOLD"), "{still}");
+    assert_eq!(at(&still), at(&rest), "held where it came to rest");
+    // Closed, then cycle start: the cut goes on to its end.
+    panel.sample(0, 3).unwrap();
+    panel.sample(start, 3).unwrap();
+    panel.sample(0, 3).unwrap();
+    let resumed = line(&mut client);
+    assert!(resumed.starts_with("!STATUS STATE=RUN"), "{resumed}");
+    let sync = line(&mut client);
+    assert!(
+        sync.starts_with("OK EV=3000 "),
+        "every step of the cut: {sync}"
+    );
+    client.write_raw(b"POS\n").unwrap();
+    assert!(line(&mut client).starts_with("OK PX=0 PZ=-3000 "));
+}

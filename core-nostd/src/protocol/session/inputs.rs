@@ -50,7 +50,9 @@ impl Session {
     /// outputs): the queued and started motion is dropped, the spindle and
     /// coolant are switched off, the program is abandoned as by a reset,
     /// and the machine is locked (`!ALARM CODE= INPUT= DONE= OF= PX= PZ=`).
-    /// The door and the hold button hold the feed; cycle start resumes.
+    /// The door and the hold button hold the feed and cycle start resumes,
+    /// as their bytes do: the transport acts on them at once (the door's
+    /// level is kept here: nothing resumes while it is open).
     pub fn inputs<I: Io>(&mut self, active: u16, io: &mut I) {
         let active = active & self.offsets.wiring.used;
         let rose = active & !self.levels;
@@ -69,14 +71,9 @@ impl Session {
                 self.halt_now(Halt::Fault, rose & FAULTS, io);
             }
         }
-        let door = Input::Door.bit();
-        if self.halt == Halt::None {
-            if rose & (door | Input::Hold.bit()) != 0 {
-                self.realtime(Realtime::Hold, io);
-            } else if rose & Input::Start.bit() != 0 && active & door == 0 {
-                self.realtime(Realtime::Resume, io);
-            }
-        }
+        // The door and the buttons are the transport's to act on at once,
+        // as it acts on the hold and cycle-start bytes (a device without
+        // motion in the background has nothing to hold).
         self.share_view(io);
     }
 
