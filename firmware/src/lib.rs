@@ -208,7 +208,8 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
         // On TIM2's microseconds, whose 32 bits wrap: summed step by step.
         let mut left = if board::PACED { us } else { 0 };
         let mut last = board::ticks();
-        while left > 0 {
+        // A reset or a switch's stop ends the wait too.
+        while left > 0 && !motion::reset_wanted() {
             self.pause();
             let now = board::ticks();
             left = left.saturating_sub(u64::from(now.wrapping_sub(last)));
