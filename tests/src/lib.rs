@@ -8,9 +8,30 @@
 //!   numbers of its canonical calls (`linuxcnc.rs`, `g76.rs`).
 //! - [`last_x_z`]: where a program's last move naming X and Z ends (the
 //!   tests that stream corpus programs through real senders).
+//! - [`board_line`]: a firmware's reply line as the in-process device
+//!   writes it (the QEMU tests).
 
 pub mod modules;
 pub mod rs274;
+
+/// A board's line as the in-process device writes it: a `!STATUS` line
+/// without the board's own ` LAT= LATE=` (which must be there, numbers),
+/// its checksum recomputed; every other line as it came, its line end
+/// trimmed.
+pub fn board_line(line: &str) -> String {
+    let line = line.trim_end();
+    let Some(body) = line.strip_prefix("!STATUS ") else {
+        return line.to_string();
+    };
+    let body = body.rsplit_once('*').expect("a checksum").0;
+    let (common, timing) = body.split_once(" LAT=").expect("LAT= on the board");
+    let (lat, late) = timing.split_once(" LATE=").expect("LATE= on the board");
+    assert!(
+        lat.parse::<u32>().is_ok() && late.parse::<u32>().is_ok(),
+        "{line}"
+    );
+    host_sim::link::with_checksum(&format!("!STATUS {common}"))
+}
 
 /// Where a program's last move naming both X and Z ends, as written (the
 /// last line whose code, comments left out, has an `X` and a `Z` word):

@@ -880,6 +880,24 @@ fn lines_until(c: &mut host_sim::link::Client, done: impl Fn(&str) -> bool) -> V
     }
 }
 
+/// Reads up to the alarm, which must be `ALARM:code`, then the status
+/// report, which must be `Alarm` with `letter` among its `Pn:`; returns it.
+fn alarm(c: &mut host_sim::link::Client, code: u8, letter: char) -> String {
+    let lines = lines_until(c, |l| l.starts_with("ALARM:"));
+    assert_eq!(
+        lines.last().map(String::as_str),
+        Some(format!("ALARM:{code}").as_str()),
+        "{lines:?}"
+    );
+    let r = report(c);
+    let pins = r.split("|Pn:").nth(1).and_then(|p| p.split('|').next());
+    assert!(
+        r.starts_with("<Alarm|") && pins.is_some_and(|p| p.contains(letter)),
+        "{r}"
+    );
+    r
+}
+
 /// On the wall clock, the E-stop pressed mid-cut stops the carriage at
 /// once where it is (the panel reads the same place), the spindle stops,
 /// and a sender sees `ALARM:10`, `Alarm` with `Pn:E`, and `error:50`
@@ -900,19 +918,8 @@ fn the_estop_stops_a_cut_at_once_and_a_sender_sees_alarm_10() {
     std::thread::sleep(Duration::from_millis(1000));
     assert!(report(&mut c).starts_with("<Run|"));
     board.panel_line("ESTOP 1").expect("panel");
-    let lines = lines_until(&mut c, |l| l.starts_with("ALARM:"));
-    assert_eq!(
-        lines.last().map(String::as_str),
-        Some("ALARM:10"),
-        "{lines:?}"
-    );
-    let stopped = report(&mut c);
-    assert!(
-        stopped.starts_with("<Alarm|")
-            && stopped.contains("|Pn:E|")
-            && stopped.contains("|FS:0.0000,0.000|"),
-        "{stopped}"
-    );
+    let stopped = alarm(&mut c, 10, 'E');
+    assert!(stopped.contains("|FS:0.0000,0.000|"), "{stopped}");
     let z = mpos(&stopped).1;
     assert!(z < -3.0 && z > -20.0, "stopped part of the way: {stopped}");
     std::thread::sleep(Duration::from_millis(300));
@@ -946,17 +953,7 @@ fn the_estop_stops_a_cut_at_once_and_a_sender_sees_alarm_10() {
     assert_eq!(c.read_line().expect("ok"), "ok");
     std::thread::sleep(Duration::from_millis(150));
     board.panel(Input::LimitZPlus.bit());
-    let lines = lines_until(&mut c, |l| l.starts_with("ALARM:"));
-    assert_eq!(
-        lines.last().map(String::as_str),
-        Some("ALARM:1"),
-        "{lines:?}"
-    );
-    let tripped = report(&mut c);
-    assert!(
-        tripped.starts_with("<Alarm|") && tripped.contains("|Pn:Z|"),
-        "{tripped}"
-    );
+    let tripped = alarm(&mut c, 1, 'Z');
     assert!(mpos(&tripped).1 < 0.0, "stopped short of Z0: {tripped}");
     c.write_raw(b"G00 Z0\n").expect("line");
     let r = lines_until(&mut c, |l| l.starts_with("error"));
@@ -981,17 +978,7 @@ fn the_simulated_carriage_trips_its_limit_switch() {
     // Z+ trips at 4 mm: a 10 mm jog stops there.
     c.write_raw(b"$J=G91 G21 Z10 F1200\n").expect("jog");
     assert_eq!(c.read_line().expect("ok"), "ok");
-    let lines = lines_until(&mut c, |l| l.starts_with("ALARM:"));
-    assert_eq!(
-        lines.last().map(String::as_str),
-        Some("ALARM:1"),
-        "{lines:?}"
-    );
-    let tripped = report(&mut c);
-    assert!(
-        tripped.starts_with("<Alarm|") && tripped.contains("|Pn:Z|"),
-        "{tripped}"
-    );
+    let tripped = alarm(&mut c, 1, 'Z');
     let z = mpos(&tripped).1;
     // The play of the screw: the carriage lags the nut by up to 0.15 mm.
     assert!(

@@ -13,6 +13,7 @@ use host_sim::qemu::{build_firmware, firmware_dir, qemu_or_skip, Qemu};
 use host_sim::scenario;
 use std::process::Command;
 use std::time::Duration;
+use tests::board_line;
 
 /// The firmware built for QEMU, booted with instruction counting, and a
 /// link to it.
@@ -125,23 +126,6 @@ fn a_debug_panic_stops_and_exits_with_failure() {
     let out = build(true);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("release_build_has_a_reachable_panic"));
-}
-
-/// A board's line as the in-process device writes it: a `!STATUS` line
-/// without the board's own ` LAT= LATE=` (which must be there, numbers),
-/// its checksum recomputed.
-fn board_line(line: &str) -> String {
-    let Some(body) = line.strip_prefix("!STATUS ") else {
-        return line.to_string();
-    };
-    let body = body.rsplit_once('*').expect("a checksum").0;
-    let (common, timing) = body.split_once(" LAT=").expect("LAT= on the board");
-    let (lat, late) = timing.split_once(" LATE=").expect("LATE= on the board");
-    assert!(
-        lat.parse::<u32>().is_ok() && late.parse::<u32>().is_ok(),
-        "{line}"
-    );
-    host_sim::link::with_checksum(&format!("!STATUS {common}"))
 }
 
 /// One exchange at a time (a real-time byte is answered the moment it

@@ -10,6 +10,7 @@ use host_sim::device::LocalDevice;
 use host_sim::link::Client;
 use host_sim::qemu::{build_firmware, qemu_or_skip, Panel, Qemu};
 use std::time::{Duration, Instant};
+use tests::board_line;
 
 /// Pin levels: the E-stop loop whole (its pin high, read inverted), every
 /// other pin low.
@@ -19,17 +20,6 @@ fn socket(name: &str) -> std::path::PathBuf {
     let s = std::env::temp_dir().join(format!("lathe-{name}-{}.sock", std::process::id()));
     let _ = std::fs::remove_file(&s);
     s
-}
-
-/// A `!STATUS` line without the board's ` LAT= LATE=`, checksum redone.
-fn board_line(line: &str) -> String {
-    let line = line.trim_end();
-    let Some(body) = line.strip_prefix("!STATUS ") else {
-        return line.to_string();
-    };
-    let body = body.rsplit_once('*').expect("a checksum").0;
-    let common = body.split_once(" LAT=").map_or(body, |(c, _)| c);
-    host_sim::link::with_checksum(&format!("!STATUS {common}"))
 }
 
 fn lines(bytes: &[u8]) -> Vec<String> {

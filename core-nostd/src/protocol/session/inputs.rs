@@ -88,14 +88,7 @@ impl Session {
         let mut line = ReplyLine::new();
         let _ = write!(line, "!ALARM CODE={} INPUT=", halt.alarm());
         let _ = write_names(&mut line, bits);
-        let _ = write!(
-            line,
-            " DONE={} OF={} PX={} PZ={}",
-            found.done,
-            found.of,
-            issued.x.get(),
-            issued.z.get()
-        );
+        super::realtime::write_dropped(&mut line, &found, issued);
         io.send(line.finish());
     }
 

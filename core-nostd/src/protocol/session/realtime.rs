@@ -137,14 +137,8 @@ impl Session {
         self.reset_halt();
         io.reset_done(found.of > 0);
         let mut line = ReplyLine::new();
-        let _ = write!(
-            line,
-            "!RESET DONE={} OF={} PX={} PZ={}",
-            found.done,
-            found.of,
-            issued.x.get(),
-            issued.z.get()
-        );
+        let _ = line.write_str("!RESET");
+        write_dropped(&mut line, &found, issued);
         io.send(line.finish());
         self.share_view(io);
     }
@@ -238,6 +232,19 @@ impl Session {
             self.switch_outputs(outputs, io);
         }
     }
+}
+
+/// ` DONE= OF= PX= PZ=`: what a stop at once found running (the events of
+/// the block issued, of how many) and the registers (`!RESET`, `!ALARM`).
+pub(super) fn write_dropped(line: &mut ReplyLine, found: &Aborted, issued: ImpulsePoint) {
+    let _ = write!(
+        line,
+        " DONE={} OF={} PX={} PZ={}",
+        found.done,
+        found.of,
+        issued.x.get(),
+        issued.z.get()
+    );
 }
 
 /// A status record of what the machine reports, with the session's view.
