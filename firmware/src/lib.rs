@@ -19,9 +19,9 @@
 //! | [`Controller`] | the protocol's transport in thread mode |
 //!
 //! The tasks and their priorities are in `main.rs` (RTIC). `→` says what a
-//! module uses: `board` → nothing of ours; `step`, `serial`, `supervisor`,
-//! `storage`, `inputs` → `board`; `motion` → `step`, `serial`, `board`,
-//! `inputs`; the controller → all of them.
+//! module uses: `board` → nothing of ours; `step`, `supervisor`,
+//! `storage`, `inputs` → `board`; `motion` → `step`, `board`, `inputs`;
+//! `serial` → `board`, `motion`; the controller → all of them.
 //!
 //! Release builds contain no panic path: their panic handler calls a symbol
 //! that does not exist, so the link fails if any panic survives optimisation.

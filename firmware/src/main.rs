@@ -225,6 +225,11 @@ mod app {
     fn realtime(cx: realtime::Context) {
         let rx = cx.local.realtime;
         let (mut prep, mut step) = (cx.shared.prep, cx.shared.step);
-        motion::realtime(|| serial::next_realtime(rx), &mut prep, &mut step);
+        motion::realtime(
+            || serial::next_realtime(rx),
+            serial::grbl(),
+            &mut prep,
+            &mut step,
+        );
     }
 }

@@ -99,9 +99,11 @@ static CYCLE_START: AtomicBool = AtomicBool::new(false);
 /// The real-time task: acts on each real-time byte in the order they
 /// came (hold, resume, reset on the motion at once), then asks thread
 /// mode for its line: every one, but a hold and a resume on a grbl link
-/// (`quiet`: grbl answers neither).
+/// (`quiet`: grbl answers neither). The switches' stop, hold and resume
+/// come first; `grbl`: the link speaks grbl (no line for the buttons).
 pub fn realtime(
     next: impl FnMut() -> Option<RtEvent>,
+    grbl: bool,
     prep: &mut impl Mutex<T = PrepStage>,
     step: &mut impl Mutex<T = StepIsr>,
 ) {
@@ -124,7 +126,7 @@ pub fn realtime(
             if rt == Realtime::Resume {
                 CYCLE_START.store(true, Ordering::Release);
             }
-            if !crate::serial::grbl() {
+            if !grbl {
                 WANTED.fetch_or(WANT_STATUS, Ordering::AcqRel);
             }
         }
