@@ -282,6 +282,10 @@ impl Shared {
     /// An event was issued: the lathe's carriages follow, and the switches
     /// they hold change with them (the panel's own switches kept).
     fn carriage_moved(&self, a: &mut Axes) {
+        // Every event passes here: nothing to work out without a lathe.
+        if a.lathe.is_none() {
+            return;
+        }
         let p = issued_of(a);
         let (hx, hz) = a.prices;
         let Some(lathe) = a.lathe.as_mut() else {
