@@ -389,13 +389,7 @@ mod tests {
         o.mcodes = crate::interp::MCodes::new();
         o.reading = Reading::DEFAULT;
         o.wiring = crate::inputs::InputConfig::NONE;
-        let lengths: Vec<i64> = lengths(&o).take(LENGTHS).collect();
-        let mut words = std::vec![MAGIC_1, 7, (PAYLOAD_WORDS_1 * 4) as u32];
-        for v in lengths {
-            words.extend([v as u64 as u32, ((v as u64) >> 32) as u32]);
-        }
-        words.push(crc_of(words.iter().copied()));
-        f.slots[0][..words.len()].copy_from_slice(&words);
+        write_old(&mut f, 0, MAGIC_1, 7, lengths(&o).take(LENGTHS));
         assert_eq!(
             load(&mut f),
             Loaded {
@@ -416,13 +410,8 @@ mod tests {
         let mut f = Nor::new();
         let mut o = table(7);
         assert_eq!(o.reading.bits(), 7);
-        let values: Vec<i64> = lengths(&o).take(LENGTHS + MCODE_VALUES).collect();
-        let mut words = std::vec![MAGIC_2, 9, (PAYLOAD_WORDS_2 * 4) as u32];
-        for v in values {
-            words.extend([v as u64 as u32, ((v as u64) >> 32) as u32]);
-        }
-        words.push(crc_of(words.iter().copied()));
-        f.slots[1][..words.len()].copy_from_slice(&words);
+        let values = lengths(&o).take(LENGTHS + MCODE_VALUES);
+        write_old(&mut f, 1, MAGIC_2, 9, values);
         o.reading = Reading::DEFAULT;
         o.wiring = crate::inputs::InputConfig::NONE;
         assert_eq!(
@@ -444,13 +433,8 @@ mod tests {
         // An LTO3 record: up to the reading; nothing wired.
         let mut f = Nor::new();
         let mut o = table(4);
-        let values: Vec<i64> = lengths(&o).take(LENGTHS + MCODE_VALUES + 1).collect();
-        let mut words = std::vec![MAGIC_3, 11, (PAYLOAD_WORDS_3 * 4) as u32];
-        for v in values {
-            words.extend([v as u64 as u32, ((v as u64) >> 32) as u32]);
-        }
-        words.push(crc_of(words.iter().copied()));
-        f.slots[0][..words.len()].copy_from_slice(&words);
+        let values = lengths(&o).take(LENGTHS + MCODE_VALUES + 1);
+        write_old(&mut f, 0, MAGIC_3, 11, values);
         o.wiring = crate::inputs::InputConfig::NONE;
         assert_eq!(
             load(&mut f),
@@ -491,6 +475,25 @@ mod tests {
         f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
         assert_eq!(sequence(&mut f, 1), Some(seq));
         assert_eq!(load(&mut f).offsets, kept(&table(1)));
+    }
+
+    /// Writes into `slot` a whole record of an older layout, `magic`, with
+    /// sequence number `seq` and these values, as the firmware of that
+    /// layout wrote it.
+    fn write_old(
+        f: &mut Nor,
+        slot: usize,
+        magic: u32,
+        seq: u32,
+        values: impl Iterator<Item = i64>,
+    ) {
+        let mut words = std::vec![magic, seq, 0];
+        for v in values {
+            words.extend([v as u64 as u32, ((v as u64) >> 32) as u32]);
+        }
+        words[2] = ((words.len() - 3) * 4) as u32;
+        words.push(crc_of(words.iter().copied()));
+        f.slots[slot][..words.len()].copy_from_slice(&words);
     }
 
     fn kept(o: &Offsets) -> Offsets {

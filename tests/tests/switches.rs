@@ -16,10 +16,18 @@ use tests::board_line;
 /// other pin low.
 const QUIET: u16 = Input::Estop.bit();
 
-fn socket(name: &str) -> std::path::PathBuf {
-    let s = std::env::temp_dir().join(format!("lathe-{name}-{}.sock", std::process::id()));
-    let _ = std::fs::remove_file(&s);
-    s
+/// The firmware of `feature` booted with its panel on a socket named
+/// after `name` (instruction counting unless paced), the link to it, and
+/// the panel.
+fn booted(name: &str, feature: &str) -> (Qemu, Client, Panel) {
+    let sock = std::env::temp_dir().join(format!("lathe-{name}-{}.sock", std::process::id()));
+    let _ = std::fs::remove_file(&sock);
+    let elf = build_firmware(feature).unwrap();
+    let paced = feature.starts_with("qemu-paced");
+    let mut qemu = Qemu::boot_with_panel(&elf, !paced, &sock).unwrap();
+    let client = qemu.connect(Duration::from_secs(30)).unwrap();
+    let panel = Panel::connect(&sock).unwrap();
+    (qemu, client, panel)
 }
 
 fn lines(bytes: &[u8]) -> Vec<String> {
@@ -55,11 +63,7 @@ fn the_switches_stop_and_lock_the_firmware_as_in_process() {
     if !qemu_or_skip() {
         return;
     }
-    let sock = socket("switches");
-    let elf = build_firmware("qemu").unwrap();
-    let mut qemu = Qemu::boot_with_panel(&elf, true, &sock).unwrap();
-    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
-    let mut panel = Panel::connect(&sock).unwrap();
+    let (_qemu, mut client, mut panel) = booted("switches", "qemu");
     let mut local = LocalDevice::new();
     let same = |client: &mut Client, local: &mut LocalDevice, bytes: &[u8]| {
         let want = lines(&local.feed(bytes));
@@ -138,11 +142,7 @@ fn the_estop_stops_a_cut_mid_way_on_the_paced_firmware() {
     if !qemu_or_skip() {
         return;
     }
-    let sock = socket("estop-paced");
-    let elf = build_firmware("qemu-paced").unwrap();
-    let mut qemu = Qemu::boot_with_panel(&elf, false, &sock).unwrap();
-    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
-    let mut panel = Panel::connect(&sock).unwrap();
+    let (_qemu, mut client, mut panel) = booted("estop-paced", "qemu-paced");
     // The final line of a request (a block's `DATA` lines skipped).
     let ask = |client: &mut Client, line: &str| -> String {
         client.write_raw(format!("{line}\n").as_bytes()).unwrap();
@@ -206,11 +206,7 @@ fn the_door_holds_a_cut_until_closed_and_cycle_start_on_the_paced_firmware() {
     if !qemu_or_skip() {
         return;
     }
-    let sock = socket("door-paced");
-    let elf = build_firmware("qemu-paced").unwrap();
-    let mut qemu = Qemu::boot_with_panel(&elf, false, &sock).unwrap();
-    let mut client = qemu.connect(Duration::from_secs(30)).unwrap();
-    let mut panel = Panel::connect(&sock).unwrap();
+    let (_qemu, mut client, mut panel) = booted("door-paced", "qemu-paced");
     let line = |client: &mut Client| board_line(&client.read_line().unwrap());
     let door = Input::Door.bit();
     let start = Input::Start.bit();
