@@ -52,19 +52,41 @@ fn other(msg: String) -> LinkError {
 /// Builds the firmware for QEMU (release, `--features <features>`) if it is
 /// not up to date, and returns the controller ELF's path; the `bench` ELF
 /// lies beside it.
+///
+/// Every feature set builds in the firmware's one target directory, so the
+/// dependencies (the PAC, RTIC's macros) are compiled once, not once per
+/// feature set: a build per directory took about 400 MB each. Cargo writes
+/// every feature set's binaries to the same path, so the build and a copy
+/// of its ELFs to `target/images/<features>/` happen under a file lock
+/// (tests build in parallel threads and processes), and the copy is renamed
+/// into place whole, so a QEMU booting the previous copy never reads half.
 pub fn build_firmware(features: &str) -> Result<PathBuf, LinkError> {
     let dir = firmware_dir();
-    let target_dir = dir.join("target").join(features.replace(',', "+"));
+    let target_dir = dir.join("target");
+    let images = target_dir.join("images").join(features.replace(',', "+"));
+    std::fs::create_dir_all(&images).map_err(|e| other(format!("{}: {e}", images.display())))?;
+    let lock_path = target_dir.join("images/.lock");
+    let lock = std::fs::File::create(&lock_path)
+        .map_err(|e| other(format!("{}: {e}", lock_path.display())))?;
+    lock.lock()
+        .map_err(|e| other(format!("{}: {e}", lock_path.display())))?;
     let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .current_dir(&dir)
-        .args(["build", "--release", "--features", features, "--target-dir"])
-        .arg(&target_dir)
+        .args(["build", "--release", "--features", features])
         .status()
         .map_err(|e| other(format!("cargo for the firmware: {e}")))?;
     if !status.success() {
         return Err(other(format!("firmware build failed ({status})")));
     }
-    Ok(target_dir.join("thumbv7em-none-eabihf/release/firmware"))
+    let built = target_dir.join("thumbv7em-none-eabihf/release");
+    for name in ["firmware", "bench"] {
+        let part = images.join(format!(".{name}.part"));
+        std::fs::copy(built.join(name), &part)
+            .and_then(|_| std::fs::rename(&part, images.join(name)))
+            .map_err(|e| other(format!("{name} ELF into {}: {e}", images.display())))?;
+    }
+    drop(lock);
+    Ok(images.join("firmware"))
 }
 
 /// Sends `requests` (raw lines, each ended by LF) one at a time, each after
