@@ -198,6 +198,12 @@ pub enum Halt {
     Limit,
     /// A drive's fault (grblHAL's alarm 17).
     Fault,
+    /// The homing cycle failed, grbl's alarm number: 6 a reset during it,
+    /// 7 the door opened, 8 the pull-off left the switch pressed, 9 the
+    /// switch not found within the travel.
+    Homing(u8),
+    /// Power-on with homing required, not yet homed (alarm 11).
+    HomingRequired,
 }
 
 impl Halt {
@@ -208,6 +214,8 @@ impl Halt {
             Halt::Estop(_) => 10,
             Halt::Limit => 1,
             Halt::Fault => 17,
+            Halt::Homing(code) => code,
+            Halt::HomingRequired => 11,
         }
     }
 
@@ -222,6 +230,15 @@ impl Halt {
             Halt::Estop(EstopStage::Reset) => "the E-stop was pressed: UNLOCK to go on",
             Halt::Limit => "a hard limit stopped the axes: UNLOCK, then move off the switch",
             Halt::Fault => "a drive reported a fault: UNLOCK once it has cleared",
+            Halt::Homing(6) => "a reset stopped the homing cycle: HOME again",
+            Halt::Homing(7) => "the door opened during homing: close it, HOME again",
+            Halt::Homing(8) => {
+                "the pull-off left the switch pressed: check the switch and PULLOFF, HOME again"
+            }
+            Halt::Homing(_) => {
+                "homing did not find the switch within the travel: check its wiring, HOME again"
+            }
+            Halt::HomingRequired => "the machine must be homed: HOME (UNLOCK moves it unhomed)",
         }
     }
 }

@@ -408,6 +408,8 @@ pub struct Offsets {
     /// The machine's switches: which are wired, their level, the filter
     /// (`INPUT`; kept with the table).
     pub wiring: crate::inputs::InputConfig,
+    /// The homing cycle's settings (`HOMING`; kept with the table).
+    pub homing: crate::homing::HomingConfig,
 }
 
 /// How G-code lines are read: the dialect and the two panel switches.
@@ -468,6 +470,7 @@ impl Offsets {
         mcodes: MCodes::new(),
         reading: Reading::DEFAULT,
         wiring: crate::inputs::InputConfig::NONE,
+        homing: crate::homing::HomingConfig::NONE,
     };
 
     /// A register (1 … 32); `None` for 0 or beyond the table.

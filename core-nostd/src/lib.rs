@@ -73,6 +73,7 @@ pub mod cone;
 pub mod crc32;
 pub mod cycle;
 pub mod gcode;
+pub mod homing;
 pub mod impulse;
 pub mod inputs;
 pub mod interleave;

@@ -20,10 +20,13 @@ use crate::crc32::Crc32;
 use crate::interp::{MAction, Offsets, Reading, ToolEntry, MCODES, TOOL_REGISTERS, WORK_SYSTEMS};
 use crate::length::Length;
 
-/// `LTO4`: the record of this layout (the table, the offsets, the
+/// `LTO5`: the record of this layout (the table, the offsets, the
 /// stored positions, the machine's M codes, how lines are read, the
-/// switches' wiring).
-const MAGIC: u32 = u32::from_le_bytes(*b"LTO4");
+/// switches' wiring, the homing cycle's settings).
+const MAGIC: u32 = u32::from_le_bytes(*b"LTO5");
+/// `LTO4`: the layout before the homing settings, still read (no axis
+/// homed).
+const MAGIC_4: u32 = u32::from_le_bytes(*b"LTO4");
 /// `LTO3`: the layout before the wiring, still read (nothing wired).
 const MAGIC_3: u32 = u32::from_le_bytes(*b"LTO3");
 /// `LTO2`: the layout before the reading, still read (read as at
@@ -42,9 +45,15 @@ const LENGTHS: usize = WORK_SYSTEMS * 2 + TOOL_REGISTERS * 6 + 2 * 2;
 /// empty) and its action.
 const MCODE_VALUES: usize = MCODES * 2;
 
+/// The homing settings' values: their flags, seek, locate, pull-off, and
+/// per axis home and travel.
+const HOMING_VALUES: usize = 8;
+
 /// Payload words: two per value, the reading's bits
-/// ([`crate::interp::Reading::bits`]) and the wiring last.
-const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES + 2) * 2;
+/// ([`crate::interp::Reading::bits`]), the wiring and the homing last.
+const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES + 2 + HOMING_VALUES) * 2;
+/// Those of an `LTO4` record.
+const PAYLOAD_WORDS_4: usize = (LENGTHS + MCODE_VALUES + 2) * 2;
 /// Those of an `LTO3` record.
 const PAYLOAD_WORDS_3: usize = (LENGTHS + MCODE_VALUES + 1) * 2;
 /// Those of an `LTO2` record.
@@ -122,11 +131,29 @@ fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
     let w = o.wiring;
     let wiring =
         core::iter::once(i64::from(w.used) | i64::from(w.invert) << 16 | i64::from(w.filter) << 32);
+    let h = o.homing;
+    // Per axis: bit 0 it homes, bit 1 towards minus.
+    let axis = |a: crate::homing::AxisHoming| i64::from(a.homes) | i64::from(a.dir < 0) << 1;
+    let flags = axis(h.axes[0])
+        | axis(h.axes[1]) << 2
+        | i64::from(h.z_first) << 4
+        | i64::from(h.required) << 5;
+    let homing = [
+        flags,
+        i64::from(h.seek),
+        i64::from(h.locate),
+        h.pulloff.as_angstrom(),
+        h.axes[0].home.as_angstrom(),
+        h.axes[1].home.as_angstrom(),
+        h.axes[0].travel.as_angstrom(),
+        h.axes[1].travel.as_angstrom(),
+    ];
     work.chain(tools)
         .chain(reference)
         .chain(mcodes)
         .chain(reading)
         .chain(wiring)
+        .chain(homing)
 }
 
 /// The words of the record of `offsets` with sequence number `seq`,
@@ -152,6 +179,7 @@ fn crc_of(words: impl Iterator<Item = u32>) -> u32 {
 fn layout<F: Flash>(flash: &mut F, slot: usize) -> Option<usize> {
     match (flash.read(slot, 0), flash.read(slot, 2)) {
         (MAGIC, n) if n == (PAYLOAD_WORDS * 4) as u32 => Some(PAYLOAD_WORDS),
+        (MAGIC_4, n) if n == (PAYLOAD_WORDS_4 * 4) as u32 => Some(PAYLOAD_WORDS_4),
         (MAGIC_3, n) if n == (PAYLOAD_WORDS_3 * 4) as u32 => Some(PAYLOAD_WORDS_3),
         (MAGIC_2, n) if n == (PAYLOAD_WORDS_2 * 4) as u32 => Some(PAYLOAD_WORDS_2),
         (MAGIC_1, n) if n == (PAYLOAD_WORDS_1 * 4) as u32 => Some(PAYLOAD_WORDS_1),
@@ -205,10 +233,14 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
     let words = layout(flash, slot);
     let with_mcodes = matches!(
         words,
-        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_3 | PAYLOAD_WORDS_2)
+        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_4 | PAYLOAD_WORDS_3 | PAYLOAD_WORDS_2)
     );
-    let with_reading = matches!(words, Some(PAYLOAD_WORDS | PAYLOAD_WORDS_3));
-    let with_wiring = words == Some(PAYLOAD_WORDS);
+    let with_reading = matches!(
+        words,
+        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_4 | PAYLOAD_WORDS_3)
+    );
+    let with_wiring = matches!(words, Some(PAYLOAD_WORDS | PAYLOAD_WORDS_4));
+    let with_homing = words == Some(PAYLOAD_WORDS);
     let mut i = 3;
     let mut next = || {
         let lo = u64::from(flash.read(slot, i));
@@ -272,6 +304,32 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
             invert: (v >> 16 & 0xFFFF) as u16,
             filter: filter as u8,
         };
+    }
+    if with_homing {
+        let flags = next();
+        if flags & !0x3F != 0 {
+            return None;
+        }
+        let rate = |v: i64| u32::try_from(v).ok();
+        let mut h = crate::homing::HomingConfig::NONE;
+        for (i, a) in h.axes.iter_mut().enumerate() {
+            let bits = flags >> (2 * i);
+            a.homes = bits & 1 != 0;
+            a.dir = if bits & 2 != 0 { -1 } else { 1 };
+        }
+        h.z_first = flags & 16 != 0;
+        h.required = flags & 32 != 0;
+        h.seek = rate(next())?;
+        h.locate = rate(next())?;
+        h.pulloff = Length::from_angstrom(next())?;
+        h.axes[0].home = Length::from_angstrom(next())?;
+        h.axes[1].home = Length::from_angstrom(next())?;
+        h.axes[0].travel = Length::from_angstrom(next())?;
+        h.axes[1].travel = Length::from_angstrom(next())?;
+        if !h.valid() {
+            return None;
+        }
+        o.homing = h;
     }
     Some(o)
 }
@@ -377,7 +435,57 @@ mod tests {
             invert: 1 | (k as u16 % 4) << 9,
             filter: (k * 7 % 101) as u8,
         };
+        o.homing.axes[0] = crate::homing::AxisHoming {
+            homes: k % 2 == 1,
+            dir: if k % 3 == 0 { -1 } else { 1 },
+            home: Length::from_angstrom(-3_000_000 * k).unwrap(),
+            travel: l("120.5"),
+        };
+        o.homing.axes[1].homes = true;
+        o.homing.axes[1].travel = l("400");
+        o.homing.seek = 1_000 * k as u32;
+        o.homing.pulloff = l("0.5");
+        o.homing.z_first = k % 2 == 0;
+        o.homing.required = k % 3 == 0;
         o
+    }
+
+    #[test]
+    fn a_record_of_the_layout_before_the_homing_still_loads() {
+        // An LTO4 record: up to the wiring; no axis homed.
+        let mut f = Nor::new();
+        let mut o = table(3);
+        let values = lengths(&o).take(LENGTHS + MCODE_VALUES + 2);
+        write_old(&mut f, 1, MAGIC_4, 12, values);
+        o.homing = crate::homing::HomingConfig::NONE;
+        assert_eq!(
+            load(&mut f),
+            Loaded {
+                offsets: kept(&o),
+                seq: 12
+            }
+        );
+        let seq = save(&mut f, &table(3), 12);
+        let got = load(&mut f);
+        assert_eq!((got.offsets, got.seq), (kept(&table(3)), seq));
+        assert!(got.offsets.homing.required);
+    }
+
+    #[test]
+    fn homing_settings_out_of_range_are_a_broken_record() {
+        // The flags' word (a bit beyond them), the seek (0), the pull-off
+        // (0), a travel beyond 10 m: each refused, the older record loads.
+        for (index, bad) in [(0, 64i64), (1, 0), (3, 0), (6, 100_001_000_000)] {
+            let mut f = Nor::new();
+            let seq = save(&mut f, &table(1), 0);
+            save(&mut f, &table(2), seq);
+            let last = RECORD_WORDS - 1;
+            let at = last - 2 * HOMING_VALUES + 2 * index;
+            f.slots[1][at] = bad as u64 as u32;
+            f.slots[1][at + 1] = ((bad as u64) >> 32) as u32;
+            f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
+            assert_eq!(load(&mut f).offsets, kept(&table(1)), "{index} {bad}");
+        }
     }
 
     #[test]
@@ -389,6 +497,7 @@ mod tests {
         o.mcodes = crate::interp::MCodes::new();
         o.reading = Reading::DEFAULT;
         o.wiring = crate::inputs::InputConfig::NONE;
+        o.homing = crate::homing::HomingConfig::NONE;
         write_old(&mut f, 0, MAGIC_1, 7, lengths(&o).take(LENGTHS));
         assert_eq!(
             load(&mut f),
@@ -414,6 +523,7 @@ mod tests {
         write_old(&mut f, 1, MAGIC_2, 9, values);
         o.reading = Reading::DEFAULT;
         o.wiring = crate::inputs::InputConfig::NONE;
+        o.homing = crate::homing::HomingConfig::NONE;
         assert_eq!(
             load(&mut f),
             Loaded {
@@ -436,6 +546,7 @@ mod tests {
         let values = lengths(&o).take(LENGTHS + MCODE_VALUES + 1);
         write_old(&mut f, 0, MAGIC_3, 11, values);
         o.wiring = crate::inputs::InputConfig::NONE;
+        o.homing = crate::homing::HomingConfig::NONE;
         assert_eq!(
             load(&mut f),
             Loaded {
@@ -456,8 +567,9 @@ mod tests {
             let seq = save(&mut f, &table(1), 0);
             save(&mut f, &table(2), seq);
             let last = RECORD_WORDS - 1;
-            f.slots[1][last - 2] = bad as u64 as u32;
-            f.slots[1][last - 1] = ((bad as u64) >> 32) as u32;
+            let at = last - 2 * HOMING_VALUES - 2;
+            f.slots[1][at] = bad as u64 as u32;
+            f.slots[1][at + 1] = ((bad as u64) >> 32) as u32;
             f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
             assert_eq!(load(&mut f).offsets, kept(&table(1)), "{bad:#x}");
         }
@@ -471,7 +583,7 @@ mod tests {
         // The newer record (slot 1) with the reading's word set to 8 and
         // its CRC made whole: refused, the older one loads.
         let last = RECORD_WORDS - 1;
-        f.slots[1][last - 4] = 8;
+        f.slots[1][last - 2 * HOMING_VALUES - 4] = 8;
         f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
         assert_eq!(sequence(&mut f, 1), Some(seq));
         assert_eq!(load(&mut f).offsets, kept(&table(1)));

@@ -245,6 +245,10 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
     fn outputs(&mut self, outputs: &core_nostd::outputs::Outputs) {
         self.motion.set_outputs(outputs);
     }
+
+    fn inputs_now(&mut self) -> Option<u16> {
+        Some(inputs::active())
+    }
 }
 
 impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P, S> {

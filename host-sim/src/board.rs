@@ -77,6 +77,9 @@ struct Axes {
     /// impulse prices (Å; X on the radius) that place them.
     lathe: Option<crate::lathe::Lathe>,
     prices: (i64, i64),
+    /// The registers the lathe's nuts last followed: the steps issued
+    /// since move them (registers set at rest do not).
+    lathe_seen: ImpulsePoint,
 }
 
 /// How far the wall clock ran from the step clock over the runs.
@@ -287,13 +290,14 @@ impl Shared {
             return;
         }
         let p = issued_of(a);
+        let seen = std::mem::replace(&mut a.lathe_seen, p);
         let (hx, hz) = a.prices;
         let Some(lathe) = a.lathe.as_mut() else {
             return;
         };
         let before = lathe.active();
         let mm = |n: i32, h: i64| n as f64 * h as f64 / 1e7;
-        let now = lathe.moved([mm(p.x.0, hx), mm(p.z.0, hz)]);
+        let now = lathe.moved_by([mm(p.x.0 - seen.x.0, hx), mm(p.z.0 - seen.z.0, hz)]);
         if now != before {
             let panel = self.panel.load(Ordering::Acquire) & !before | now;
             self.panel_locked(a, panel);
@@ -542,6 +546,10 @@ impl<W: Write> Io for Protocol<W> {
         a.stepper.set_spindle(outputs.rpm);
         a.outputs = *outputs;
     }
+
+    fn inputs_now(&mut self) -> Option<u16> {
+        Some(self.shared.panel.load(Ordering::Acquire))
+    }
 }
 
 impl<W: Write> Background for Protocol<W> {
@@ -575,7 +583,10 @@ impl<W: Write> Background for Protocol<W> {
     }
 
     fn set_issued(&mut self, registers: ImpulsePoint) {
-        self.shared.axes().stepper.set_issued(registers);
+        let mut a = self.shared.axes();
+        a.stepper.set_issued(registers);
+        // The registers set at rest: the lathe's nuts stay where they are.
+        a.lathe_seen = issued_of(&a);
     }
 
     fn take_record(&mut self) -> Record {
@@ -836,6 +847,7 @@ impl Board {
                 user_outputs: [false; 4],
                 user_inputs: [false; 4],
                 lathe: None,
+                lathe_seen: ImpulsePoint::default(),
                 prices: (50_000, 100_000),
             }),
             work: Condvar::new(),
@@ -911,8 +923,15 @@ impl Board {
     /// carriages follow the steps issued and trip its switches.
     pub fn set_lathe(&self, file: crate::lathe::MachineFile) {
         let mut a = self.shared.axes();
-        a.lathe = Some(crate::lathe::Lathe::new(file));
-        self.shared.carriage_moved(&mut a);
+        let p = issued_of(&a);
+        let (hx, hz) = a.prices;
+        let mm = |n: i32, h: i64| n as f64 * h as f64 / 1e7;
+        let mut lathe = crate::lathe::Lathe::new(file);
+        let active = lathe.moved([mm(p.x.0, hx), mm(p.z.0, hz)]);
+        a.lathe = Some(lathe);
+        a.lathe_seen = p;
+        let panel = self.shared.panel.load(Ordering::Acquire) | active;
+        self.shared.panel_locked(&mut a, panel);
     }
 
     /// The switches as the panel last set them.

@@ -2,9 +2,10 @@
 //! the switches its carriage trips from its own position, and the play of
 //! its leadscrew (`examples/machine.toml` documents every field).
 //!
-//! The carriage follows the leadscrew's nut, whose position is the
-//! registers times the impulse price (X on the radius: the cross-slide's
-//! own travel). With backlash `b` the carriage lags the nut by up to `b`
+//! The carriage follows the leadscrew's nut, which moves by the steps
+//! issued times the impulse price (X on the radius: the cross-slide's
+//! own travel); it starts where the registers put it, and setting the
+//! registers (`ZERO`, homing) moves nothing. With backlash `b` the carriage lags the nut by up to `b`
 //! after a reversal: it stays where it is until the nut has taken up the
 //! play (`c ∈ [n − b, n]`). A switch at `at` towards minus is active while
 //! the carriage is at or below `at` and releases above `at + hysteresis`;
@@ -92,6 +93,8 @@ pub struct Lathe {
     file: MachineFile,
     /// Where each carriage is, mm (X on the radius).
     carriage: [f64; 2],
+    /// Where each nut is, mm.
+    nut: [f64; 2],
     /// The carriages have been placed (at the first registers).
     started: bool,
     /// The switches active now.
@@ -105,6 +108,7 @@ impl Lathe {
         Lathe {
             file,
             carriage: [0.0; 2],
+            nut: [0.0; 2],
             started: false,
             active: 0,
         }
@@ -113,6 +117,7 @@ impl Lathe {
     /// The nuts moved to `nut` (mm, X on the radius): the carriages follow
     /// within their play; returns the switches active now.
     pub fn moved(&mut self, nut: [f64; 2]) -> u16 {
+        self.nut = nut;
         for (i, axis) in [&self.file.x, &self.file.z].into_iter().enumerate() {
             let c = &mut self.carriage[i];
             *c = if self.started {
@@ -141,6 +146,11 @@ impl Lathe {
         }
         self.started = true;
         self.active
+    }
+
+    /// The nuts moved by `by` (mm) from where they were.
+    pub fn moved_by(&mut self, by: [f64; 2]) -> u16 {
+        self.moved([self.nut[0] + by[0], self.nut[1] + by[1]])
     }
 
     /// Where the carriages are, mm (X on the radius).

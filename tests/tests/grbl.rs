@@ -393,12 +393,14 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
             "${n}: {all}"
         );
     }
-    // Kept and read back.
+    // Kept (or set through HOMING) and read back.
     for (line, back) in [
         ("$1=255", "$1=255\r\n"),
         ("$24=50.5", "$24=50.500\r\n"),
         ("$27=2", "$27=2.000\r\n"),
         ("$130=310", "$130=310.000\r\n"),
+        ("$23=4", "$23=4\r\n"),
+        ("$22=5", "$22=7\r\n"),
     ] {
         assert_eq!(
             text(&mut dev, format!("{line}\n").as_bytes()),
@@ -415,7 +417,7 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     assert!(now.contains("$100=160.000\r\n"), "{now}");
     assert!(now.contains("$12=0.0020\r\n"), "{now}");
     // Values the setting already has are accepted.
-    for line in ["$2=0", "$13=0", "$20=0", "$21=0", "$22=0", "$32=2"] {
+    for line in ["$2=0", "$13=0", "$20=0", "$21=0", "$32=2"] {
         assert_eq!(
             text(&mut dev, format!("{line}\n").as_bytes()),
             "ok\r\n",
@@ -429,7 +431,9 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
         ("$5=2", "error:3"),
         ("$14=1", "error:3"),
         ("$6=3", "error:3"),
-        ("$22=1", "error:3"),
+        ("$22=8", "error:3"),
+        ("$23=2", "error:3"),
+        ("$27=0", "error:20"),
         ("$13=1", "error:3"),
         ("$32=1", "error:3"),
         ("$100=1280", "error:3"),

@@ -347,6 +347,14 @@ pub trait Io {
         let _ = outputs;
     }
 
+    /// The inputs active now, filtered, where the transport reads
+    /// switches (a board, a simulated machine); `None` where it has none
+    /// (nothing can home there). The homing cycle reads its switch
+    /// through this while it waits for the motion.
+    fn inputs_now(&mut self) -> Option<u16> {
+        None
+    }
+
     /// For a `!STATUS` line: how the transport keeps time, where it
     /// measures it (a board); the line then ends with `LAT= LATE=`.
     fn timing(&mut self) -> Option<Timing> {
@@ -458,6 +466,12 @@ macro_rules! forward_motion {
             if !(false $(|| self.$flag)?) {
                 self.inner.outputs(outputs);
             }
+        }
+        fn inputs_now(&mut self) -> Option<u16> {
+            if false $(|| self.$flag)? {
+                return None;
+            }
+            self.inner.inputs_now()
         }
     };
 }

@@ -54,6 +54,10 @@ pub enum Command {
     Unlock,
     /// `INPUT`: the inputs wired, their level, the filter.
     Input,
+    /// `HOMING`: the homing cycle's settings.
+    Homing,
+    /// `HOME`: the homing cycle.
+    Home,
     /// `TOOL`: a row of the tool table.
     Tool,
     /// `WORK`: a work offset.
@@ -106,7 +110,7 @@ const fn calc(mut s: Spec) -> Spec {
 
 /// Every request of the pendant protocol, in the order `docs/protocol.md`
 /// gives them.
-pub const REQUESTS: [Spec; 26] = [
+pub const REQUESTS: [Spec; 28] = [
     spec(Command::Ver, "VER"),
     spec(Command::Cfg, "CFG HX HZ DIAM RN TIP TOL PASS"),
     spec(Command::Cone, "CONE A RN"),
@@ -125,6 +129,11 @@ pub const REQUESTS: [Spec; 26] = [
     spec(Command::Reset, "RESET"),
     spec(Command::Unlock, "UNLOCK"),
     spec(Command::Input, "INPUT USED INVERT FILTER"),
+    spec(
+        Command::Homing,
+        "HOMING AXES DIRX DIRZ HOMEX HOMEZ TRAVELX TRAVELZ SEEK LOCATE PULLOFF ORDER REQUIRED",
+    ),
+    spec(Command::Home, "HOME AXES"),
     spec(Command::Gear, "GEAR N TOP"),
     spec(Command::Mcode, "MCODE M DO N"),
     spec(Command::Session, "SESSION TOKEN"),
@@ -194,6 +203,8 @@ impl Command {
             Command::Reset => &["RESET"],
             Command::Unlock => &["UNLOCK"],
             Command::Input => &["INPUT [USED=names|-] [INVERT=names|-] [FILTER=0..100]"],
+            Command::Homing => &["HOMING [AXES=X|Z|XZ|-] [DIRX=+|-] [DIRZ=+|-] [HOMEX=] [HOMEZ=] [TRAVELX=] [TRAVELZ=] [SEEK=] [LOCATE=] [PULLOFF=] [ORDER=XZ|ZX] [REQUIRED=0|1]"],
+            Command::Home => &["HOME [AXES=X|Z|XZ]"],
             Command::Gear => &["GEAR [N=1..4 TOP=]"],
             Command::Mcode => &["MCODE [M= [DO=STOP|NONE|ON|OFF|HIGH|LOW] [N=1..4]]"],
             Command::Session => &["SESSION [TOKEN=n]"],

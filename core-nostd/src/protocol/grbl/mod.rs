@@ -297,10 +297,39 @@ pub fn line<I: Io + ?Sized>(
                     t.line(b"[MSG:Caution: Unlocked]");
                 }
             }
-            (Some(b'H'), 2) => {
-                t.outcome = Some(Err(5));
-                t.message
-                    .push_bytes(b"no homing cycle: these lathes have no home switches");
+            (Some(b'H'), 2 | 3) => {
+                // `$H`, `$HX`, `$HZ`: the homing cycle (its failure is an
+                // alarm, `ALARM:6`, `8` or `9`); home, the alarm of a reset
+                // in motion is cleared as `$X` clears it.
+                let axes = match upper(2) {
+                    None => Some(None),
+                    Some(b'X') => Some(Some("X")),
+                    Some(b'Z') => Some(Some("Z")),
+                    Some(_) => None,
+                };
+                match axes {
+                    Some(_) if session.homing().order().next().is_none() => {
+                        // grbl's error 5: homing not enabled.
+                        t.outcome = Some(Err(5));
+                        t.message.push_bytes(
+                            b"homing is off: $22=1 turns it on, $23 sets the switches' sides, $130/$132 the travels",
+                        );
+                    }
+                    Some(axes) => {
+                        let named = [("AXES", axes.unwrap_or(""))];
+                        let args: &[(&str, &str)] = if axes.is_some() { &named } else { &[] };
+                        if let Ok(request) = Request::command(Command::Home, args) {
+                            session.request(&request, &mut t);
+                        }
+                    }
+                    None => {
+                        t.outcome = Some(Err(3));
+                        t.message.push_bytes(b"$HX or $HZ: a lathe has X and Z");
+                    }
+                }
+                if t.outcome == Some(Ok(())) {
+                    front.alarm = None;
+                }
             }
             (Some(b'J'), _) if upper(2) == Some(b'=') => {
                 if let Some(a) = front.alarm {

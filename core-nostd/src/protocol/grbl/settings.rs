@@ -4,7 +4,20 @@ use super::front::*;
 use super::report::*;
 use super::translate::*;
 use crate::inputs::{write_names, Input};
-use crate::length::Length;
+use crate::length::{write_exact_mm, Length};
+
+/// A length as grbl prints its settings, with three decimals (more only
+/// where the value has them).
+fn write_mm3(l: &mut ReplyLine, angstrom: i64) {
+    if angstrom % 10_000 == 0 {
+        let um = angstrom / 10_000;
+        let sign = if um < 0 { "-" } else { "" };
+        let um = um.unsigned_abs();
+        let _ = write!(l, "{sign}{}.{:03}", um / 1000, um % 1000);
+    } else {
+        let _ = write_exact_mm(l, angstrom);
+    }
+}
 use crate::protocol::io::Io;
 use crate::protocol::reply::ReplyLine;
 use crate::protocol::request::{Command, Request};
@@ -50,6 +63,13 @@ pub(super) enum Place {
         bits: &'static [(u8, u16)],
         other: &'static str,
     },
+    /// `$22`, grblHAL's homing mask: bit 0 the cycle on (`HOMING
+    /// AXES=XZ`, else `-`), bit 1 single-axis commands (always on here),
+    /// bit 2 homing required at power-on (`REQUIRED`).
+    HomingCycle,
+    /// `$23`, the homing direction mask: a bit set homes its axis
+    /// towards minus (`HOMING DIRX= DIRZ=`): bit 0 X, bit 2 Z.
+    HomingDirs,
 }
 
 /// The limit switches of X and of Z.
@@ -143,7 +163,7 @@ pub(super) const SETTINGS: [Setting; 34] = [
         Place::Fixed(
             b"0",
             10,
-            "soft limits need homing, which this board has not",
+            "soft limits are not on this controller yet",
         ),
     ),
     setting(
@@ -154,15 +174,27 @@ pub(super) const SETTINGS: [Setting; 34] = [
             other: "0 or 1 (hard limits on all four switches; INPUT USED= wires fewer)",
         },
     ),
+    setting(22, Place::HomingCycle),
+    setting(23, Place::HomingDirs),
     setting(
-        22,
-        Place::Fixed(b"0", 3, "this controller has no homing cycle yet"),
+        24,
+        Place::Request(Command::Homing, "LOCATE", |s, l| {
+            write_mm3(l, i64::from(s.homing().locate) * 10_000);
+        }),
     ),
-    setting(23, Place::Kept(2, false)),
-    setting(24, Place::Kept(3, true)),
-    setting(25, Place::Kept(4, true)),
+    setting(
+        25,
+        Place::Request(Command::Homing, "SEEK", |s, l| {
+            write_mm3(l, i64::from(s.homing().seek) * 10_000);
+        }),
+    ),
     setting(26, Place::Kept(5, false)),
-    setting(27, Place::Kept(6, true)),
+    setting(
+        27,
+        Place::Request(Command::Homing, "PULLOFF", |s, l| {
+            write_mm3(l, s.homing().pulloff.as_angstrom());
+        }),
+    ),
     setting(
         30,
         Place::Request(Command::Aux, "SMAX", |s, l| {
@@ -203,8 +235,18 @@ pub(super) const SETTINGS: [Setting; 34] = [
             let _ = write!(l, "{}", s.machine().limits().accel(1));
         }),
     ),
-    setting(130, Place::Kept(7, true)),
-    setting(132, Place::Kept(8, true)),
+    setting(
+        130,
+        Place::Request(Command::Homing, "TRAVELX", |s, l| {
+            write_mm3(l, s.homing().axes[0].travel.as_angstrom());
+        }),
+    ),
+    setting(
+        132,
+        Place::Request(Command::Homing, "TRAVELZ", |s, l| {
+            write_mm3(l, s.homing().axes[1].travel.as_angstrom());
+        }),
+    ),
     // This controller's own, in the range grblHAL leaves to no public
     // setting: how G-code lines are read, as `OPT` sets it.
     setting(
@@ -258,6 +300,17 @@ pub(super) fn settings<I: Io + ?Sized>(
             }
             Place::Choice(_, _, _, which) => {
                 let _ = write!(l, "{}", which(session));
+            }
+            Place::HomingCycle => {
+                let h = session.homing();
+                let on = h.order().next().is_some();
+                let mask = (u8::from(on) * 3) | (u8::from(h.required) << 2);
+                let _ = write!(l, "{mask}");
+            }
+            Place::HomingDirs => {
+                let h = session.homing();
+                let mask = u8::from(h.axes[0].dir < 0) | u8::from(h.axes[1].dir < 0) << 2;
+                let _ = write!(l, "{mask}");
             }
             Place::Inputs { used, bits, .. } => {
                 let w = session.wiring();
@@ -338,9 +391,10 @@ pub(super) fn set<I: Io + ?Sized>(
     match s.place {
         Place::Request(command, key, _) => {
             // One word of printable ASCII, as in a request line.
+            // A number, as grbl reads a setting's value.
             let word = core::str::from_utf8(v)
                 .ok()
-                .filter(|w| w.bytes().all(|b| b.is_ascii_graphic()));
+                .filter(|w| Length::from_gcode_mm(w).is_ok());
             let Some(word) = word else {
                 return refuse_setting(io, 2, s.n, b"a number");
             };
@@ -431,6 +485,32 @@ pub(super) fn set<I: Io + ?Sized>(
                         );
                     }
                 }
+            }
+        }
+        Place::HomingCycle => {
+            let Some(mask) = parse_setting(v, false).filter(|m| m & !7 == 0) else {
+                return refuse_setting(
+                    io,
+                    3,
+                    s.n,
+                    b"bits 0 homing on, 1 single-axis $HX/$HZ, 2 homing required at power-on",
+                );
+            };
+            let axes = if mask & 1 != 0 { "XZ" } else { "-" };
+            let required = if mask & 4 != 0 { "1" } else { "0" };
+            match Request::command(Command::Homing, &[("AXES", axes), ("REQUIRED", required)]) {
+                Ok(request) => session.request(&request, io),
+                Err(_) => refuse_setting(io, 3, s.n, b"not a key of HOMING"),
+            }
+        }
+        Place::HomingDirs => {
+            let Some(mask) = parse_setting(v, false).filter(|m| m & !5 == 0) else {
+                return refuse_setting(io, 3, s.n, b"bit 0 X, bit 2 Z: a lathe has no Y");
+            };
+            let sign = |bit: u32| if mask & bit != 0 { "-" } else { "+" };
+            match Request::command(Command::Homing, &[("DIRX", sign(1)), ("DIRZ", sign(4))]) {
+                Ok(request) => session.request(&request, io),
+                Err(_) => refuse_setting(io, 3, s.n, b"not a key of HOMING"),
             }
         }
         Place::Inputs { used, bits, other } => {

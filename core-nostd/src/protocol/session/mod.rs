@@ -36,6 +36,7 @@ mod cycle_moves;
 mod cycle_state;
 mod cycles;
 mod gcode;
+mod homing;
 mod inputs;
 mod moves;
 mod offsets;
@@ -429,6 +430,8 @@ impl Session {
             }
             Command::Reset => self.reset_command(io),
             Command::Unlock => self.unlock_command(io),
+            Command::Homing => self.homing_command(args, io),
+            Command::Home => self.home_command(args, io),
             Command::Input => self.input_command(args, io),
             Command::Pos => {
                 self.pos_reply(io);

@@ -199,11 +199,22 @@ impl Session {
     pub fn restore_offsets(&mut self, offsets: Offsets) {
         self.offsets = offsets;
         self.prog = self.work_point(self.cmd);
+        self.power_on_homing();
     }
 
     /// New offsets; what a board keeps of them changed or not.
     pub(super) fn take_offsets(&mut self, new: Offsets) {
-        let kept = |o: &Offsets| (o.work, o.tools, o.reference, o.mcodes, o.reading, o.wiring);
+        let kept = |o: &Offsets| {
+            (
+                o.work,
+                o.tools,
+                o.reference,
+                o.mcodes,
+                o.reading,
+                o.wiring,
+                o.homing,
+            )
+        };
         if kept(&new) != kept(&self.offsets) {
             self.generation = self.generation.wrapping_add(1);
         }

@@ -10,6 +10,7 @@ use std::vec::Vec;
 
 mod compensation;
 mod cycles;
+mod homing;
 mod inputs;
 mod machine;
 mod programs;

@@ -1,0 +1,197 @@
+//! The homing cycle on the simulated machine (`docs/inputs.md` §8): a
+//! lathe from a machine file behind the simulated board, its carriages
+//! tripping their switches where the file puts them.
+
+use core_nostd::protocol::{Device, Io};
+use host_sim::board::{serve_pty, Board, Pace};
+use host_sim::lathe::MachineFile;
+use host_sim::link::{Client, Reply};
+use std::path::PathBuf;
+use std::time::Duration;
+
+struct Nowhere;
+impl Io for Nowhere {
+    fn send(&mut self, _: &[u8]) {}
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The example lathe behind a board speaking the pendant protocol, its
+/// four limit switches wired, radius mode.
+fn lathe() -> (Board, Client) {
+    let text = std::fs::read_to_string(root().join("examples/machine.toml")).expect("file");
+    let file = MachineFile::parse(&text).expect("the example parses");
+    let mut device = Device::new();
+    device.receive_bytes(b"CFG DIAM=0\nINPUT USED=X-,X+,Z-,Z+\n", &mut Nowhere);
+    let (path, board) = serve_pty(device, Pace::Wall(8.0)).expect("pty");
+    board.set_lathe(file);
+    let mut c = Client::open(&path, Duration::from_secs(30)).expect("open");
+    c.drain();
+    (board, c)
+}
+
+fn ask(c: &mut Client, line: &str) -> Reply {
+    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
+    c.read_reply().expect("reply")
+}
+
+/// The carriages' own positions (play included), mm, from the panel.
+fn carriage(board: &Board) -> (f64, f64) {
+    let state = board.panel_line("STATE?").expect("state").expect("a line");
+    let v = |k: &str| -> f64 {
+        host_sim::link::words_value(&state, k)
+            .and_then(|v| v.parse().ok())
+            .expect(&state)
+    };
+    (v("X"), v("Z"))
+}
+
+/// Homing twice from two different places ends with the carriages at the
+/// same place, a pull-off short of their switches, and the machine
+/// position there is the home set; the position is then no longer lost.
+#[test]
+fn homing_ends_at_the_same_place_wherever_it_starts() {
+    let (board, mut c) = lathe();
+    let set = ask(
+        &mut c,
+        "HOMING AXES=XZ HOMEX=70 HOMEZ=0 TRAVELX=77 TRAVELZ=405 SEEK=3000 LOCATE=300 PULLOFF=1",
+    );
+    assert!(set.is_ok(), "{set:?}");
+    assert_eq!(set.value("ORDER"), Some("XZ"));
+    let first = ask(&mut c, "HOME");
+    assert_eq!(first.last, "OK MX=70 MZ=0", "{first:?}");
+    let at_first = carriage(&board);
+    // X's switch trips at 74 (the nut at 74.08, 0.08 of play), Z's at 4
+    // (the nut at 4.15): home is a pull-off of 1 mm back from where the
+    // slow approach tripped it.
+    assert!((72.9..73.1).contains(&at_first.0), "{at_first:?}");
+    assert!((3.1..3.2).contains(&at_first.1), "{at_first:?}");
+    let pos = ask(&mut c, "STATUS");
+    assert!(!pos.last.contains("LOST=1"), "{pos:?}");
+    // Elsewhere, then home again.
+    assert!(ask(&mut c, "MOVE X=20 Z=-150").is_ok());
+    assert!(ask(&mut c, "SYNC").is_ok());
+    let second = ask(&mut c, "HOME");
+    assert_eq!(second.last, "OK MX=70 MZ=0", "{second:?}");
+    let at_second = carriage(&board);
+    // The same place, within one impulse of each axis.
+    assert!(
+        (at_second.0 - at_first.0).abs() <= 0.0051,
+        "{at_first:?} {at_second:?}"
+    );
+    assert!(
+        (at_second.1 - at_first.1).abs() <= 0.0101,
+        "{at_first:?} {at_second:?}"
+    );
+    // A move to the machine position 60 goes 10 mm from home.
+    assert!(ask(&mut c, "MOVE X=60").is_ok());
+    assert!(ask(&mut c, "SYNC").is_ok());
+    let moved = carriage(&board);
+    assert!((at_second.0 - moved.0 - 10.0).abs() < 0.1, "{moved:?}");
+}
+
+/// A seek that runs its whole length without its switch raises alarm 9
+/// and locks the machine until it is unlocked (the position stays lost);
+/// an axis with no switch wired is refused before anything moves.
+#[test]
+fn a_switch_not_found_within_the_travel_raises_alarm_9() {
+    let (board, mut c) = lathe();
+    // 10 mm of travel: the seek (15 mm) stops far short of 74.
+    assert!(ask(&mut c, "HOMING AXES=X TRAVELX=10 SEEK=3000").is_ok());
+    c.write_raw(b"HOME\n").expect("write");
+    let alarm = c.read_line().expect("alarm");
+    assert!(
+        alarm.starts_with("!ALARM CODE=9 INPUT=X+ AXIS=X PX="),
+        "{alarm}"
+    );
+    let reply = c.read_reply().expect("reply");
+    assert!(
+        reply.last.starts_with("ERR ALARM 9: homing did not find"),
+        "{reply:?}"
+    );
+    let (x, _) = carriage(&board);
+    assert!((14.9..15.1).contains(&x), "the whole seek ran: {x}");
+    let refused = ask(&mut c, "MOVE X=0");
+    assert!(refused.last.starts_with("ERR ALARM 9"), "{refused:?}");
+    let unlocked = ask(&mut c, "UNLOCK");
+    assert_eq!(unlocked.last, "OK LOST=1");
+    assert!(ask(&mut c, "MOVE X=0").is_ok());
+    // Z homes on a switch no longer wired: refused, nothing moves.
+    assert!(ask(&mut c, "INPUT USED=X-,X+").is_ok());
+    assert!(ask(&mut c, "HOMING AXES=XZ DIRZ=- TRAVELZ=405").is_ok());
+    let before = carriage(&board);
+    let refused = ask(&mut c, "HOME AXES=Z");
+    assert!(
+        refused.last.contains("no limit switch wired"),
+        "{refused:?}"
+    );
+    assert_eq!(carriage(&board), before);
+}
+
+/// A grbl sender homes with grbl's settings: `$22` on, `$23` the sides,
+/// `$24`/`$25` the rates, `$27` the pull-off, `$130`/`$132` the travels;
+/// `$H` answers `ok` and the machine position is the home (0), `$HX`
+/// homes X alone; a seek that finds nothing is `ALARM:9`, cleared by `$X`.
+#[test]
+fn a_grbl_sender_homes_with_grbls_settings() {
+    let text = std::fs::read_to_string(root().join("examples/machine.toml")).expect("file");
+    let file = MachineFile::parse(&text).expect("the example parses");
+    let mut device = Device::new();
+    device.receive_bytes(b"CFG DIAM=0\nINPUT USED=X-,X+,Z-,Z+\n", &mut Nowhere);
+    device.set_grbl(true, &mut Nowhere);
+    let (path, board) = serve_pty(device, Pace::Wall(8.0)).expect("pty");
+    board.set_lathe(file);
+    let mut c = Client::open(&path, Duration::from_secs(30)).expect("open");
+    // A board greets the sender that opens its port.
+    assert_eq!(c.read_line().expect("banner"), "");
+    assert!(c.read_line().expect("banner").starts_with("Grbl 1.1h"));
+    let say = |c: &mut Client, line: &str| -> Vec<String> {
+        c.write_raw(format!("{line}\n").as_bytes()).expect("write");
+        let mut got = Vec::new();
+        loop {
+            let l = c.read_line().expect("line");
+            let end = l == "ok" || l.starts_with("error:");
+            got.push(l);
+            if end {
+                return got;
+            }
+        }
+    };
+    assert_eq!(
+        say(&mut c, "$H"),
+        [
+            "[MSG:homing is off: $22=1 turns it on, $23 sets the switches' sides, \
+             $130/$132 the travels]",
+            "error:5"
+        ]
+    );
+    for line in [
+        "$22=1", "$23=0", "$24=300", "$25=3000", "$27=1", "$130=77", "$132=405",
+    ] {
+        assert_eq!(say(&mut c, line), ["ok"], "{line}");
+    }
+    assert_eq!(say(&mut c, "$H"), ["ok"]);
+    let homed = carriage(&board);
+    assert!((72.9..73.1).contains(&homed.0), "{homed:?}");
+    c.write_raw(b"?").expect("status");
+    let report = c.read_line().expect("report");
+    assert!(
+        report.starts_with("<Idle|MPos:0.0000,0.0000,0.0000|"),
+        "{report}"
+    );
+    // X alone, from elsewhere.
+    assert_eq!(say(&mut c, "G0 X-20"), ["ok"]);
+    assert_eq!(say(&mut c, "$HX"), ["ok"]);
+    assert!((carriage(&board).0 - homed.0).abs() <= 0.0051);
+    // A travel too short for the switch: alarm 9.
+    assert_eq!(say(&mut c, "$132=1"), ["ok"]);
+    assert_eq!(say(&mut c, "G0 Z-50"), ["ok"]);
+    let r = say(&mut c, "$HZ");
+    assert_eq!(r.first().map(String::as_str), Some("ALARM:9"), "{r:?}");
+    assert_eq!(r.last().map(String::as_str), Some("error:9"), "{r:?}");
+    let r = say(&mut c, "G0 Z0");
+    assert_eq!(r.last().map(String::as_str), Some("error:9"), "{r:?}");
+    assert_eq!(say(&mut c, "$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+}
