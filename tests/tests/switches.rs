@@ -258,3 +258,74 @@ fn the_door_holds_a_cut_until_closed_and_cycle_start_on_the_paced_firmware() {
     client.write_raw(b"POS\n").unwrap();
     assert!(line(&mut client).starts_with("OK PX=0 PZ=-3000 "));
 }
+
+/// The homing cycle on the paced firmware: the test is Z's switch, at
+/// Z −20 mm of the registers before homing (−2000 impulses), releasing 0.2
+/// mm above; it reads the registers from status bytes while `HOME` runs
+/// and sets the pin as the carriage passes. The cycle seeks, pulls off,
+/// locates and pulls off on its own, answers with the machine position
+/// set, and the switch was tripped twice (seek and locate) without an
+/// alarm.
+#[test]
+fn the_paced_firmware_homes_on_its_switch() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client, mut panel) = booted("homing-paced", "qemu-paced");
+    // The request's line (status lines the test asked for skipped).
+    let ask = |client: &mut Client, line: &str| -> String {
+        client.write_raw(format!("{line}\n").as_bytes()).unwrap();
+        loop {
+            let l = board_line(&client.read_line().unwrap());
+            if !l.starts_with("!STATUS") {
+                return l;
+            }
+        }
+    };
+    assert!(ask(&mut client, "INPUT USED=Z- FILTER=0").starts_with("OK"));
+    let set = ask(
+        &mut client,
+        "HOMING AXES=Z DIRZ=- HOMEZ=-1.5 TRAVELZ=30 SEEK=900 LOCATE=120 PULLOFF=0.5",
+    );
+    assert!(set.starts_with("OK AXES=Z DIRX=+ DIRZ=-"), "{set}");
+    panel.sample(QUIET, 3).unwrap();
+    client.write_raw(b"HOME\n").unwrap();
+    let (mut pressed, mut trips) = (false, 0);
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let last = loop {
+        assert!(Instant::now() < deadline, "HOME did not end");
+        client.write_raw(b"\x80").unwrap();
+        let l = board_line(&client.read_line().unwrap());
+        if !l.starts_with("!STATUS") {
+            break l;
+        }
+        let pz: i64 = l
+            .split(" PZ=")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .expect(&l);
+        let now = if pressed { pz <= -1_980 } else { pz <= -2_000 };
+        if now != pressed {
+            pressed = now;
+            trips += usize::from(now);
+            let pins = if now {
+                QUIET | Input::LimitZMinus.bit()
+            } else {
+                QUIET
+            };
+            panel.sample(pins, 1).unwrap();
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert_eq!(last, host_sim::link::with_checksum("OK MX=0 MZ=-1.5"));
+    assert_eq!(trips, 2, "seek and locate");
+    assert!(!pressed, "pulled off the switch");
+    let pos = ask(&mut client, "POS");
+    assert!(pos.starts_with("OK PX=0 PZ=-150 "), "{pos}");
+    let status = ask(&mut client, "STATUS");
+    assert!(
+        status.starts_with("OK STATE=IDLE") && !status.contains("LOST"),
+        "{status}"
+    );
+}
