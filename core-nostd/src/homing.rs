@@ -52,6 +52,9 @@ pub struct HomingConfig {
     /// Nothing moves at power-on until the machine is homed (grbl's
     /// alarm 11).
     pub required: bool,
+    /// Soft limits: once an axis is homed, motion that would leave its
+    /// travel is refused before it starts (grbl's `$20`).
+    pub soft: bool,
 }
 
 /// `n` mm, for the constants (within the length's limit).
@@ -79,6 +82,7 @@ impl HomingConfig {
         pulloff: mm(1),
         z_first: false,
         required: false,
+        soft: false,
     };
 
     /// The axes homed (0 X, 1 Z), in the cycle's order.
@@ -100,6 +104,23 @@ impl HomingConfig {
                     && a.travel >= Length::ZERO
                     && a.travel <= MAX_LENGTH
             })
+    }
+}
+
+impl AxisHoming {
+    /// The machine positions the axis may reach once homed: its travel
+    /// from home, away from the switch.
+    pub fn window(&self) -> Option<(Length, Length)> {
+        let far = if self.dir > 0 {
+            self.home.checked_sub(self.travel)?
+        } else {
+            self.home.checked_add(self.travel)?
+        };
+        Some(if far < self.home {
+            (far, self.home)
+        } else {
+            (self.home, far)
+        })
     }
 }
 

@@ -401,6 +401,7 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
         ("$130=310", "$130=310.000\r\n"),
         ("$23=4", "$23=4\r\n"),
         ("$22=5", "$22=7\r\n"),
+        ("$20=1", "$20=1\r\n"),
     ] {
         assert_eq!(
             text(&mut dev, format!("{line}\n").as_bytes()),
@@ -417,7 +418,7 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     assert!(now.contains("$100=160.000\r\n"), "{now}");
     assert!(now.contains("$12=0.0020\r\n"), "{now}");
     // Values the setting already has are accepted.
-    for line in ["$2=0", "$13=0", "$20=0", "$21=0", "$32=2"] {
+    for line in ["$2=0", "$13=0", "$21=0", "$32=2"] {
         assert_eq!(
             text(&mut dev, format!("{line}\n").as_bytes()),
             "ok\r\n",
@@ -426,7 +427,7 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     }
     // Refused with grbl's codes, nothing changed.
     for (line, code) in [
-        ("$20=1", "error:10"),
+        ("$20=2", "error:20"),
         ("$21=2", "error:3"),
         ("$5=2", "error:3"),
         ("$14=1", "error:3"),

@@ -92,6 +92,60 @@ fn homing_ends_at_the_same_place_wherever_it_starts() {
     assert!((at_second.0 - moved.0 - 10.0).abs() < 0.1, "{moved:?}");
 }
 
+/// Soft limits once homed: X homes to 70 towards plus with 77 mm of
+/// travel, so X may reach −7 … 70. A move, a G-code block, an arc, a grbl
+/// jog beyond are refused before anything moves (grbl's error 15); within
+/// they run. Setting the machine position by hand (`ZERO`) ends them.
+#[test]
+fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
+    let (board, mut c) = lathe();
+    let set = ask(
+        &mut c,
+        "HOMING AXES=X HOMEX=70 TRAVELX=77 SEEK=3000 LOCATE=300 PULLOFF=1 SOFT=1",
+    );
+    assert!(set.last.ends_with(" SOFT=1"), "{set:?}");
+    // Not homed yet: nothing refused.
+    assert!(ask(&mut c, "MOVE X=20").is_ok());
+    assert!(ask(&mut c, "HOME").is_ok());
+    let home = carriage(&board);
+    for (request, axis) in [
+        ("MOVE X=70.01", "X"),
+        ("MOVE X=-7.5", "X"),
+        ("G01 X71 F500", "X"),
+        ("G01 X69 F500", ""),
+        // A quarter circle from X69 Z0 to X60 Z-9 about X60 Z0 bulges to
+        // X69 only; about X69 Z-9 (the other way) to X78: refused.
+        ("G03 X60 Z-9 I-9 K0", ""),
+        ("G00 X69 Z0", ""),
+        ("G02 X60 Z-9 I0 K-9", ""),
+        ("G00 X69 Z0", ""),
+        ("G03 X78 Z-9 I0 K-9", "X"),
+    ] {
+        let r = ask(&mut c, request);
+        if axis.is_empty() {
+            assert!(r.is_ok(), "{request}: {r:?}");
+        } else {
+            assert!(
+                r.last
+                    .starts_with(&format!("ERR RANGE {axis} would leave its travel")),
+                "{request}: {r:?}"
+            );
+        }
+    }
+    assert!(ask(&mut c, "SYNC").is_ok());
+    let (x, _) = carriage(&board);
+    // 1 mm short of home, the play (0.08) short again when it arrives
+    // moving towards plus.
+    assert!(
+        (home.0 - 1.0 - x).abs() < 0.09,
+        "at X69: {x} (home {home:?})"
+    );
+    // Set by hand: the machine position is no longer homing's.
+    assert!(ask(&mut c, "ZERO X=0").is_ok());
+    assert!(ask(&mut c, "MOVE X=5").is_ok());
+    assert!(ask(&mut c, "SYNC").is_ok());
+}
+
 /// A seek that runs its whole length without its switch raises alarm 9
 /// and locks the machine until it is unlocked (the position stays lost);
 /// an axis with no switch wired is refused before anything moves.
@@ -181,6 +235,13 @@ fn a_grbl_sender_homes_with_grbls_settings() {
         report.starts_with("<Idle|MPos:0.0000,0.0000,0.0000|"),
         "{report}"
     );
+    // Soft limits ($20): X may go from 0 down to -77; a jog beyond is
+    // grbl's error 15, one within runs.
+    assert_eq!(say(&mut c, "$20=1"), ["ok"]);
+    let r = say(&mut c, "$J=G91 G21 X0.5 F500");
+    assert_eq!(r.last().map(String::as_str), Some("error:15"), "{r:?}");
+    assert_eq!(say(&mut c, "$J=G91 G21 X-0.5 F500"), ["ok"]);
+    assert_eq!(say(&mut c, "$20=0"), ["ok"]);
     // X alone, from elsewhere.
     assert_eq!(say(&mut c, "G0 X-20"), ["ok"]);
     assert_eq!(say(&mut c, "$HX"), ["ok"]);

@@ -160,11 +160,9 @@ pub(super) const SETTINGS: [Setting; 34] = [
     ),
     setting(
         20,
-        Place::Fixed(
-            b"0",
-            10,
-            "soft limits are not on this controller yet",
-        ),
+        Place::Request(Command::Homing, "SOFT", |s, l| {
+            let _ = write!(l, "{}", u8::from(s.homing().soft));
+        }),
     ),
     setting(
         21,

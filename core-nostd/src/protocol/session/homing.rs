@@ -90,7 +90,7 @@ impl Session {
     /// [TRAVELZ=] [SEEK=] [LOCATE=] [PULLOFF=] [ORDER=XZ|ZX]
     /// [REQUIRED=0|1]`.
     pub(super) fn homing_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
-        let [axes, dir_x, dir_z, home_x, home_z, travel_x, travel_z, seek, locate, pulloff, order, required] =
+        let [axes, dir_x, dir_z, home_x, home_z, travel_x, travel_z, seek, locate, pulloff, order, required, soft] =
             args.values();
         let mut h = self.offsets.homing;
         if let Some(v) = axes {
@@ -155,6 +155,9 @@ impl Session {
         if let Some(v) = required {
             h.required = parse_flag("REQUIRED", v)?;
         }
+        if let Some(v) = soft {
+            h.soft = parse_flag("SOFT", v)?;
+        }
         let mut offsets = self.offsets;
         offsets.homing = h;
         self.take_offsets(offsets);
@@ -182,9 +185,10 @@ impl Session {
         exact(&mut line, "PULLOFF", h.pulloff.as_angstrom());
         let _ = write!(
             line,
-            " ORDER={} REQUIRED={}",
+            " ORDER={} REQUIRED={} SOFT={}",
             if h.z_first { "ZX" } else { "XZ" },
-            u8::from(h.required)
+            u8::from(h.required),
+            u8::from(h.soft)
         );
         io.send(line.finish());
         Ok(())
@@ -357,6 +361,44 @@ impl Session {
         self.cmd = cmd;
         self.pos = pos;
         self.prog = self.work_point(cmd);
+        if let Some(homed) = self.homed.get_mut(axis) {
+            *homed = true;
+        }
+        Ok(())
+    }
+
+    /// Refuses a point `to` (registers) outside the travel of an axis
+    /// homed, with soft limits on (grbl's error 15, travel exceeded).
+    pub(super) fn soft_check(&self, to: ImpulsePoint) -> Result<(), Refusal<'static>> {
+        let h = &self.offsets.homing;
+        if !h.soft {
+            return Ok(());
+        }
+        let axes = [
+            (
+                to.x,
+                self.cfg.hx,
+                "X would leave its travel (soft limits: HOMING SOFT=, TRAVELX=)",
+            ),
+            (
+                to.z,
+                self.cfg.hz,
+                "Z would leave its travel (soft limits: HOMING SOFT=, TRAVELZ=)",
+            ),
+        ];
+        for ((a, homed), (n, price, why)) in h.axes.iter().zip(self.homed).zip(axes) {
+            if !homed {
+                continue;
+            }
+            let Some((lo, hi)) = a.window() else {
+                continue;
+            };
+            // A register times its price is a machine position.
+            let at = i64::from(n.get()) * price.as_angstrom();
+            if at < lo.as_angstrom() || at > hi.as_angstrom() {
+                return Err(Refusal::Range(why));
+            }
+        }
         Ok(())
     }
 

@@ -132,6 +132,9 @@ pub struct Session {
     /// The axes were stopped at once in motion: a drive may have lost
     /// steps, so the registers may no longer be where the carriage is.
     pub(super) lost: bool,
+    /// Each axis has been homed since power-on (and its machine position
+    /// not set by hand since): its soft limits apply.
+    pub(super) homed: [bool; 2],
     /// The BCK-5 tape read so far by `TAPE` requests.
     #[cfg(feature = "calc")]
     pub(super) tape: crate::calc::tape::Bck5Verifier,
@@ -181,6 +184,7 @@ impl Session {
             levels: 0,
             halt: crate::inputs::Halt::None,
             lost: false,
+            homed: [false; 2],
             element_feed: None,
             top: None,
             spinup_us: 0,

@@ -147,9 +147,22 @@ impl Session {
         let arc = DirectArc::new(points, dir, self.pos, self.cfg.hx, self.cfg.hz)?;
         let mut crc = Crc32::new();
         let mut events = 0u32;
+        // Every point the arc passes, within the soft limits.
+        let mut at = self.pos;
+        let soft = self.offsets.homing.soft && self.homed != [false; 2];
         for e in arc.events() {
             crc.push(e.bits());
             events += 1;
+            if soft {
+                let step = |neg: bool| if neg { -1 } else { 1 };
+                if e.x_steps() {
+                    at.x = Impulses(at.x.get().saturating_add(step(e.x_negative())));
+                }
+                if e.z_steps() {
+                    at.z = Impulses(at.z.get().saturating_add(step(e.z_negative())));
+                }
+                self.soft_check(at)?;
+            }
         }
         let start = self.pos;
         self.cmd = points.end;
@@ -209,6 +222,7 @@ impl Session {
                     z: quantize(end[1], self.cfg.hz).map_err(|_| Refusal::Range(RANGE_POS_Z))?,
                 };
                 let block = LinearBlock::new(pos, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+                self.soft_check(to)?;
                 Ok(Planned::Line {
                     block,
                     end,
@@ -331,6 +345,7 @@ impl Session {
                 .chord_end(i, self.cfg.hx, self.cfg.hz)
                 .map_err(|_| Refusal::Range(RANGE_POS))?;
             LinearBlock::new(at, to).map_err(|_| Refusal::Range(RANGE_BLOCK))?;
+            self.soft_check(to)?;
             at = to;
         }
         Ok(at)
@@ -412,6 +427,7 @@ impl Session {
             target[1] = step(from, word, true, "Z beyond 99999.999999 mm")?;
         }
         let block = self.linear_block(target)?;
+        self.soft_check(block.to())?;
         let crc = block_crc(&block, Crc32::new());
         self.cmd = target;
         self.prog = self.work_point(target);

@@ -32,8 +32,10 @@ impl Session {
         self.cmd = cmd;
         self.prog = work;
         self.pos = pos;
-        // The machinist has set where the carriage is.
+        // The machinist has set where the carriage is: the machine
+        // position is no longer the one homing found.
         self.lost = false;
+        self.homed = [false; 2];
         send_ok(io, None);
         Ok(())
     }
