@@ -93,9 +93,9 @@ fn homing_ends_at_the_same_place_wherever_it_starts() {
 }
 
 /// Soft limits once homed: X homes to 70 towards plus with 77 mm of
-/// travel, so X may reach −7 … 70. A move, a G-code block, an arc, a grbl
-/// jog beyond are refused before anything moves (grbl's error 15); within
-/// they run. Setting the machine position by hand (`ZERO`) ends them.
+/// travel, so X may reach −7 … 70. A move, a G-code block, an arc, a
+/// canned cycle beyond are refused before anything moves (a grbl jog:
+/// error 15, in the grbl test); within they run. Setting the machine position by hand (`ZERO`) ends them.
 #[test]
 fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
     let (board, mut c) = lathe();
@@ -120,6 +120,11 @@ fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
         ("G02 X60 Z-9 I0 K-9", ""),
         ("G00 X69 Z0", ""),
         ("G03 X78 Z-9 I0 K-9", "X"),
+        // A canned cycle is checked whole before its first move: Fanuc's
+        // G90 from X69 Z0, its cut at X75.
+        ("OPT DIALECT=FANUC", ""),
+        ("G90 X75 Z-5 F200", "X"),
+        ("OPT DIALECT=ISO", ""),
     ] {
         let r = ask(&mut c, request);
         if axis.is_empty() {
