@@ -261,3 +261,36 @@ fn a_grbl_sender_homes_with_grbls_settings() {
     assert_eq!(r.last().map(String::as_str), Some("error:9"), "{r:?}");
     assert_eq!(say(&mut c, "$X"), ["[MSG:Caution: Unlocked]", "ok"]);
 }
+
+/// A reset during the seek stops it at once: alarm 6 (`!ALARM CODE=6`,
+/// the request's `ERR ALARM 6`, then the reset's own `!RESET`), the
+/// machine locked until homed again, which then succeeds.
+#[test]
+fn a_reset_during_homing_raises_alarm_6() {
+    let (board, mut c) = lathe();
+    // A slow seek: 77 mm from X0 at 600 mm/min on an 8× clock, about 1 s.
+    assert!(ask(&mut c, "HOMING AXES=X TRAVELX=77 SEEK=600 LOCATE=300").is_ok());
+    c.write_raw(b"HOME\n").expect("write");
+    std::thread::sleep(Duration::from_millis(300));
+    c.write_raw(&[0x18]).expect("reset");
+    let alarm = c.read_line().expect("alarm");
+    assert!(
+        alarm.starts_with("!ALARM CODE=6 INPUT=X+ AXIS=X PX="),
+        "{alarm}"
+    );
+    let reply = c.read_reply().expect("reply");
+    assert!(
+        reply
+            .last
+            .starts_with("ERR ALARM 6: a reset stopped the homing"),
+        "{reply:?}"
+    );
+    let reset = c.read_line().expect("reset line");
+    assert!(reset.starts_with("!RESET "), "{reset}");
+    let (x, _) = carriage(&board);
+    assert!(x > 1.0 && x < 70.0, "stopped part of the way: {x}");
+    let status = ask(&mut c, "STATUS");
+    assert!(status.last.contains(" ALARM=6"), "{status:?}");
+    let again = ask(&mut c, "HOME");
+    assert!(again.is_ok(), "{again:?}");
+}
