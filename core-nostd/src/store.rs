@@ -453,25 +453,87 @@ mod tests {
         o
     }
 
-    #[test]
-    fn a_record_of_the_layout_before_the_homing_still_loads() {
-        // An LTO4 record: up to the wiring; no axis homed.
+    /// Writes `table(k)` into `slot` as a record of an older layout,
+    /// `magic`, holding its first `values` values with sequence number
+    /// `seq`; checks that it loads with what that layout lacked as at
+    /// power-on (`lacked`), then that `table(again)` saved over it loads in
+    /// this layout, and returns that.
+    fn older_layout(
+        k: i64,
+        (magic, values): (u32, usize),
+        (slot, seq): (usize, u32),
+        lacked: fn(&mut Offsets),
+        again: i64,
+    ) -> Offsets {
         let mut f = Nor::new();
-        let mut o = table(3);
-        let values = lengths(&o).take(LENGTHS + MCODE_VALUES + 2);
-        write_old(&mut f, 1, MAGIC_4, 12, values);
-        o.homing = crate::homing::HomingConfig::NONE;
+        let mut o = table(k);
+        write_old(&mut f, slot, magic, seq, lengths(&o).take(values));
+        lacked(&mut o);
         assert_eq!(
             load(&mut f),
             Loaded {
                 offsets: kept(&o),
-                seq: 12
+                seq
             }
         );
-        let seq = save(&mut f, &table(3), 12);
+        let next = save(&mut f, &table(again), seq);
         let got = load(&mut f);
-        assert_eq!((got.offsets, got.seq), (kept(&table(3)), seq));
-        assert!(got.offsets.homing.required);
+        assert_eq!((got.offsets, got.seq), (kept(&table(again)), next));
+        got.offsets
+    }
+
+    #[test]
+    fn records_of_the_older_layouts_still_load() {
+        // LTO1, as the firmware before the M codes wrote it: the lengths
+        // only.
+        older_layout(
+            1,
+            (MAGIC_1, LENGTHS),
+            (0, 7),
+            |o| {
+                o.mcodes = crate::interp::MCodes::new();
+                o.reading = Reading::DEFAULT;
+                o.wiring = crate::inputs::InputConfig::NONE;
+                o.homing = crate::homing::HomingConfig::NONE;
+            },
+            2,
+        );
+        // LTO2: the lengths and the M codes; read as at power-on, ISO with
+        // both switches off. Saved again, the reading comes back.
+        assert_eq!(table(7).reading.bits(), 7);
+        let got = older_layout(
+            7,
+            (MAGIC_2, LENGTHS + MCODE_VALUES),
+            (1, 9),
+            |o| {
+                o.reading = Reading::DEFAULT;
+                o.wiring = crate::inputs::InputConfig::NONE;
+                o.homing = crate::homing::HomingConfig::NONE;
+            },
+            5,
+        );
+        assert_eq!(got.reading.bits(), 5);
+        // LTO3: up to the reading; nothing wired.
+        let got = older_layout(
+            4,
+            (MAGIC_3, LENGTHS + MCODE_VALUES + 1),
+            (0, 11),
+            |o| {
+                o.wiring = crate::inputs::InputConfig::NONE;
+                o.homing = crate::homing::HomingConfig::NONE;
+            },
+            4,
+        );
+        assert_ne!(got.wiring, crate::inputs::InputConfig::NONE);
+        // LTO4: up to the wiring; no axis homed.
+        let got = older_layout(
+            3,
+            (MAGIC_4, LENGTHS + MCODE_VALUES + 2),
+            (1, 12),
+            |o| o.homing = crate::homing::HomingConfig::NONE,
+            3,
+        );
+        assert!(got.homing.required);
     }
 
     #[test]
@@ -489,78 +551,6 @@ mod tests {
             f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
             assert_eq!(load(&mut f).offsets, kept(&table(1)), "{index} {bad}");
         }
-    }
-
-    #[test]
-    fn a_record_of_the_layout_before_the_m_codes_still_loads() {
-        // An LTO1 record as the firmware before the M codes wrote it: the
-        // lengths only.
-        let mut f = Nor::new();
-        let mut o = table(1);
-        o.mcodes = crate::interp::MCodes::new();
-        o.reading = Reading::DEFAULT;
-        o.wiring = crate::inputs::InputConfig::NONE;
-        o.homing = crate::homing::HomingConfig::NONE;
-        write_old(&mut f, 0, MAGIC_1, 7, lengths(&o).take(LENGTHS));
-        assert_eq!(
-            load(&mut f),
-            Loaded {
-                offsets: kept(&o),
-                seq: 7
-            }
-        );
-        // The next save writes the new layout over the other slot.
-        let seq = save(&mut f, &table(2), 7);
-        assert_eq!(load(&mut f).offsets, kept(&table(2)));
-        assert_eq!(load(&mut f).seq, seq);
-    }
-
-    #[test]
-    fn a_record_of_the_layout_before_the_reading_still_loads() {
-        // An LTO2 record: the lengths and the M codes; read as at
-        // power-on, ISO with both switches off.
-        let mut f = Nor::new();
-        let mut o = table(7);
-        assert_eq!(o.reading.bits(), 7);
-        let values = lengths(&o).take(LENGTHS + MCODE_VALUES);
-        write_old(&mut f, 1, MAGIC_2, 9, values);
-        o.reading = Reading::DEFAULT;
-        o.wiring = crate::inputs::InputConfig::NONE;
-        o.homing = crate::homing::HomingConfig::NONE;
-        assert_eq!(
-            load(&mut f),
-            Loaded {
-                offsets: kept(&o),
-                seq: 9
-            }
-        );
-        // Saved again in this layout, the reading comes back.
-        let seq = save(&mut f, &table(5), 9);
-        let got = load(&mut f);
-        assert_eq!((got.offsets, got.seq), (kept(&table(5)), seq));
-        assert_eq!(got.offsets.reading.bits(), 5);
-    }
-
-    #[test]
-    fn a_record_of_the_layout_before_the_wiring_still_loads() {
-        // An LTO3 record: up to the reading; nothing wired.
-        let mut f = Nor::new();
-        let mut o = table(4);
-        let values = lengths(&o).take(LENGTHS + MCODE_VALUES + 1);
-        write_old(&mut f, 0, MAGIC_3, 11, values);
-        o.wiring = crate::inputs::InputConfig::NONE;
-        o.homing = crate::homing::HomingConfig::NONE;
-        assert_eq!(
-            load(&mut f),
-            Loaded {
-                offsets: kept(&o),
-                seq: 11
-            }
-        );
-        let seq = save(&mut f, &table(4), 11);
-        let got = load(&mut f);
-        assert_eq!((got.offsets, got.seq), (kept(&table(4)), seq));
-        assert_ne!(got.offsets.wiring, crate::inputs::InputConfig::NONE);
     }
 
     #[test]

@@ -417,17 +417,7 @@ impl Session {
         target[axis & 1] = self.cmd[axis & 1].checked_add(by).ok_or(Failed::Alarm(9))?;
         let block = self.linear_block(target).map_err(|_| Failed::Alarm(9))?;
         let feed = Length::from_um(i64::from(rate)).and_then(Feed::new);
-        self.cmd = target;
-        self.prog = self.work_point(target);
-        self.pos = block.to();
-        let h = [self.cfg.hx, self.cfg.hz];
-        self.machine.queue(
-            point_q32(target),
-            block,
-            feed,
-            h,
-            &mut Sink::new(io, self.drive),
-        );
+        self.queue_line(target, block, feed, io);
         self.machine.flush(&mut Sink::new(io, self.drive));
         let wired = self.offsets.wiring.used;
         let now = io.inputs_now().unwrap_or(0) & wired;

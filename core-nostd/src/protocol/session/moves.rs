@@ -400,6 +400,29 @@ impl Session {
         x_radius(word, self.cfg.diam)
     }
 
+    /// Queues a straight move to `target` (its block from the registers):
+    /// the commanded point, the programmed point and the registers move
+    /// there.
+    pub(super) fn queue_line<I: Io>(
+        &mut self,
+        target: [Length; 2],
+        block: LinearBlock,
+        feed: Option<Feed>,
+        io: &mut I,
+    ) {
+        self.cmd = target;
+        self.prog = self.work_point(target);
+        self.pos = block.to();
+        let h = [self.cfg.hx, self.cfg.hz];
+        self.machine.queue(
+            point_q32(target),
+            block,
+            feed,
+            h,
+            &mut Sink::new(io, self.drive),
+        );
+    }
+
     #[inline(never)]
     pub(super) fn move_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
         let [x, z, inc, feed] = args.values();
@@ -429,17 +452,7 @@ impl Session {
         let block = self.linear_block(target)?;
         self.soft_check(block.to())?;
         let crc = block_crc(&block, Crc32::new());
-        self.cmd = target;
-        self.prog = self.work_point(target);
-        self.pos = block.to();
-        let h = [self.cfg.hx, self.cfg.hz];
-        self.machine.queue(
-            point_q32(target),
-            block,
-            feed,
-            h,
-            &mut Sink::new(io, self.drive),
-        );
+        self.queue_line(target, block, feed, io);
         send_ok(
             io,
             Some(format_args!(
