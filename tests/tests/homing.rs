@@ -294,3 +294,34 @@ fn a_reset_during_homing_raises_alarm_6() {
     let again = ask(&mut c, "HOME");
     assert!(again.is_ok(), "{again:?}");
 }
+
+/// A pull-off shorter than the switch's hysteresis and the screw's play
+/// (X's releases 0.2 mm back, with 0.08 of play) leaves it pressed: alarm
+/// 8, after the seek found it; a longer pull-off then homes.
+#[test]
+fn a_pull_off_that_leaves_the_switch_pressed_raises_alarm_8() {
+    let (board, mut c) = lathe();
+    assert!(ask(
+        &mut c,
+        "HOMING AXES=X TRAVELX=77 SEEK=3000 LOCATE=300 PULLOFF=0.1"
+    )
+    .is_ok());
+    c.write_raw(b"HOME\n").expect("write");
+    let alarm = c.read_line().expect("alarm");
+    assert!(
+        alarm.starts_with("!ALARM CODE=8 INPUT=X+ AXIS=X PX="),
+        "{alarm}"
+    );
+    let reply = c.read_reply().expect("reply");
+    assert!(
+        reply
+            .last
+            .starts_with("ERR ALARM 8: the pull-off left the switch pressed"),
+        "{reply:?}"
+    );
+    let state = board.panel_line("STATE?").expect("state").expect("a line");
+    assert!(state.contains(" IN=X "), "still on the switch: {state}");
+    assert!(ask(&mut c, "HOMING PULLOFF=1").is_ok());
+    let homed = ask(&mut c, "HOME");
+    assert!(homed.is_ok(), "{homed:?}");
+}
