@@ -204,6 +204,9 @@ pub enum Halt {
     Homing(u8),
     /// Power-on with homing required, not yet homed (alarm 11).
     HomingRequired,
+    /// A G-code block would have left the travel of an axis homed (soft
+    /// limits, alarm 2): refused before it moved, the program stopped.
+    Travel,
 }
 
 impl Halt {
@@ -216,6 +219,7 @@ impl Halt {
             Halt::Fault => 17,
             Halt::Homing(code) => code,
             Halt::HomingRequired => 11,
+            Halt::Travel => 2,
         }
     }
 
@@ -239,6 +243,9 @@ impl Halt {
                 "homing did not find the switch within the travel: check its wiring, HOME again"
             }
             Halt::HomingRequired => "the machine must be homed: HOME (UNLOCK moves it unhomed)",
+            Halt::Travel => {
+                "a block would have left the travel (soft limits): UNLOCK, then correct the program or its offsets"
+            }
         }
     }
 }

@@ -95,7 +95,8 @@ fn homing_ends_at_the_same_place_wherever_it_starts() {
 /// Soft limits once homed: X homes to 70 towards plus with 77 mm of
 /// travel, so X may reach −7 … 70. A move, a G-code block, an arc, a
 /// canned cycle beyond are refused before anything moves (a grbl jog:
-/// error 15, in the grbl test); within they run. Setting the machine position by hand (`ZERO`) ends them.
+/// error 15, in the grbl test); within they run. A G-code block refused
+/// stops the program with alarm 2 until unlocked. Setting the machine position by hand (`ZERO`) ends them.
 #[test]
 fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
     let (board, mut c) = lathe();
@@ -135,6 +136,18 @@ fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
                     .starts_with(&format!("ERR RANGE {axis} would leave its travel")),
                 "{request}: {r:?}"
             );
+            if request.starts_with('G') {
+                // A program's block: the program stops there (alarm 2)
+                // until unlocked.
+                let locked = ask(&mut c, "G00 X69 Z0");
+                assert!(
+                    locked
+                        .last
+                        .starts_with("ERR ALARM 2: a block would have left the travel"),
+                    "{locked:?}"
+                );
+                assert_eq!(ask(&mut c, "UNLOCK").last, "OK LOST=0");
+            }
         }
     }
     assert!(ask(&mut c, "SYNC").is_ok());
@@ -246,6 +259,21 @@ fn a_grbl_sender_homes_with_grbls_settings() {
     let r = say(&mut c, "$J=G91 G21 X0.5 F500");
     assert_eq!(r.last().map(String::as_str), Some("error:15"), "{r:?}");
     assert_eq!(say(&mut c, "$J=G91 G21 X-0.5 F500"), ["ok"]);
+    // A program's block beyond: ALARM:2, its error, and the lines after
+    // it refused until $X (grbl's soft-limit alarm; nothing moved).
+    let r = say(&mut c, "G01 X1 F500");
+    assert_eq!(
+        r,
+        [
+            "ALARM:2",
+            "[MSG:RANGE X would leave its travel (soft limits: HOMING SOFT=, TRAVELX=)]",
+            "error:15"
+        ]
+    );
+    let r = say(&mut c, "G01 X-1 F500");
+    assert_eq!(r.last().map(String::as_str), Some("error:9"), "{r:?}");
+    assert_eq!(say(&mut c, "$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+    assert_eq!(say(&mut c, "G01 X-1 F500"), ["ok"]);
     assert_eq!(say(&mut c, "$20=0"), ["ok"]);
     // X alone, from elsewhere.
     assert_eq!(say(&mut c, "G0 X-20"), ["ok"]);

@@ -9,6 +9,15 @@ impl Session {
     pub(super) fn gcode<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
         // Nothing runs while an input holds the machine locked.
         self.unlocked()?;
+        let outcome = self.gcode_line(text, io);
+        if let Err(Refusal::Travel(_)) = outcome {
+            self.travel_alarm(io);
+        }
+        outcome
+    }
+
+    /// [`Session::gcode`] once unlocked.
+    fn gcode_line<'a, I: Io>(&mut self, text: &str, io: &mut I) -> Outcome<'a> {
         if self.cycles.holding() {
             return self.profile_line(text, io);
         }

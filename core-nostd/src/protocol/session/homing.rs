@@ -367,6 +367,24 @@ impl Session {
         Ok(())
     }
 
+    /// A G-code block was refused for leaving the travel: the program
+    /// stops there as grbl's alarm 2 stops it (`!ALARM CODE=2`, locked
+    /// until `UNLOCK`), so that a sender going on past a refused line moves
+    /// nothing more. The motion queued before it runs on: it is within the
+    /// travel.
+    pub(super) fn travel_alarm<I: Io>(&mut self, io: &mut I) {
+        self.halt = Halt::Travel;
+        io.alarm(2);
+        let mut line = ReplyLine::new();
+        let _ = write!(
+            line,
+            "!ALARM CODE=2 INPUT=- PX={} PZ={}",
+            self.pos.x.get(),
+            self.pos.z.get()
+        );
+        io.send(line.finish());
+    }
+
     /// Refuses a point `to` (registers) outside the travel of an axis
     /// homed, with soft limits on (grbl's error 15, travel exceeded).
     pub(super) fn soft_check(&self, to: ImpulsePoint) -> Result<(), Refusal<'static>> {
@@ -396,7 +414,7 @@ impl Session {
             // A register times its price is a machine position.
             let at = i64::from(n.get()) * price.as_angstrom();
             if at < lo.as_angstrom() || at > hi.as_angstrom() {
-                return Err(Refusal::Range(why));
+                return Err(Refusal::Travel(why));
             }
         }
         Ok(())

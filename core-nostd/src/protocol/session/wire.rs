@@ -27,6 +27,8 @@ pub(in crate::protocol) enum Refusal<'a> {
     NoArgs(&'static str),
     Value(&'static str, &'static str),
     Range(&'static str),
+    /// A point beyond the travel of an axis homed (soft limits).
+    Travel(&'static str),
     Geometry(&'static str),
     Missing(&'static str),
     Block(BlockError),
@@ -464,7 +466,9 @@ pub(super) fn send_refusal<I: Io>(io: &mut I, refusal: Refusal<'_>) {
             };
             send_error_about(io, E::Value, about, format_args!("{key} {why}"))
         }
-        Refusal::Range(what) => send_error(io, E::Range, format_args!("{what}")),
+        Refusal::Range(what) | Refusal::Travel(what) => {
+            send_error(io, E::Range, format_args!("{what}"))
+        }
         Refusal::Geometry(what) => send_error(io, E::Geometry, format_args!("{what}")),
         Refusal::Missing(what) => send_error(io, E::Syntax, format_args!("{what}")),
         Refusal::Halted(halt @ crate::inputs::Halt::Estop(_)) => {
