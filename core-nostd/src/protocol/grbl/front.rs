@@ -120,12 +120,11 @@ impl Default for Front {
 }
 
 /// How many settings the front keeps.
-pub const KEPT: usize = 9;
+pub const KEPT: usize = 2;
 
-/// The kept settings at power-on, as grbl's defaults: `$1` 25 ms, (unused
-/// slot), `$23` 0, `$24` 25 mm/min, `$25` 500 mm/min, `$26` 250 ms, `$27`
-/// 1 mm, `$130`/`$132` 200 mm (decimals in 10⁻³).
-pub const KEPT_DEFAULT: [u32; KEPT] = [25, 0, 0, 25_000, 500_000, 250, 1_000, 200_000, 200_000];
+/// The kept settings at power-on, as grbl's defaults: `$1` 25 ms, `$26`
+/// 250 ms.
+pub const KEPT_DEFAULT: [u32; KEPT] = [25, 250];
 
 /// An override stepped by its byte, as 0x90–0x94 step the feed's: 100 %,
 /// +10, −10, +1, −1, within 10 … 200 %.

@@ -36,9 +36,9 @@ pub(super) enum Place {
     /// Steps per mm of an axis: one over the impulse price of `CFG`'s key.
     StepsPerMm(&'static str),
     /// Kept by the front for senders that write and read it back; it
-    /// changes nothing on this machine (`Front::kept`, by index). A decimal
-    /// when `decimal`, else a whole number up to 65535.
-    Kept(usize, bool),
+    /// changes nothing on this machine (`Front::kept`, by index): a whole
+    /// number up to 65535.
+    Kept(usize),
     /// Only the value shown is accepted; another is refused with the
     /// reason (grbl's error 3, or the code given).
     Fixed(&'static [u8], u8, &'static str),
@@ -99,7 +99,7 @@ pub(super) const SETTINGS: [Setting; 34] = [
             let _ = write!(l, "{}", s.drive().pulse_us());
         }),
     ),
-    setting(1, Place::Kept(0, false)),
+    setting(1, Place::Kept(0)),
     setting(
         2,
         Place::Fixed(b"0", 3, "step pulses are not inverted on this board"),
@@ -186,7 +186,7 @@ pub(super) const SETTINGS: [Setting; 34] = [
             write_mm3(l, i64::from(s.homing().seek) * 10_000);
         }),
     ),
-    setting(26, Place::Kept(5, false)),
+    setting(26, Place::Kept(1)),
     setting(
         27,
         Place::Request(Command::Homing, "PULLOFF", |s, l| {
@@ -284,13 +284,8 @@ pub(super) fn settings<I: Io + ?Sized>(
                 let milli = crate::length::div_round_half_away(10_000_000_000, h.max(1));
                 let _ = write!(l, "{}.{:03}", milli / 1000, milli % 1000);
             }
-            Place::Kept(i, decimal) => {
-                let v = front.kept.get(i).copied().unwrap_or(0);
-                let _ = if decimal {
-                    write!(l, "{}.{:03}", v / 1000, v % 1000)
-                } else {
-                    write!(l, "{v}")
-                };
+            Place::Kept(i) => {
+                let _ = write!(l, "{}", front.kept.get(i).copied().unwrap_or(0));
             }
             Place::Fixed(v, _, _) => l.push_bytes(v),
             Place::ReportMask => {
@@ -431,21 +426,12 @@ pub(super) fn set<I: Io + ?Sized>(
                 Err(_) => refuse_setting(io, 3, s.n, b"not a key of CFG"),
             }
         }
-        Place::Kept(i, decimal) => match (parse_setting(v, decimal), front.kept.get_mut(i)) {
+        Place::Kept(i) => match (parse_setting(v, false), front.kept.get_mut(i)) {
             (Some(value), Some(slot)) => {
                 *slot = value;
                 io.outcome = Some(Ok(()));
             }
-            _ => refuse_setting(
-                io,
-                2,
-                s.n,
-                if decimal {
-                    b"a number with up to 3 decimals"
-                } else {
-                    b"a whole number up to 65535"
-                },
-            ),
+            _ => refuse_setting(io, 2, s.n, b"a whole number up to 65535"),
         },
         Place::ReportMask => match parse_setting(v, false) {
             Some(m @ (0 | 1)) => {

@@ -264,21 +264,15 @@ impl Session {
                 Ok(()) => {}
                 Err(Failed::Input) => return Err(Refusal::Halted(self.halt)),
                 Err(Failed::Alarm(code)) => {
-                    self.halt = Halt::Homing(code);
                     self.lost = true;
-                    io.alarm(code);
-                    let mut line = ReplyLine::new();
-                    let _ = write!(line, "!ALARM CODE={code} INPUT=");
                     let switch = home_switch(axis, h.axes[axis & 1].dir, &self.offsets.wiring);
-                    let _ = write_names(&mut line, switch.map_or(0, Input::bit));
-                    let _ = write!(
-                        line,
-                        " AXIS={} PX={} PZ={}",
-                        if axis == 0 { 'X' } else { 'Z' },
-                        self.pos.x.get(),
-                        self.pos.z.get()
+                    let axis = if axis == 0 { "X" } else { "Z" };
+                    self.lock(
+                        Halt::Homing(code),
+                        switch.map_or(0, Input::bit),
+                        Some(axis),
+                        io,
                     );
-                    io.send(line.finish());
                     return Err(Refusal::Halted(self.halt));
                 }
             }
@@ -373,15 +367,22 @@ impl Session {
     /// nothing more. The motion queued before it runs on: it is within the
     /// travel.
     pub(super) fn travel_alarm<I: Io>(&mut self, io: &mut I) {
-        self.halt = Halt::Travel;
-        io.alarm(2);
+        self.lock(Halt::Travel, 0, None, io);
+    }
+
+    /// Locks the machine with `halt`, nothing dropped (what was to move
+    /// was refused before it moved): `!ALARM CODE= INPUT= [AXIS=] PX= PZ=`,
+    /// the inputs `bits` and the axis concerned.
+    fn lock<I: Io>(&mut self, halt: Halt, bits: u16, axis: Option<&str>, io: &mut I) {
+        self.halt = halt;
+        io.alarm(halt.alarm());
         let mut line = ReplyLine::new();
-        let _ = write!(
-            line,
-            "!ALARM CODE=2 INPUT=- PX={} PZ={}",
-            self.pos.x.get(),
-            self.pos.z.get()
-        );
+        let _ = write!(line, "!ALARM CODE={} INPUT=", halt.alarm());
+        let _ = write_names(&mut line, bits);
+        if let Some(axis) = axis {
+            let _ = write!(line, " AXIS={axis}");
+        }
+        let _ = write!(line, " PX={} PZ={}", self.pos.x.get(), self.pos.z.get());
         io.send(line.finish());
     }
 
