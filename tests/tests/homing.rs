@@ -37,6 +37,21 @@ fn ask(c: &mut Client, line: &str) -> Reply {
     c.read_reply().expect("reply")
 }
 
+/// Reads a failed `HOME` of X on its plus switch: the alarm line of
+/// `code`, then the request's `ERR ALARM` saying `why`.
+fn homing_failed(c: &mut Client, code: u8, why: &str) {
+    let alarm = c.read_line().expect("alarm");
+    assert!(
+        alarm.starts_with(&format!("!ALARM CODE={code} INPUT=X+ AXIS=X PX=")),
+        "{alarm}"
+    );
+    let reply = c.read_reply().expect("reply");
+    assert!(
+        reply.last.starts_with(&format!("ERR ALARM {code}: {why}")),
+        "{reply:?}"
+    );
+}
+
 /// The carriages' own positions (play included), mm, from the panel.
 fn carriage(board: &Board) -> (f64, f64) {
     let state = board.panel_line("STATE?").expect("state").expect("a line");
@@ -173,16 +188,7 @@ fn a_switch_not_found_within_the_travel_raises_alarm_9() {
     // 10 mm of travel: the seek (15 mm) stops far short of 74.
     assert!(ask(&mut c, "HOMING AXES=X TRAVELX=10 SEEK=3000").is_ok());
     c.write_raw(b"HOME\n").expect("write");
-    let alarm = c.read_line().expect("alarm");
-    assert!(
-        alarm.starts_with("!ALARM CODE=9 INPUT=X+ AXIS=X PX="),
-        "{alarm}"
-    );
-    let reply = c.read_reply().expect("reply");
-    assert!(
-        reply.last.starts_with("ERR ALARM 9: homing did not find"),
-        "{reply:?}"
-    );
+    homing_failed(&mut c, 9, "homing did not find");
     let (x, _) = carriage(&board);
     assert!((14.9..15.1).contains(&x), "the whole seek ran: {x}");
     let refused = ask(&mut c, "MOVE X=0");
@@ -301,18 +307,7 @@ fn a_reset_during_homing_raises_alarm_6() {
     c.write_raw(b"HOME\n").expect("write");
     std::thread::sleep(Duration::from_millis(300));
     c.write_raw(&[0x18]).expect("reset");
-    let alarm = c.read_line().expect("alarm");
-    assert!(
-        alarm.starts_with("!ALARM CODE=6 INPUT=X+ AXIS=X PX="),
-        "{alarm}"
-    );
-    let reply = c.read_reply().expect("reply");
-    assert!(
-        reply
-            .last
-            .starts_with("ERR ALARM 6: a reset stopped the homing"),
-        "{reply:?}"
-    );
+    homing_failed(&mut c, 6, "a reset stopped the homing");
     let reset = c.read_line().expect("reset line");
     assert!(reset.starts_with("!RESET "), "{reset}");
     let (x, _) = carriage(&board);
@@ -335,18 +330,7 @@ fn a_pull_off_that_leaves_the_switch_pressed_raises_alarm_8() {
     )
     .is_ok());
     c.write_raw(b"HOME\n").expect("write");
-    let alarm = c.read_line().expect("alarm");
-    assert!(
-        alarm.starts_with("!ALARM CODE=8 INPUT=X+ AXIS=X PX="),
-        "{alarm}"
-    );
-    let reply = c.read_reply().expect("reply");
-    assert!(
-        reply
-            .last
-            .starts_with("ERR ALARM 8: the pull-off left the switch pressed"),
-        "{reply:?}"
-    );
+    homing_failed(&mut c, 8, "the pull-off left the switch pressed");
     let state = board.panel_line("STATE?").expect("state").expect("a line");
     assert!(state.contains(" IN=X "), "still on the switch: {state}");
     assert!(ask(&mut c, "HOMING PULLOFF=1").is_ok());

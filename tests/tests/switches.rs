@@ -58,6 +58,26 @@ fn status_with(client: &mut Client, pn: &str) -> String {
     }
 }
 
+/// The final line of a request (a block's `DATA` lines and the status
+/// lines a test asked for by byte skipped).
+fn ask(client: &mut Client, line: &str) -> String {
+    client.write_raw(format!("{line}\n").as_bytes()).unwrap();
+    loop {
+        let l = board_line(&client.read_line().unwrap());
+        if !l.starts_with("DATA") && !l.starts_with("!STATUS") {
+            return l;
+        }
+    }
+}
+
+/// The whole number `key=` holds in a line (its `*HH` aside).
+fn value(line: &str, key: &str) -> i64 {
+    let body = line.rsplit_once('*').map_or(line, |(b, _)| b);
+    host_sim::link::words_value(body, key)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{key} in {line}"))
+}
+
 #[test]
 fn the_switches_stop_and_lock_the_firmware_as_in_process() {
     if !qemu_or_skip() {
@@ -143,16 +163,6 @@ fn the_estop_stops_a_cut_mid_way_on_the_paced_firmware() {
         return;
     }
     let (_qemu, mut client, mut panel) = booted("estop-paced", "qemu-paced");
-    // The final line of a request (a block's `DATA` lines skipped).
-    let ask = |client: &mut Client, line: &str| -> String {
-        client.write_raw(format!("{line}\n").as_bytes()).unwrap();
-        loop {
-            let l = board_line(&client.read_line().unwrap());
-            if !l.starts_with("DATA") {
-                return l;
-            }
-        }
-    };
     assert!(ask(&mut client, "INPUT USED=ESTOP INVERT=ESTOP FILTER=2").starts_with("OK"));
     panel.sample(QUIET, 5).unwrap();
     // 30 mm of Z at 600 mm/min: 3 s; SYNC starts it and waits.
@@ -169,12 +179,7 @@ fn the_estop_stops_a_cut_mid_way_on_the_paced_firmware() {
     assert!(sync.starts_with("OK EV="), "{sync}");
     let alarm = board_line(&client.read_line().unwrap());
     assert!(alarm.starts_with("!ALARM CODE=10 INPUT=ESTOP "), "{alarm}");
-    let pz: i64 = alarm
-        .split(" PZ=")
-        .nth(1)
-        .and_then(|s| s.split('*').next())
-        .and_then(|s| s.parse().ok())
-        .expect(&alarm);
+    let pz = value(&alarm, "PZ");
     assert!((-2_500..=-500).contains(&pz), "part of the way: {alarm}");
     std::thread::sleep(Duration::from_millis(300));
     let stopped = ask(&mut client, "STATUS");
@@ -272,16 +277,6 @@ fn the_paced_firmware_homes_on_its_switch() {
         return;
     }
     let (_qemu, mut client, mut panel) = booted("homing-paced", "qemu-paced");
-    // The request's line (status lines the test asked for skipped).
-    let ask = |client: &mut Client, line: &str| -> String {
-        client.write_raw(format!("{line}\n").as_bytes()).unwrap();
-        loop {
-            let l = board_line(&client.read_line().unwrap());
-            if !l.starts_with("!STATUS") {
-                return l;
-            }
-        }
-    };
     assert!(ask(&mut client, "INPUT USED=Z- FILTER=0").starts_with("OK"));
     let set = ask(
         &mut client,
@@ -299,12 +294,7 @@ fn the_paced_firmware_homes_on_its_switch() {
         if !l.starts_with("!STATUS") {
             break l;
         }
-        let pz: i64 = l
-            .split(" PZ=")
-            .nth(1)
-            .and_then(|s| s.split(' ').next())
-            .and_then(|s| s.parse().ok())
-            .expect(&l);
+        let pz = value(&l, "PZ");
         let now = if pressed { pz <= -1_980 } else { pz <= -2_000 };
         if now != pressed {
             pressed = now;
