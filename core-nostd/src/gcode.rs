@@ -270,6 +270,34 @@ pub enum Special {
     ClearShift(bool),
     /// `G92.3`: the shift kept by `G92.2` restored.
     RestoreShift,
+    /// `G38.2`–`G38.5` (ISO): a straight feed move toward the block's
+    /// `X`/`Z` that stops where the probe changes.
+    Probe(ProbeMode),
+}
+
+/// How a probing move (`G38.2`–`G38.5`) stops and what it makes of no
+/// change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ProbeMode {
+    /// `G38.2`/`G38.3`: stops where the probe touches (becomes active);
+    /// `G38.4`/`G38.5`: where it leaves (becomes inactive).
+    pub toward: bool,
+    /// `G38.2`/`G38.4`: reaching the end with no change is an error
+    /// (grbl's alarm 5); `G38.3`/`G38.5` end there.
+    pub must_change: bool,
+}
+
+impl ProbeMode {
+    /// The code in tenths (382 … 385).
+    pub const fn code(self) -> u16 {
+        match (self.toward, self.must_change) {
+            (true, true) => 382,
+            (true, false) => 383,
+            (false, true) => 384,
+            (false, false) => 385,
+        }
+    }
 }
 
 /// Lecture 13's `G45`–`G48` (one block): each axis move of the block
@@ -409,7 +437,7 @@ pub struct Block {
     pub coolant: Option<Coolant>,
     /// M00/M01/M02/M30.
     pub stop: Option<Stop>,
-    /// G28, G30, G28.1, G30.1, G53, G92 (Fanuc G50 X Z).
+    /// G28, G30, G28.1, G30.1, G53, G92 (Fanuc G50 X Z), G38.2–G38.5.
     pub special: Option<Special>,
     /// G54–G59 if given: 0 … 5.
     pub wcs: Option<u8>,
@@ -1333,6 +1361,9 @@ impl Reading {
             40 | 100 | 280 | 300 | 530 | 450 | 460 | 470 | 480 => {
                 set(&mut self.once, (tenths, pos))
             }
+            // Probing: LinuxCNC's and grbl's; a Fanuc lathe skips with G31.
+            382..=385 if fanuc => other(Dialect::Iso),
+            382..=385 => set(&mut self.once, (tenths, pos)),
             540..=590 if tenths % 10 == 0 => set(&mut b.wcs, ((tenths - 540) / 10) as u8),
             700 | 710 | 720 | 730 | 740 | 750 if fanuc => {
                 if self.cycle.is_none() {
@@ -1545,6 +1576,32 @@ impl Reading {
                     },
                     register,
                 });
+            }
+            Some(code @ 382..=385) => {
+                if b.i.is_some() || b.k.is_some() || b.r.is_some() {
+                    return Err((
+                        BlockError::Form("G38.2 to G38.5 probe in a line: X and Z"),
+                        once_at,
+                    ));
+                }
+                if b.x.is_none() && b.z.is_none() {
+                    return Err((
+                        BlockError::Form("G38.2 to G38.5 need X or Z: where the probing move ends"),
+                        once_at,
+                    ));
+                }
+                if b.motion.is_some() {
+                    return Err((
+                        BlockError::Form(
+                            "G38.2 to G38.5 are a motion of their own: no G00 to G03 in the block",
+                        ),
+                        once_at,
+                    ));
+                }
+                b.special = Some(Special::Probe(ProbeMode {
+                    toward: code <= 383,
+                    must_change: code == 382 || code == 384,
+                }));
             }
             Some(530) => {
                 if b.i.is_some() || b.k.is_some() || b.r.is_some() {
@@ -1982,6 +2039,33 @@ mod tests {
         for (line, special) in cleared {
             assert_eq!(iso(line).unwrap().special, Some(special), "{line}");
         }
+        // Probing: the four kinds, a straight move to X/Z of their own.
+        for (line, toward, must_change) in [
+            ("G38.2 Z-10 F50", true, true),
+            ("G38.3 X5", true, false),
+            ("G38.4 Z1", false, true),
+            ("G38.5 X1 Z1", false, false),
+        ] {
+            let b = iso(line).unwrap();
+            let mode = ProbeMode {
+                toward,
+                must_change,
+            };
+            assert_eq!(b.special, Some(Special::Probe(mode)), "{line}");
+            assert_eq!(b.motion, None, "{line}: the motion mode stays");
+            assert_eq!(
+                u32::from(mode.code()),
+                line[1..5].replace('.', "").parse::<u32>().unwrap()
+            );
+        }
+        for line in ["G38.2", "G38.2 Z1 K1", "G01 G38.2 Z1", "G38.2 G28 Z1"] {
+            assert!(iso(line).is_err(), "{line}");
+        }
+        assert_eq!(
+            refused("G38.2 W1"),
+            BlockError::OtherDialect(b'G', 382, Dialect::Iso),
+            "a Fanuc lathe skips with G31"
+        );
         assert!(matches!(
             iso("G28.1 X1").unwrap_err().error,
             BlockError::Form(_)

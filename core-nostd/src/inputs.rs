@@ -98,6 +98,17 @@ impl Input {
     }
 }
 
+/// Where a probing move (`G38.2`–`G38.5`) ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProbeResult {
+    /// The machine position (X on the radius): the registers times their
+    /// prices.
+    pub at: [crate::length::Length; 2],
+    /// The probe changed there (grbl's `:1`); otherwise the move ran to
+    /// its end.
+    pub changed: bool,
+}
+
 /// The inputs wired and how they read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InputConfig {
@@ -207,6 +218,10 @@ pub enum Halt {
     /// A G-code block would have left the travel of an axis homed (soft
     /// limits, alarm 2): refused before it moved, the program stopped.
     Travel,
+    /// A probing move failed, grbl's alarm number: 4 the probe was not in
+    /// the state the move starts from, 5 it did not change within the
+    /// move.
+    Probe(u8),
 }
 
 impl Halt {
@@ -220,6 +235,7 @@ impl Halt {
             Halt::Homing(code) => code,
             Halt::HomingRequired => 11,
             Halt::Travel => 2,
+            Halt::Probe(code) => code,
         }
     }
 
@@ -245,6 +261,12 @@ impl Halt {
             Halt::HomingRequired => "the machine must be homed: HOME (UNLOCK moves it unhomed)",
             Halt::Travel => {
                 "a block would have left the travel (soft limits): UNLOCK, then correct the program or its offsets"
+            }
+            Halt::Probe(4) => {
+                "the probe was not in the state the probing move starts from: check it, UNLOCK"
+            }
+            Halt::Probe(_) => {
+                "the probe did not change within the probing move: UNLOCK, then probe again nearer"
             }
         }
     }

@@ -36,6 +36,11 @@ static CHANGED: AtomicBool = AtomicBool::new(false);
 /// 0x82 and 0x81 are.
 static HOLD: AtomicBool = AtomicBool::new(false);
 static RESUME: AtomicBool = AtomicBool::new(false);
+/// A probing move is armed: 0 not, [`PROBE_TOUCH`] it stops where the
+/// probe becomes active, [`PROBE_LEAVE`] where it becomes inactive.
+static PROBE: AtomicU8 = AtomicU8::new(0);
+const PROBE_TOUCH: u8 = 1;
+const PROBE_LEAVE: u8 = 2;
 
 /// The inputs that stop everything at once.
 const STOPS: u16 = Input::Estop.bit() | LIMITS | FAULTS;
@@ -45,6 +50,17 @@ pub fn set_wiring(cfg: InputConfig) {
     USED.store(cfg.used, Ordering::Relaxed);
     INVERT.store(cfg.invert, Ordering::Relaxed);
     FILTER.store(cfg.filter, Ordering::Relaxed);
+}
+
+/// Arms the probe's stop for a probing move (`Some(touch)`), or disarms
+/// it (thread mode).
+pub fn arm_probe(stop_on: Option<bool>) {
+    let v = match stop_on {
+        None => 0,
+        Some(true) => PROBE_TOUCH,
+        Some(false) => PROBE_LEAVE,
+    };
+    PROBE.store(v, Ordering::Release);
 }
 
 fn wiring() -> InputConfig {
@@ -131,6 +147,15 @@ impl Sampler {
         let rose = changed & active;
         if rose & STOPS != 0 {
             stop_now();
+        } else if changed & Input::Probe.bit() != 0 {
+            // A probing move stops where the probe changes as it is armed
+            // to, the spindle left turning.
+            let touch = rose & Input::Probe.bit() != 0;
+            let armed = PROBE.load(Ordering::Acquire);
+            if (armed == PROBE_TOUCH && touch) || (armed == PROBE_LEAVE && !touch) {
+                PROBE.store(0, Ordering::Release);
+                stop_steps();
+            }
         }
         ACTIVE.store(active, Ordering::Release);
         CHANGED.store(true, Ordering::Release);
@@ -151,8 +176,15 @@ impl Sampler {
 /// to drop the motion.
 #[inline(always)]
 fn stop_now() {
-    board::step_outputs_low();
     board::spindle::all_low();
+    stop_steps();
+}
+
+/// The STEP outputs low, the step interrupt masked, the real-time task
+/// pended to drop the motion.
+#[inline(always)]
+fn stop_steps() {
+    board::step_outputs_low();
     NVIC::mask(Interrupt::TIM5);
     STOPPED.store(true, Ordering::Release);
     NVIC::pend(Interrupt::EXTI1);

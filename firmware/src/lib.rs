@@ -249,6 +249,10 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
     fn inputs_now(&mut self) -> Option<u16> {
         Some(inputs::active())
     }
+
+    fn probe_arm(&mut self, stop_on: Option<bool>) {
+        inputs::arm_probe(stop_on);
+    }
 }
 
 impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P, S> {

@@ -125,6 +125,9 @@ struct Shared {
     /// and drive faults stop the axes at once, the door and the buttons
     /// hold and resume them.
     wired: AtomicU16,
+    /// A probing move is armed: 0 not, 1 it stops where the probe becomes
+    /// active, 2 where it becomes inactive.
+    probe: AtomicU8,
     /// X's and Z's impulse prices (Å) and whether X reads as a diameter, as
     /// the session last had them (for the panel's `STATE?`).
     prices: Mutex<(i64, i64, bool)>,
@@ -250,7 +253,17 @@ impl Shared {
         let before = self.panel.swap(active, Ordering::AcqRel);
         let wired = self.wired.load(Ordering::Acquire);
         let rose = active & !before & wired;
-        if rose & (Input::Estop.bit() | LIMITS | FAULTS) != 0 {
+        let probe = (active ^ before) & wired & Input::Probe.bit() != 0;
+        let touch = rose & Input::Probe.bit() != 0;
+        let armed = match self.probe.load(Ordering::Acquire) {
+            1 => probe && touch,
+            2 => probe && !touch,
+            _ => false,
+        };
+        if armed {
+            self.probe.store(0, Ordering::Release);
+        }
+        if armed || rose & (Input::Estop.bit() | LIMITS | FAULTS) != 0 {
             if a.aborted.is_none() {
                 let found = abort(a);
                 a.aborted = Some(found);
@@ -549,6 +562,15 @@ impl<W: Write> Io for Protocol<W> {
 
     fn inputs_now(&mut self) -> Option<u16> {
         Some(self.shared.panel.load(Ordering::Acquire))
+    }
+
+    fn probe_arm(&mut self, stop_on: Option<bool>) {
+        let v = match stop_on {
+            None => 0,
+            Some(true) => 1,
+            Some(false) => 2,
+        };
+        self.shared.probe.store(v, Ordering::Release);
     }
 }
 
@@ -861,6 +883,7 @@ impl Board {
             commands: Mutex::new(Vec::new()),
             panel: AtomicU16::new(0),
             wired: AtomicU16::new(0),
+            probe: AtomicU8::new(0),
             prices: Mutex::new((50_000, 100_000, true)),
         });
         let (tx, rx) = mpsc::channel();

@@ -9,17 +9,27 @@
 //! after a reversal: it stays where it is until the nut has taken up the
 //! play (`c ∈ [n − b, n]`). A switch at `at` towards minus is active while
 //! the carriage is at or below `at` and releases above `at + hysteresis`;
-//! one towards plus the other way round.
+//! one towards plus the other way round. A probe (a tool setter) is a
+//! switch too, on the side its file gives; an input with switches on both
+//! axes is active while any of them is.
 
 use core_nostd::inputs::Input;
 use serde::Deserialize;
+
+/// A nanometre, mm: how near a carriage at a switch's place counts as on it.
+const EPS: f64 = 1e-6;
 
 /// One switch on an axis.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Switch {
-    /// The input it is wired to: `X-`, `X+`, `Z-`, `Z+` (`INPUT` names).
+    /// The input it is wired to: `X-`, `X+`, `Z-`, `Z+` (`INPUT` names),
+    /// or `PROBE` (a tool setter, a touch probe).
     pub input: String,
+    /// The way it trips, `-` (at or below `at`) or `+` (at or above): a
+    /// limit's is its name's; a probe's must be given.
+    #[serde(default)]
+    pub side: Option<String>,
     /// Where it trips, mm (machine coordinates, X on the radius).
     pub at: f64,
     /// How far back the carriage must go before it releases, mm.
@@ -69,11 +79,27 @@ impl MachineFile {
                 }
             }
             for s in &axis.switches {
-                if !sides.iter().any(|side| s.input.eq_ignore_ascii_case(side)) {
+                let probe = s.input.eq_ignore_ascii_case("PROBE");
+                if !probe && !sides.iter().any(|side| s.input.eq_ignore_ascii_case(side)) {
                     return Err(format!(
-                        "{name}.switch input {:?}: {} or {}",
+                        "{name}.switch input {:?}: {}, {} or PROBE",
                         s.input, sides[0], sides[1]
                     ));
+                }
+                match (s.side.as_deref(), probe) {
+                    (Some("-" | "+"), true) | (None, false) => {}
+                    (Some(side), false) if s.input.ends_with(side) => {}
+                    (None, true) => {
+                        return Err(format!(
+                            "{name}.switch PROBE: `side` \"-\" or \"+\", the way it trips"
+                        ))
+                    }
+                    (Some(side), _) => {
+                        return Err(format!(
+                            "{name}.switch {}: side {side:?} is not the way it trips",
+                            s.input
+                        ))
+                    }
                 }
                 if !(s.at.is_finite() && s.hysteresis.is_finite() && s.hysteresis >= 0.0) {
                     return Err(format!(
@@ -118,6 +144,7 @@ impl Lathe {
     /// within their play; returns the switches active now.
     pub fn moved(&mut self, nut: [f64; 2]) -> u16 {
         self.nut = nut;
+        let mut hit = 0;
         for (i, axis) in [&self.file.x, &self.file.z].into_iter().enumerate() {
             let c = &mut self.carriage[i];
             *c = if self.started {
@@ -130,20 +157,24 @@ impl Lathe {
                     continue;
                 };
                 let bit = input.bit();
-                let minus = matches!(input, Input::LimitXMinus | Input::LimitZMinus);
+                let minus = match s.side.as_deref() {
+                    Some(side) => side == "-",
+                    None => matches!(input, Input::LimitXMinus | Input::LimitZMinus),
+                };
                 let was = self.active & bit != 0;
+                // Within a nanometre: the nuts add up steps in floating
+                // point, and a switch at a step's place trips on it.
                 let now = if minus {
-                    *c <= s.at || (was && *c <= s.at + s.hysteresis)
+                    *c <= s.at + EPS || (was && *c <= s.at + s.hysteresis)
                 } else {
-                    *c >= s.at || (was && *c >= s.at - s.hysteresis)
+                    *c >= s.at - EPS || (was && *c >= s.at - s.hysteresis)
                 };
                 if now {
-                    self.active |= bit;
-                } else {
-                    self.active &= !bit;
+                    hit |= bit;
                 }
             }
         }
+        self.active = hit;
         self.started = true;
         self.active
     }
@@ -207,6 +238,14 @@ hysteresis = 0.5
                 "x.switch input \"Z+\"",
             ),
             ("[z]\ntravel = [5.0, -5.0]\n", "z.travel"),
+            (
+                "[z]\n[[z.switch]]\ninput = \"PROBE\"\nat = 1\n",
+                "z.switch PROBE: `side`",
+            ),
+            (
+                "[z]\n[[z.switch]]\ninput = \"Z-\"\nside = \"+\"\nat = 1\n",
+                "side \"+\" is not the way it trips",
+            ),
             ("[y]\n", "unknown field `y`"),
             ("[z]\nbacklash = \"a lot\"\n", "invalid type"),
         ] {

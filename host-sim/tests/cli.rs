@@ -149,7 +149,7 @@ fn serve_refuses_a_bad_machine_file_by_name() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("lathe-bad-") && err.contains("z.switch input \"X+\": Z- or Z+"),
+        err.contains("lathe-bad-") && err.contains("z.switch input \"X+\": Z-, Z+ or PROBE"),
         "{err}"
     );
 }

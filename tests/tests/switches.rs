@@ -319,3 +319,71 @@ fn the_paced_firmware_homes_on_its_switch() {
         "{status}"
     );
 }
+
+/// Probing on the paced firmware: `G38.2` toward a probe the harness
+/// presses once the carriage has gone 10 mm; the firmware stops the steps
+/// on its edge (no alarm, the spindle left alone), reports where
+/// (`!PROBE`) and the registers are there. `G38.4` back off stops where
+/// the harness releases it.
+#[test]
+fn the_paced_firmware_stops_a_probing_move_on_the_probe() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client, mut panel) = booted("probe-paced", "qemu-paced");
+    assert!(ask(&mut client, "INPUT USED=PROBE FILTER=0").starts_with("OK"));
+    panel.sample(QUIET, 3).unwrap();
+    // Sends `line` and follows the carriage: the probe reads pressed while
+    // Z is at `at` (10⁻² mm) or below. Returns the `!PROBE` line and the
+    // request's last line.
+    let probe = |client: &mut Client, panel: &mut Panel, line: &str, at: i64, pressed: bool| {
+        client.write_raw(format!("{line}\n").as_bytes()).unwrap();
+        let mut pressed = pressed;
+        let mut found = None;
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            assert!(Instant::now() < deadline, "{line} did not end");
+            client.write_raw(b"\x80").unwrap();
+            let l = board_line(&client.read_line().unwrap());
+            if l.starts_with("!PROBE") {
+                found = Some(l);
+                continue;
+            }
+            if l.starts_with("DATA") {
+                continue;
+            }
+            if !l.starts_with("!STATUS") {
+                return (found.expect("a !PROBE line"), l);
+            }
+            let now = value(&l, "PZ") <= at;
+            if now != pressed {
+                pressed = now;
+                let pins = if now {
+                    QUIET | Input::Probe.bit()
+                } else {
+                    QUIET
+                };
+                panel.sample(pins, 1).unwrap();
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    };
+    let (touched, ok) = probe(&mut client, &mut panel, "G38.2 Z-30 F300", -1_000, false);
+    assert!(touched.contains(" OK=1"), "{touched}");
+    let pz = value(&touched, "PZ");
+    // The harness presses it a status line late at most: within 1 mm.
+    assert!((-1_100..=-1_000).contains(&pz), "{touched}");
+    assert!(ok.starts_with("OK "), "{ok}");
+    assert_eq!(value(&ok, "PZ"), pz, "the registers are where it stopped");
+    let status = ask(&mut client, "STATUS");
+    assert!(
+        status.starts_with("OK STATE=IDLE") && !status.contains("ALARM"),
+        "{status}"
+    );
+    // Back off: it releases above −10 mm.
+    let (left, ok) = probe(&mut client, &mut panel, "G38.4 Z0 F120", -1_000, true);
+    assert!(left.contains(" OK=1"), "{left}");
+    let back = value(&left, "PZ");
+    assert!((-999..=-900).contains(&back), "{left}");
+    assert_eq!(value(&ok, "PZ"), back);
+}

@@ -4,7 +4,7 @@
 
 use super::reply::ReplyLine;
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
-use crate::length::div_round_half_away;
+use crate::length::{div_round_half_away, Length};
 use crate::machine::Background;
 use crate::outputs::Outputs;
 use crate::stepdir::DriveTiming;
@@ -355,6 +355,22 @@ pub trait Io {
         None
     }
 
+    /// A probing move is about to start (`Some(touch)`) or has ended
+    /// (`None`): meanwhile the transport stops the axes at once where the
+    /// probe becomes active (`touch`) or inactive, as it stops them for a
+    /// hard limit, the spindle and coolant left as they are. The session
+    /// reads where through [`Io::inputs_now`] and the registers.
+    fn probe_arm(&mut self, stop_on: Option<bool>) {
+        let _ = stop_on;
+    }
+
+    /// A probing move ended at the machine position `at` (X on the radius;
+    /// `diameter` when X is shown as a diameter), `changed` when the probe
+    /// changed there: its `!PROBE` line comes next.
+    fn probed(&mut self, at: [Length; 2], diameter: bool, changed: bool) {
+        let _ = (at, diameter, changed);
+    }
+
     /// For a `!STATUS` line: how the transport keeps time, where it
     /// measures it (a board); the line then ends with `LAT= LATE=`.
     fn timing(&mut self) -> Option<Timing> {
@@ -400,6 +416,9 @@ macro_rules! forward_replies {
         }
         fn alarm(&mut self, code: u8) {
             self.inner.alarm(code);
+        }
+        fn probed(&mut self, at: [crate::length::Length; 2], diameter: bool, changed: bool) {
+            self.inner.probed(at, diameter, changed);
         }
     };
 }
@@ -472,6 +491,11 @@ macro_rules! forward_motion {
                 return None;
             }
             self.inner.inputs_now()
+        }
+        fn probe_arm(&mut self, stop_on: Option<bool>) {
+            if !(false $(|| self.$flag)?) {
+                self.inner.probe_arm(stop_on);
+            }
         }
     };
 }

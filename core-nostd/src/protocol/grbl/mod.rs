@@ -66,7 +66,8 @@ fn offsets<I: Io + ?Sized>(session: &Session, io: &mut Translate<'_, I>) {
     put(b"G30", o.reference[1]);
     put(b"G92", o.shift);
     io.line(b"[TLO:0.0000]");
-    io.line(b"[PRB:0.0000,0.0000,0.0000:0]");
+    let l = probe_line(session.last_probe(), diameter);
+    io.inner.send(l.as_bytes());
 }
 
 /// `$G`: the modal state, grblHAL's lathe words included.

@@ -137,3 +137,19 @@ pub fn error_number(why: Refused) -> u8 {
         E::Estop => 50,
     }
 }
+
+/// `[PRB:x,0.0000,z:n]`: where the last probing move ended (machine
+/// coordinates), `n` 1 when the probe changed there.
+pub(super) fn probe_line(probe: Option<crate::inputs::ProbeResult>, diameter: bool) -> ReplyLine {
+    let (at, changed) = probe.map_or(([crate::length::Length::ZERO; 2], false), |p| {
+        (p.at, p.changed)
+    });
+    let mut l = ReplyLine::new();
+    l.push_bytes(b"[PRB:");
+    write_mm(&mut l, at[0].as_angstrom(), diameter);
+    l.push_bytes(b",0.0000,");
+    write_mm(&mut l, at[1].as_angstrom(), false);
+    let _ = write!(l, ":{}]", u8::from(changed));
+    let _ = finish(&mut l);
+    l
+}

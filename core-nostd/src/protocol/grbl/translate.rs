@@ -157,6 +157,14 @@ impl<I: Io + ?Sized> Io for Translate<'_, I> {
         let _ = write!(l, "ALARM:{code}");
         self.inner.send(finish(&mut l));
     }
+    fn probed(&mut self, at: [crate::length::Length; 2], diameter: bool, changed: bool) {
+        if !self.grbl {
+            return self.inner.probed(at, diameter, changed);
+        }
+        let p = crate::inputs::ProbeResult { at, changed };
+        let l = probe_line(Some(p), diameter);
+        self.inner.send(l.as_bytes());
+    }
     fn reset_done(&mut self, running: bool) {
         if self.grbl {
             self.reset = Some(running);

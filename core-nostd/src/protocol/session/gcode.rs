@@ -112,7 +112,7 @@ impl Session {
         let special = b.special;
         if special.is_some() && (self.contour.active() || b.compensation.is_some()) {
             return Err(Refusal::Busy(
-                "G28, G30, G53 and G92 (G50) with nose compensation",
+                "G28, G30, G38, G53 and G92 (G50) with nose compensation",
             ));
         }
         // G92 (G50): the point here takes the block's coordinates.
@@ -180,7 +180,7 @@ impl Session {
         // Words are work coordinates; increments add to the programmed point.
         let mut target = here;
         let words = if b.set_work.is_some()
-            || matches!(special, Some(s) if !matches!(s, Special::Reference(_)))
+            || matches!(special, Some(s) if !matches!(s, Special::Reference(_) | Special::Probe(_)))
         {
             // G10's X and Z are an offset's, G53's machine coordinates,
             // G92's the point here.
@@ -326,9 +326,27 @@ impl Session {
                 }
                 let _ = machine_path.push(end);
             }
+            Some(Special::Probe(_)) => {
+                if modal.feed_mode == FeedMode::PerRev {
+                    return Err(Refusal::Missing(
+                        "G38.2 to G38.5 probe at a feed per minute: G94 (G98) first",
+                    ));
+                }
+                let end = to_machine(target, off)?;
+                if end == self.cmd {
+                    return Err(Refusal::Geometry(
+                        "G38.2 to G38.5 end where the tool already is",
+                    ));
+                }
+                let _ = machine_path.push(end);
+            }
             _ => {}
         }
-        let rapid = special != Some(Special::Machine) || modal.motion == Motion::Rapid;
+        let rapid = match special {
+            Some(Special::Machine) => modal.motion == Motion::Rapid,
+            Some(Special::Probe(_)) => false,
+            _ => true,
+        };
         let feeds = element.is_some_and(|e| !matches!(e.shape, Shape::Line { rapid: true }))
             || (!machine_path.is_empty() && !rapid);
         // Output blocks of the element held back by compensation run at its
@@ -427,6 +445,18 @@ impl Session {
         let machine_m = b
             .machine_m
             .map(|code| (code, self.offsets.mcodes.get(code)));
+        let probe = match special {
+            Some(Special::Probe(mode)) => Some(mode),
+            _ => None,
+        };
+        if let Some(mode) = probe {
+            if b.stop.is_some() || b.gear.is_some() || machine_m.is_some() {
+                return Err(Refusal::Missing(
+                    "G38.2 to G38.5 with M00 to M02, M30, M41 to M44 or a machine's M code: one block each",
+                ));
+            }
+            self.probe_ready(mode, io)?;
+        }
         if (b.gear.is_some() || machine_m.is_some()) && contour.active() {
             return Err(Refusal::Busy("a gear range or a machine's M code"));
         }
@@ -495,6 +525,9 @@ impl Session {
         self.machine.set_spindle(outputs.rpm);
         // The DATA lines write X as this block reads it.
         self.cfg.diam = diam;
+        if let Some(mode) = probe {
+            io.probe_arm(Some(mode.toward));
+        }
         for p in &planned {
             *crc = self.run_planned(p, *crc, io);
         }
@@ -517,6 +550,9 @@ impl Session {
         self.last_moves = moves;
         if element.is_some() {
             self.element_feed = now;
+        }
+        if let Some(mode) = probe {
+            self.probe_end(mode, io)?;
         }
         if pause {
             // At rest where the block ends, until cycle start.

@@ -373,7 +373,7 @@ impl Session {
     /// Locks the machine with `halt`, nothing dropped (what was to move
     /// was refused before it moved): `!ALARM CODE= INPUT= [AXIS=] PX= PZ=`,
     /// the inputs `bits` and the axis concerned.
-    fn lock<I: Io>(&mut self, halt: Halt, bits: u16, axis: Option<&str>, io: &mut I) {
+    pub(super) fn lock<I: Io>(&mut self, halt: Halt, bits: u16, axis: Option<&str>, io: &mut I) {
         self.halt = halt;
         io.alarm(halt.alarm());
         let mut line = ReplyLine::new();

@@ -40,6 +40,7 @@ mod homing;
 mod inputs;
 mod moves;
 mod offsets;
+mod probe;
 mod realtime;
 mod settings;
 pub(super) mod wire;
@@ -135,6 +136,8 @@ pub struct Session {
     /// Each axis has been homed since power-on (and its machine position
     /// not set by hand since): its soft limits apply.
     pub(super) homed: [bool; 2],
+    /// Where the last probing move ended (grbl's `PRB:`).
+    pub(super) probe: Option<crate::inputs::ProbeResult>,
     /// The BCK-5 tape read so far by `TAPE` requests.
     #[cfg(feature = "calc")]
     pub(super) tape: crate::calc::tape::Bck5Verifier,
@@ -185,6 +188,7 @@ impl Session {
             halt: crate::inputs::Halt::None,
             lost: false,
             homed: [false; 2],
+            probe: None,
             element_feed: None,
             top: None,
             spinup_us: 0,

@@ -134,3 +134,18 @@ fn homing_required_locks_at_power_on_until_unlocked() {
     third.restore_offsets(*next.session().offsets());
     assert!(ask1(&mut third, "MOVE X=1").starts_with("OK"));
 }
+
+/// A probing block where nothing reads a probe (the in-process device) is
+/// refused before it moves, and changes nothing.
+#[test]
+fn probing_needs_a_machine_that_reads_the_probe() {
+    let mut dev = Device::new();
+    let r = ask1(&mut dev, "G38.2 Z-10 F100");
+    assert_eq!(
+        r,
+        "ERR SYNTAX G38.2 to G38.5 need a machine with switches (the probe)"
+    );
+    let status = ask1(&mut dev, "STATUS");
+    assert!(status.contains(" PX=0 PZ=0 "), "{status}");
+    assert_eq!(dev.session().last_probe(), None);
+}

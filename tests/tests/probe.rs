@@ -1,0 +1,235 @@
+//! Probing on the simulated machine (`docs/inputs.md` §10): `G38.2`–
+//! `G38.5` on a lathe whose tool setter trips where its machine file puts
+//! it; the move stops on the probe's edge and where it stopped is the
+//! result, for the pendant protocol (`!PROBE`) and a grbl sender (`PRB:`).
+
+use core_nostd::protocol::{Device, Io};
+use host_sim::board::{serve_pty, Board, Pace};
+use host_sim::lathe::MachineFile;
+use host_sim::link::{words_value, Client, Reply};
+use std::time::Duration;
+
+struct Nowhere;
+impl Io for Nowhere {
+    fn send(&mut self, _: &[u8]) {}
+}
+
+/// A lathe with 0.15 mm of play in Z and a tool setter the carriage
+/// touches at Z −50 (machine coordinates) coming from plus.
+const LATHE: &str = r#"
+[x]
+travel = [-2.0, 75.0]
+backlash = 0.08
+[[x.switch]]
+input = "X+"
+at = 74.0
+[z]
+travel = [-400.0, 5.0]
+backlash = 0.15
+[[z.switch]]
+input = "PROBE"
+side = "-"
+at = -50.0
+"#;
+
+/// The lathe behind a board, radius mode, its limit and probe wired; the
+/// link speaks grbl when `grbl`.
+fn lathe(grbl: bool) -> (Board, Client) {
+    let file = MachineFile::parse(LATHE).expect("the file parses");
+    let mut device = Device::new();
+    device.receive_bytes(b"CFG DIAM=0\nINPUT USED=X+,PROBE\n", &mut Nowhere);
+    if grbl {
+        device.set_grbl(true, &mut Nowhere);
+    }
+    let (path, board) = serve_pty(device, Pace::Wall(8.0)).expect("pty");
+    board.set_lathe(file);
+    let mut c = Client::open(&path, Duration::from_secs(30)).expect("open");
+    c.drain();
+    (board, c)
+}
+
+fn ask(c: &mut Client, line: &str) -> Reply {
+    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
+    c.read_reply().expect("reply")
+}
+
+/// Sends `line` and reads to its `!PROBE` line (the block's `DATA`
+/// lines come first).
+fn probe_line(c: &mut Client, line: &str) -> String {
+    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
+    loop {
+        let l = c.read_line().expect("probe line");
+        if l.starts_with("!PROBE") {
+            // Without its `*HH`.
+            return l.split('*').next().unwrap_or_default().to_string();
+        }
+        assert!(l.starts_with("DATA "), "{line}: {l}");
+    }
+}
+
+/// A `!PROBE` line's value of `key` as a number.
+fn num(line: &str, key: &str) -> f64 {
+    words_value(line, key)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{key} in {line}"))
+}
+
+/// The carriage's own Z (play included), mm, from the panel.
+fn carriage_z(board: &Board) -> f64 {
+    let state = board.panel_line("STATE?").expect("state").expect("a line");
+    words_value(&state, "Z")
+        .and_then(|v| v.parse().ok())
+        .expect(&state)
+}
+
+/// `G38.2` stops where the carriage touches the setter: the result is
+/// that point, to the impulse, and the registers are there. `G38.4` back
+/// off it stops where it leaves: later by the screw's play, which the
+/// result shows. A `G38.3` that touches nothing runs to its end and says
+/// so; a `G38.2` that touches nothing locks with alarm 5, one that starts
+/// on the probe with alarm 4, nothing moved.
+#[test]
+fn a_probing_move_stops_where_the_probe_changes() {
+    let (board, mut c) = lathe(false);
+    // Towards the setter: it trips at Z −50 (Z's impulse 0.01 mm).
+    let probe = probe_line(&mut c, "G38.2 Z-60 F200");
+    assert!(probe.starts_with("!PROBE MX=0 MZ="), "{probe}");
+    assert_eq!(words_value(&probe, "OK"), Some("1"), "{probe}");
+    let mz = num(&probe, "MZ");
+    assert!((-50.0..=-49.99).contains(&mz) || mz == -50.0, "{probe}");
+    assert_eq!(num(&probe, "PZ"), mz * 100.0, "{probe}");
+    let ok = c.read_reply().expect("reply");
+    assert!(ok.is_ok(), "{ok:?}");
+    assert_eq!(
+        ok.value("PZ").map(str::to_string),
+        words_value(&probe, "PZ").map(str::to_string)
+    );
+    assert!(
+        (carriage_z(&board) - mz).abs() < 1e-9,
+        "the carriage is where it stopped"
+    );
+    // The program goes on from there: the point is the probe's.
+    let status = ask(&mut c, "STATUS");
+    assert_eq!(
+        status.value("Z").map(|z| z.parse::<f64>().unwrap()),
+        Some(mz),
+        "{status:?}"
+    );
+    // Away from it: the carriage stands still until the nut has taken up
+    // the 0.15 mm of play, then leaves the setter.
+    let off = probe_line(&mut c, "G38.4 Z-40 F50");
+    assert_eq!(words_value(&off, "OK"), Some("1"), "{off}");
+    let left = num(&off, "MZ");
+    assert!(
+        (left - (mz + 0.15 + 0.01)).abs() < 0.0101,
+        "left at {left}, touched at {mz}: {off}"
+    );
+    assert!(c.read_reply().expect("reply").is_ok());
+    // Clear of it, a G38.3 that ends short of the setter: no change, no
+    // alarm, the move ran to its end.
+    assert!(ask(&mut c, "G00 Z0").is_ok());
+    let short = probe_line(&mut c, "G38.3 Z-30 F300");
+    assert_eq!(words_value(&short, "OK"), Some("0"), "{short}");
+    assert_eq!(num(&short, "MZ"), -30.0, "{short}");
+    assert!(c.read_reply().expect("reply").is_ok());
+    // The same with G38.2: alarm 5, locked until UNLOCK.
+    let short = probe_line(&mut c, "G38.2 Z-40 F300");
+    assert_eq!(words_value(&short, "OK"), Some("0"), "{short}");
+    let alarm = c.read_line().expect("alarm");
+    assert!(alarm.starts_with("!ALARM CODE=5 "), "{alarm}");
+    let r = c.read_reply().expect("reply");
+    assert!(
+        r.last.starts_with("ERR ALARM 5: the probe did not change"),
+        "{r:?}"
+    );
+    assert!(ask(&mut c, "G00 Z0").last.starts_with("ERR ALARM 5"));
+    assert!(ask(&mut c, "UNLOCK").is_ok());
+    // On the setter already, a G38.2 towards it is alarm 4 and moves
+    // nothing.
+    assert!(ask(&mut c, "G00 Z-55").is_ok());
+    assert!(ask(&mut c, "SYNC").is_ok());
+    let before = carriage_z(&board);
+    c.write_raw(b"G38.2 Z-60 F100\n").expect("write");
+    let alarm = c.read_line().expect("alarm");
+    assert!(alarm.starts_with("!ALARM CODE=4 INPUT=PROBE "), "{alarm}");
+    let r = c.read_reply().expect("reply");
+    assert!(r.last.starts_with("ERR ALARM 4"), "{r:?}");
+    assert_eq!(carriage_z(&board), before, "nothing moved");
+    assert!(ask(&mut c, "UNLOCK").is_ok());
+}
+
+/// What a probing block needs is checked before anything moves.
+#[test]
+fn a_probing_block_is_refused_before_it_moves() {
+    let (board, mut c) = lathe(false);
+    for (line, why) in [
+        (
+            "G95 G38.2 Z-60 F0.1",
+            "ERR SYNTAX G38.2 to G38.5 probe at a feed per minute",
+        ),
+        (
+            "G38.2 Z0 F100",
+            "ERR GEOMETRY G38.2 to G38.5 end where the tool already is",
+        ),
+        ("G38.2 F100", "ERR SYNTAX G38.2 to G38.5 need X or Z"),
+        (
+            "G01 G38.2 Z-10 F100",
+            "ERR SYNTAX G38.2 to G38.5 are a motion of their own",
+        ),
+        ("G38.2 Z-10 M00 F100", "ERR SYNTAX G38.2 to G38.5 with M00"),
+    ] {
+        let r = ask(&mut c, line);
+        assert!(r.last.starts_with(why), "{line}: {r:?}");
+        assert_eq!(carriage_z(&board), 0.0, "{line} moved nothing");
+        assert!(ask(&mut c, "G94").is_ok());
+    }
+    // Not wired: refused, nothing moved.
+    assert!(ask(&mut c, "INPUT USED=X+").is_ok());
+    let r = ask(&mut c, "G38.2 Z-60 F100");
+    assert!(
+        r.last
+            .starts_with("ERR SYNTAX G38.2 to G38.5 need the probe wired"),
+        "{r:?}"
+    );
+    assert_eq!(carriage_z(&board), 0.0);
+}
+
+/// A grbl sender probes as on grbl: `[PRB:x,y,z:1]` (machine coordinates)
+/// before the block's `ok`, `$#` repeats it; no contact is `ALARM:5`.
+#[test]
+fn a_grbl_sender_reads_prb() {
+    let (_board, mut c) = lathe(true);
+    let say = |c: &mut Client, line: &str| -> Vec<String> {
+        c.write_raw(format!("{line}\n").as_bytes()).expect("write");
+        let mut got = Vec::new();
+        loop {
+            let l = c.read_line().expect("line");
+            let end = l == "ok" || l.starts_with("error:");
+            if !l.is_empty() && !l.starts_with("Grbl") {
+                got.push(l);
+            }
+            if end {
+                return got;
+            }
+        }
+    };
+    assert_eq!(
+        say(&mut c, "G38.2 Z-60 F200"),
+        ["[PRB:0.0000,0.0000,-50.0000:1]", "ok"]
+    );
+    let offsets = say(&mut c, "$#");
+    assert!(
+        offsets.contains(&"[PRB:0.0000,0.0000,-50.0000:1]".to_string()),
+        "{offsets:?}"
+    );
+    assert_eq!(say(&mut c, "G0 Z0"), ["ok"]);
+    let r = say(&mut c, "G38.2 Z-20 F300");
+    assert_eq!(
+        r.first().map(String::as_str),
+        Some("[PRB:0.0000,0.0000,-20.0000:0]"),
+        "{r:?}"
+    );
+    assert_eq!(r.get(1).map(String::as_str), Some("ALARM:5"), "{r:?}");
+    assert_eq!(r.last().map(String::as_str), Some("error:9"), "{r:?}");
+    assert_eq!(say(&mut c, "$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+}
