@@ -48,3 +48,30 @@ pub fn last_x_z(program: &str) -> Option<(f64, f64)> {
         .rev()
         .find_map(|l| Some((word(l, 'X')?, word(l, 'Z')?)))
 }
+
+/// A lathe of machine file `text` behind a simulated board that first
+/// takes `setup` (pendant requests: its wiring, radius mode), speaking
+/// grbl when `grbl`; the link to it, drained. The homing and probing
+/// tests' machine.
+pub fn lathe_board(
+    text: &str,
+    setup: &str,
+    grbl: bool,
+) -> (host_sim::board::Board, host_sim::link::Client) {
+    use core_nostd::protocol::{Device, Io};
+    struct Nowhere;
+    impl Io for Nowhere {
+        fn send(&mut self, _: &[u8]) {}
+    }
+    let file = host_sim::lathe::MachineFile::parse(text).expect("the machine file parses");
+    let mut device = Device::new();
+    device.receive_bytes(setup.as_bytes(), &mut Nowhere);
+    if grbl {
+        device.set_grbl(true, &mut Nowhere);
+    }
+    let (path, board) =
+        host_sim::board::serve_pty(device, host_sim::board::Pace::Wall(8.0)).expect("pty");
+    board.set_lathe(file);
+    let c = host_sim::link::Client::open(&path, std::time::Duration::from_secs(30)).expect("open");
+    (board, c)
+}

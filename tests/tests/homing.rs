@@ -2,17 +2,10 @@
 //! lathe from a machine file behind the simulated board, its carriages
 //! tripping their switches where the file puts them.
 
-use core_nostd::protocol::{Device, Io};
-use host_sim::board::{serve_pty, Board, Pace};
-use host_sim::lathe::MachineFile;
+use host_sim::board::Board;
 use host_sim::link::{Client, Reply};
 use std::path::PathBuf;
 use std::time::Duration;
-
-struct Nowhere;
-impl Io for Nowhere {
-    fn send(&mut self, _: &[u8]) {}
-}
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -22,15 +15,13 @@ fn root() -> PathBuf {
 /// four limit switches wired, radius mode.
 fn lathe() -> (Board, Client) {
     let text = std::fs::read_to_string(root().join("examples/machine.toml")).expect("file");
-    let file = MachineFile::parse(&text).expect("the example parses");
-    let mut device = Device::new();
-    device.receive_bytes(b"CFG DIAM=0\nINPUT USED=X-,X+,Z-,Z+\n", &mut Nowhere);
-    let (path, board) = serve_pty(device, Pace::Wall(8.0)).expect("pty");
-    board.set_lathe(file);
-    let mut c = Client::open(&path, Duration::from_secs(30)).expect("open");
+    let (board, mut c) = tests::lathe_board(&text, SETUP, false);
     c.drain();
     (board, c)
 }
+
+/// Radius mode, the four limit switches wired.
+const SETUP: &str = "CFG DIAM=0\nINPUT USED=X-,X+,Z-,Z+\n";
 
 fn ask(c: &mut Client, line: &str) -> Reply {
     c.write_raw(format!("{line}\n").as_bytes()).expect("write");
@@ -215,13 +206,7 @@ fn a_switch_not_found_within_the_travel_raises_alarm_9() {
 #[test]
 fn a_grbl_sender_homes_with_grbls_settings() {
     let text = std::fs::read_to_string(root().join("examples/machine.toml")).expect("file");
-    let file = MachineFile::parse(&text).expect("the example parses");
-    let mut device = Device::new();
-    device.receive_bytes(b"CFG DIAM=0\nINPUT USED=X-,X+,Z-,Z+\n", &mut Nowhere);
-    device.set_grbl(true, &mut Nowhere);
-    let (path, board) = serve_pty(device, Pace::Wall(8.0)).expect("pty");
-    board.set_lathe(file);
-    let mut c = Client::open(&path, Duration::from_secs(30)).expect("open");
+    let (board, mut c) = tests::lathe_board(&text, SETUP, true);
     // A board greets the sender that opens its port.
     assert_eq!(c.read_line().expect("banner"), "");
     assert!(c.read_line().expect("banner").starts_with("Grbl 1.1h"));

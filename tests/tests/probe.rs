@@ -3,16 +3,8 @@
 //! it; the move stops on the probe's edge and where it stopped is the
 //! result, for the pendant protocol (`!PROBE`) and a grbl sender (`PRB:`).
 
-use core_nostd::protocol::{Device, Io};
-use host_sim::board::{serve_pty, Board, Pace};
-use host_sim::lathe::MachineFile;
+use host_sim::board::Board;
 use host_sim::link::{words_value, Client, Reply};
-use std::time::Duration;
-
-struct Nowhere;
-impl Io for Nowhere {
-    fn send(&mut self, _: &[u8]) {}
-}
 
 /// A lathe with 0.15 mm of play in Z and a tool setter the carriage
 /// touches at Z −50 (machine coordinates) coming from plus.
@@ -35,15 +27,7 @@ at = -50.0
 /// The lathe behind a board, radius mode, its limit and probe wired; the
 /// link speaks grbl when `grbl`.
 fn lathe(grbl: bool) -> (Board, Client) {
-    let file = MachineFile::parse(LATHE).expect("the file parses");
-    let mut device = Device::new();
-    device.receive_bytes(b"CFG DIAM=0\nINPUT USED=X+,PROBE\n", &mut Nowhere);
-    if grbl {
-        device.set_grbl(true, &mut Nowhere);
-    }
-    let (path, board) = serve_pty(device, Pace::Wall(8.0)).expect("pty");
-    board.set_lathe(file);
-    let mut c = Client::open(&path, Duration::from_secs(30)).expect("open");
+    let (board, mut c) = tests::lathe_board(LATHE, "CFG DIAM=0\nINPUT USED=X+,PROBE\n", grbl);
     c.drain();
     (board, c)
 }
