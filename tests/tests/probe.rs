@@ -27,7 +27,13 @@ at = -50.0
 /// The lathe behind a board, radius mode, its limit and probe wired; the
 /// link speaks grbl when `grbl`.
 fn lathe(grbl: bool) -> (Board, Client) {
-    let (board, mut c) = tests::lathe_board(LATHE, "CFG DIAM=0\nINPUT USED=X+,PROBE\n", grbl);
+    let wiring = if grbl {
+        // A grbl sender wires its probe with $6.
+        "CFG DIAM=0\nINPUT USED=X+\n"
+    } else {
+        "CFG DIAM=0\nINPUT USED=X+,PROBE\n"
+    };
+    let (board, mut c) = tests::lathe_board(LATHE, wiring, grbl);
     c.drain();
     (board, c)
 }
@@ -178,8 +184,9 @@ fn a_probing_block_is_refused_before_it_moves() {
     assert_eq!(carriage_z(&board), 0.0);
 }
 
-/// A grbl sender probes as on grbl: `[PRB:x,y,z:1]` (machine coordinates)
-/// before the block's `ok`, `$#` repeats it; no contact is `ALARM:5`.
+/// A grbl sender probes as on grbl: `$6` (how the probe reads) wires it;
+/// `[PRB:x,y,z:1]` (machine coordinates) before the block's `ok`, `$#`
+/// repeats it; no contact is `ALARM:5`.
 #[test]
 fn a_grbl_sender_reads_prb() {
     let (_board, mut c) = lathe(true);
@@ -197,6 +204,17 @@ fn a_grbl_sender_reads_prb() {
             }
         }
     };
+    let unwired = say(&mut c, "G38.2 Z-60 F200");
+    assert_eq!(
+        unwired.first().map(String::as_str),
+        Some("[MSG:SYNTAX G38.2 to G38.5 need the probe wired: $6=0 (or $6=1, inverted) wires it]"),
+        "{unwired:?}"
+    );
+    assert!(
+        unwired.last().is_some_and(|l| l.starts_with("error:")),
+        "{unwired:?}"
+    );
+    assert_eq!(say(&mut c, "$6=0"), ["ok"]);
     assert_eq!(
         say(&mut c, "G38.2 Z-60 F200"),
         ["[PRB:0.0000,0.0000,-50.0000:1]", "ok"]

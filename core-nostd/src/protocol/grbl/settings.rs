@@ -57,11 +57,14 @@ pub(super) enum Place {
     /// A mask of grbl's over the switches' wiring (`INPUT`): each bit
     /// it knows stands for inputs; `used` sets which are wired (`$21`),
     /// else which read active low (`$5`, `$6`, `$14`). A bit it does not
-    /// know is refused with the reason.
+    /// know is refused with the reason. Setting it also wires `wires`
+    /// (`$6`: a grbl board always has its probe input, and setting how it
+    /// reads is how a sender commissions it).
     Inputs {
         used: bool,
         bits: &'static [(u8, u16)],
         other: &'static str,
+        wires: u16,
     },
     /// `$22`, grblHAL's homing mask: bit 0 the cycle on (`HOMING
     /// AXES=XZ`, else `-`), bit 1 single-axis commands (always on here),
@@ -119,6 +122,7 @@ pub(super) const SETTINGS: [Setting; 34] = [
             used: false,
             bits: &[(0, LIMITS_X), (2, LIMITS_Z)],
             other: "bit 0 X, bit 2 Z: a lathe has no Y",
+            wires: 0,
         },
     ),
     setting(
@@ -127,6 +131,7 @@ pub(super) const SETTINGS: [Setting; 34] = [
             used: false,
             bits: &[(0, Input::Probe.bit())],
             other: "0 or 1",
+            wires: Input::Probe.bit(),
         },
     ),
     setting(10, Place::ReportMask),
@@ -156,6 +161,7 @@ pub(super) const SETTINGS: [Setting; 34] = [
                 (6, Input::Estop.bit()),
             ],
             other: "bits 1 hold, 2 cycle start, 3 door, 6 E-stop: this board has no reset, block delete, optional stop or probe-connected input",
+            wires: 0,
         },
     ),
     setting(
@@ -170,6 +176,7 @@ pub(super) const SETTINGS: [Setting; 34] = [
             used: true,
             bits: &[(0, LIMITS_X | LIMITS_Z)],
             other: "0 or 1 (hard limits on all four switches; INPUT USED= wires fewer)",
+            wires: 0,
         },
     ),
     setting(22, Place::HomingCycle),
@@ -497,7 +504,12 @@ pub(super) fn set<I: Io + ?Sized>(
                 Err(_) => refuse_setting(io, 3, s.n, b"not a key of HOMING"),
             }
         }
-        Place::Inputs { used, bits, other } => {
+        Place::Inputs {
+            used,
+            bits,
+            other,
+            wires,
+        } => {
             let known = bits.iter().fold(0u32, |m, (bit, _)| m | 1 << bit);
             let Some(mask) = parse_setting(v, false).filter(|m| m & !known == 0) else {
                 return refuse_setting(io, 3, s.n, other.as_bytes());
@@ -513,7 +525,12 @@ pub(super) fn set<I: Io + ?Sized>(
             let _ = write_names(&mut names, field & !all | chosen);
             let names = core::str::from_utf8(names.as_bytes()).unwrap_or("-");
             let key = if used { "USED" } else { "INVERT" };
-            match Request::command(Command::Input, &[(key, names)]) {
+            let mut wired = ReplyLine::new();
+            let _ = write_names(&mut wired, w.used | wires);
+            let wired = core::str::from_utf8(wired.as_bytes()).unwrap_or("-");
+            let words = [(key, names), ("USED", wired)];
+            let words = if wires != 0 { &words[..] } else { &words[..1] };
+            match Request::command(Command::Input, words) {
                 Ok(request) => session.request(&request, io),
                 Err(_) => refuse_setting(io, 3, s.n, b"not a key of INPUT"),
             }

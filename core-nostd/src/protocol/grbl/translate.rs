@@ -8,9 +8,14 @@ use core::fmt::Write;
 
 /// A refusal's way to the other dialect, as the pendant protocol ends it
 /// and as a grbl sender sets it (`$450`).
-const DIALECT_HINTS: [(&[u8], &[u8]); 2] = [
+const DIALECT_HINTS: [(&[u8], &[u8]); 3] = [
     (b"(OPT DIALECT=FANUC)", b"($450=1)"),
     (b"(OPT DIALECT=ISO)", b"($450=0)"),
+    // And the way to wire the probe.
+    (
+        b"INPUT USED= with PROBE",
+        b"$6=0 (or $6=1, inverted) wires it",
+    ),
 ];
 
 /// The one [`Io`] the session answers through (so that its code exists

@@ -149,3 +149,24 @@ fn probing_needs_a_machine_that_reads_the_probe() {
     assert!(status.contains(" PX=0 PZ=0 "), "{status}");
     assert_eq!(dev.session().last_probe(), None);
 }
+
+/// A grbl sender wires the probe with `$6` (how it reads): the wiring
+/// gains PROBE, the other inputs kept.
+#[test]
+fn grbls_probe_setting_wires_the_probe() {
+    struct Out;
+    impl Io for Out {
+        fn send(&mut self, _: &[u8]) {}
+    }
+    let mut dev = Device::new();
+    dev.receive_bytes(b"INPUT USED=X+\n", &mut Out);
+    dev.set_grbl(true, &mut Out);
+    dev.receive_bytes(b"$6=1\n", &mut Out);
+    let w = dev.session().offsets().wiring;
+    let probe = crate::inputs::Input::Probe.bit();
+    let x = crate::inputs::Input::LimitXPlus.bit();
+    assert_eq!((w.used, w.invert), (x | probe, probe));
+    dev.receive_bytes(b"$6=0\n", &mut Out);
+    let w = dev.session().offsets().wiring;
+    assert_eq!((w.used, w.invert), (x | probe, 0));
+}
