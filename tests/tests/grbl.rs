@@ -460,7 +460,7 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
 
 /// `$5`, `$6`, `$14` and `$21` as grblHAL numbers them set the switches'
 /// wiring (`INPUT`): limit pins inverted per axis, the probe inverted, the
-/// control inputs inverted, hard limits on; each is read back in `$$` and
+/// control inputs inverted ($6 wires the probe too), hard limits on; each is read back in `$$` and
 /// in `INPUT`, and a bit this lathe has no input for is refused by name.
 #[test]
 fn a_sender_wires_the_switches_with_grbls_settings() {
@@ -482,7 +482,7 @@ fn a_sender_wires_the_switches_with_grbls_settings() {
     assert_eq!(text(&mut dev, b"$PENDANT\n"), "ok\r\n");
     let r = text(&mut dev, b"INPUT\n");
     assert!(
-        r.starts_with("OK USED=X-,X+,Z-,Z+ INVERT=ESTOP,Z-,Z+,DOOR,PROBE FILTER=0"),
+        r.starts_with("OK USED=X-,X+,Z-,Z+,PROBE INVERT=ESTOP,Z-,Z+,DOOR,PROBE FILTER=0"),
         "{r}"
     );
     assert!(text(&mut dev, b"GRBL\n").contains("Grbl 1.1h"));
