@@ -323,16 +323,21 @@ pub struct ToolWord {
     pub offset: Option<u8>,
 }
 
-/// `G10 L2`/`L20`: a work offset register set from the block's `X`/`Z`.
+/// `G10 L2`/`L20`: a work offset register set from the block's `X`/`Z`;
+/// (ISO) `G10 L1`/`L10`: a tool's geometry offset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SetWork {
-    /// 1 … 6: `G54` … `G59`; 0 (ISO): the system in effect once the
-    /// block's own `G54`–`G59` is taken.
+    /// A work offset: 1 … 6, `G54` … `G59`; 0 (ISO): the system in effect
+    /// once the block's own `G54`–`G59` is taken. A tool's: its register,
+    /// 1 … 32.
     pub register: u8,
-    /// `L20`: so that the current point has the coordinates `X`/`Z`;
-    /// `L2`: to them.
+    /// `L20`, `L10`: so that the current point has the coordinates
+    /// `X`/`Z` (with that tool's offset in effect, for `L10`); `L2`, `L1`:
+    /// to them.
     pub here: bool,
+    /// `L1`, `L10`: the register is a tool's.
+    pub tool: bool,
 }
 
 /// LinuxCNC's `G41.1`/`G42.1 D L`: the nose given in the block.
@@ -1486,16 +1491,29 @@ impl Reading {
             }
             Some(100) => {
                 let form = |why| Err((BlockError::Form(why), once_at));
-                let here = match self.l.map(|(l, _)| l) {
-                    Some(2) => false,
-                    Some(20) => true,
+                let iso = self.dialect == Dialect::Iso;
+                let (here, tool) = match self.l.map(|(l, _)| l) {
+                    Some(2) => (false, false),
+                    Some(20) => (true, false),
+                    Some(1) if iso => (false, true),
+                    Some(10) if iso => (true, true),
+                    _ if iso => {
+                        return form("G10 needs L2 or L20 (a work offset), L1 or L10 (a tool's)")
+                    }
                     _ => return form("G10 needs L2 or L20 (a work offset)"),
                 };
-                let register = match self.p {
-                    Some((p @ 1..=6, _)) => p as u8,
+                let register = match (tool, self.p) {
+                    (true, Some((p @ 1..=32, _))) => p as u8,
+                    (true, Some((_, at))) => {
+                        return Err((BlockError::Range(b'P', "names a tool's register: 1 to 32"), at))
+                    }
+                    (true, None) => {
+                        return form("G10 L1 and L10 need P: the tool's register, 1 to 32")
+                    }
+                    (false, Some((p @ 1..=6, _))) => p as u8,
                     // ISO (LinuxCNC, grbl): the system in effect.
-                    Some((0, _)) if self.dialect == Dialect::Iso => 0,
-                    Some((0, at)) => {
+                    (false, Some((0, _))) if iso => 0,
+                    (false, Some((0, at))) => {
                         return Err((
                             BlockError::Range(
                                 b'P',
@@ -1504,18 +1522,28 @@ impl Reading {
                             at,
                         ))
                     }
-                    Some((_, at)) => {
+                    (false, Some((_, at))) => {
                         return Err((BlockError::Range(b'P', "names G54 to G59: 1 to 6"), at))
                     }
-                    None => return form("G10 needs P, the work offset: 1 to 6 (G54 to G59)"),
+                    (false, None) => {
+                        return form("G10 needs P, the work offset: 1 to 6 (G54 to G59)")
+                    }
                 };
                 if b.i.is_some() || b.k.is_some() || b.r.is_some() {
-                    return form("G10 takes X and Z");
+                    return form(if tool {
+                        "G10 L1 and L10 take X and Z (a nose is set with TOOL R= TIP=)"
+                    } else {
+                        "G10 takes X and Z"
+                    });
                 }
                 if b.incremental_x || b.incremental_z {
                     return form("G10 takes X and Z, not U and W");
                 }
-                b.set_work = Some(SetWork { register, here });
+                b.set_work = Some(SetWork {
+                    register,
+                    here,
+                    tool,
+                });
                 self.p = None;
                 self.l = None;
             }

@@ -88,6 +88,16 @@ const PEERS: &[Peer] = &[
         inch: true,
     },
     Peer {
+        name:
+            "a tool's offsets set by G10 L1 and by G10 L10 where the tool stands, reloaded by G43",
+        body: "G18 G21 G8 G90\nG10 L1 P2 X1.5 Z-3\nT2 M6 G43\nG00 X10 Z5\nG01 Z-4 F100\n\
+               G10 L10 P2 Z0 X7.25\nG43\nG01 X12 Z-2\nG00 X20 Z10\nM2\n",
+        tool: None,
+        entry: &[],
+        x_only: &[],
+        inch: false,
+    },
+    Peer {
         name: "spaces and tabs between letters and numbers",
         body: "G 18 G21 G7 G90\nG00 X 30 Z\t5\nG01 Z -10 F 100\nG02 X 40 Z -15 R 5\n\
                G00 X 50 Z 5\nM 2\n",

@@ -235,3 +235,29 @@ fn a_grbl_sender_reads_prb() {
     assert_eq!(r.last().map(String::as_str), Some("error:9"), "{r:?}");
     assert_eq!(say(&mut c, "$X"), ["[MSG:Caution: Unlocked]", "ok"]);
 }
+
+/// A tool setter's touch-off in a program, as LinuxCNC writes it: probe
+/// the setter with the tool, then `G10 L10` makes that point Z0 with the
+/// tool's offset, written to its register. The simulated setter trips at
+/// the carriage's place whatever the tool, so two tools touched off get
+/// the same offset, the setter's machine Z.
+#[test]
+fn a_tool_setter_touch_off_writes_the_tools_offset() {
+    let (_board, mut c) = lathe(false);
+    // Clear of the setter: Z0 with no offset, then Z10 above it with
+    // tool 1's.
+    for (tool, before) in [(1, "G00 Z0"), (2, "G00 Z10")] {
+        assert!(ask(&mut c, before).is_ok());
+        assert!(ask(&mut c, &format!("T{tool} M06 G43")).is_ok());
+        let touched = probe_line(&mut c, "G38.2 Z-60 F200");
+        assert!(touched.ends_with(" OK=1"), "{touched}");
+        assert!(c.read_reply().expect("reply").is_ok());
+        assert!(ask(&mut c, &format!("G10 L10 P{tool} Z0")).is_ok());
+        let pos = ask(&mut c, "POS");
+        assert_eq!(pos.value("Z"), Some("0.0000"), "tool {tool}: {pos:?}");
+    }
+    let t1 = ask(&mut c, "TOOL N=1");
+    let t2 = ask(&mut c, "TOOL N=2");
+    assert_eq!(t1.value("Z"), Some("-50.0000"), "{t1:?}");
+    assert_eq!(t2.value("Z"), t1.value("Z"), "{t2:?}");
+}

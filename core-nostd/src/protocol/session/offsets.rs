@@ -135,6 +135,39 @@ impl Session {
             }
         }
         let mut offsets = self.offsets;
+        if let Some(set) = b.set_work.filter(|s| s.tool) {
+            // G10 L1/L10: a tool's geometry; L10 so that the point here,
+            // with that tool's offset in the work system in effect, has
+            // the block's coordinates (machine = work + system + tool +
+            // G92: the tool's geometry is what is left, less its wear).
+            let values = [block_x(b, diam), b.z];
+            let system = offsets
+                .work
+                .get(usize::from(sel.wcs))
+                .copied()
+                .unwrap_or([Length::ZERO; 2]);
+            let shift = offsets.shift;
+            let entry = usize::from(set.register)
+                .checked_sub(1)
+                .and_then(|i| offsets.tools.get_mut(i))
+                .ok_or(Refusal::Value("P", "names a tool's register: 1 to 32"))?;
+            for a in 0..2 {
+                let Some(v) = values.get(a).copied().flatten() else {
+                    continue;
+                };
+                let g = if set.here {
+                    self.cmd[a & 1]
+                        .checked_sub(system[a & 1])
+                        .and_then(|p| p.checked_sub(shift[a & 1]))
+                        .and_then(|p| p.checked_sub(entry.wear[a & 1]))
+                        .and_then(|p| p.checked_sub(v))
+                } else {
+                    Some(v)
+                };
+                entry.geometry[a & 1] = g.ok_or(Refusal::Range(RANGE_OFFSET))?;
+            }
+            return Ok((sel, offsets));
+        }
         if let Some(set) = b.set_work {
             // The tool's offset with the selection of this block.
             let tool = offsets

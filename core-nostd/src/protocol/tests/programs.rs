@@ -261,6 +261,56 @@ fn g10_p0_sets_the_work_system_in_effect() {
     assert_eq!(ask1(&mut dev, "WORK G=56"), "OK G=56 X=10.0000 Z=-7.5000");
 }
 
+/// ISO `G10 L1`/`L10` (LinuxCNC): a tool's geometry set to the block's
+/// values, or so that the point here reads them with that tool's offset in
+/// effect (a tool setter's touch-off in a program, after a `G38.2`); the
+/// machine stays where it is. X is a diameter as the block reads it.
+#[test]
+fn g10_l1_and_l10_set_a_tools_geometry() {
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "G10 L1 P3 X4 Z-2").starts_with("OK"));
+    let t3 = ask1(&mut dev, "TOOL N=3");
+    assert!(t3.starts_with("OK N=3 X=4.0000 Z=-2.0000 "), "{t3}");
+    ask(&mut dev, b"G00 X20 Z-4\n");
+    assert!(ask1(&mut dev, "TOOL N=3 WZ=0.5").starts_with("OK"));
+    ask(&mut dev, b"T3 M06 G43\n");
+    // Z0 here with tool 3: its geometry is what is left, less its wear.
+    assert!(ask1(&mut dev, "G10 L10 P3 Z0").starts_with("OK"));
+    let t3 = ask1(&mut dev, "TOOL N=3");
+    assert!(t3.starts_with("OK N=3 X=4.0000 Z=-4.5000 "), "{t3}");
+    assert_eq!(
+        ask1(&mut dev, "POS"),
+        "OK PX=2000 PZ=-400 X=16.0000 Z=0.0000 MX=20.0000 MZ=-4.0000"
+    );
+    // X30 (a diameter) here: the geometry is −10 on the diameter.
+    assert!(ask1(&mut dev, "G10 L10 P3 X30").starts_with("OK"));
+    assert!(ask1(&mut dev, "TOOL N=3").starts_with("OK N=3 X=-10.0000 Z=-4.5000 "));
+    assert!(ask1(&mut dev, "POS").contains(" X=30.0000 Z=0.0000 MX=20.0000 MZ=-4.0000"));
+    let before = ask1(&mut dev, "TOOL N=3");
+    for (line, want) in [
+        (
+            "G10 L1 P33 X0",
+            "ERR VALUE P names a tool's register: 1 to 32",
+        ),
+        ("G10 L10 X0", "ERR SYNTAX G10 L1 and L10 need P"),
+        ("G10 L10 P3 R1 Z0", "ERR SYNTAX G10 L1 and L10 take X and Z"),
+        (
+            "G10 L3 P1 X0",
+            "ERR SYNTAX G10 needs L2 or L20 (a work offset), L1 or L10 (a tool's)",
+        ),
+    ] {
+        let r = ask1(&mut dev, line);
+        assert!(r.starts_with(want), "{line}: {r}");
+    }
+    assert_eq!(ask1(&mut dev, "TOOL N=3"), before);
+    // Fanuc's G10 sets its tool offsets otherwise: L1/L10 are refused.
+    ask1(&mut dev, "OPT DIALECT=FANUC");
+    assert_eq!(
+        ask1(&mut dev, "G10 L1 P1 X0"),
+        "ERR SYNTAX G10 needs L2 or L20 (a work offset)"
+    );
+}
+
 /// Safety: an axis a block does not name never moves, whatever changed
 /// the offsets before it (a work system set or selected, G92 and its kin,
 /// a tool's offset), in both dialects; a named axis takes the new offset up.
