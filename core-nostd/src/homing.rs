@@ -55,6 +55,9 @@ pub struct HomingConfig {
     /// Soft limits: once an axis is homed, motion that would leave its
     /// travel is refused before it starts (grbl's `$20`).
     pub soft: bool,
+    /// With soft limits, a jog past the travel runs up to it instead of
+    /// being refused (grblHAL's `$40`).
+    pub jog_clip: bool,
 }
 
 /// `n` mm, for the constants (within the length's limit).
@@ -83,6 +86,7 @@ impl HomingConfig {
         z_first: false,
         required: false,
         soft: false,
+        jog_clip: false,
     };
 
     /// The axes homed (0 X, 1 Z), in the cycle's order.

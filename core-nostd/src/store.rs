@@ -138,7 +138,8 @@ fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
         | axis(h.axes[1]) << 2
         | i64::from(h.z_first) << 4
         | i64::from(h.required) << 5
-        | i64::from(h.soft) << 6;
+        | i64::from(h.soft) << 6
+        | i64::from(h.jog_clip) << 7;
     let homing = [
         flags,
         i64::from(h.seek),
@@ -308,7 +309,7 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
     }
     if with_homing {
         let flags = next();
-        if flags & !0x7F != 0 {
+        if flags & !0xFF != 0 {
             return None;
         }
         let rate = |v: i64| u32::try_from(v).ok();
@@ -321,6 +322,7 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
         h.z_first = flags & 16 != 0;
         h.required = flags & 32 != 0;
         h.soft = flags & 64 != 0;
+        h.jog_clip = flags & 128 != 0;
         h.seek = rate(next())?;
         h.locate = rate(next())?;
         h.pulloff = Length::from_angstrom(next())?;
@@ -450,6 +452,7 @@ mod tests {
         o.homing.z_first = k % 2 == 0;
         o.homing.required = k % 3 == 0;
         o.homing.soft = k % 4 == 1;
+        o.homing.jog_clip = k % 2 == 0;
         o
     }
 
@@ -540,7 +543,7 @@ mod tests {
     fn homing_settings_out_of_range_are_a_broken_record() {
         // The flags' word (a bit beyond them), the seek (0), the pull-off
         // (0), a travel beyond 10 m: each refused, the older record loads.
-        for (index, bad) in [(0, 128i64), (1, 0), (3, 0), (6, 100_001_000_000)] {
+        for (index, bad) in [(0, 256i64), (1, 0), (3, 0), (6, 100_001_000_000)] {
             let mut f = Nor::new();
             let seq = save(&mut f, &table(1), 0);
             save(&mut f, &table(2), seq);

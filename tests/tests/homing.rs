@@ -110,7 +110,7 @@ fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
         &mut c,
         "HOMING AXES=X HOMEX=70 TRAVELX=77 SEEK=3000 LOCATE=300 PULLOFF=1 SOFT=1",
     );
-    assert!(set.last.ends_with(" SOFT=1"), "{set:?}");
+    assert!(set.last.ends_with(" SOFT=1 JOGCLIP=0"), "{set:?}");
     // Not homed yet: nothing refused.
     assert!(ask(&mut c, "MOVE X=20").is_ok());
     assert!(ask(&mut c, "HOME").is_ok());
@@ -164,6 +164,38 @@ fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
         (home.0 - 1.0 - x).abs() < 0.09,
         "at X69: {x} (home {home:?})"
     );
+    // Jogs clipped (JOGCLIP=1, grblHAL's $40): a MOVE past the travel runs
+    // up to it; a G-code block past it is still refused.
+    let clip = ask(&mut c, "HOMING JOGCLIP=1");
+    assert!(clip.last.ends_with(" SOFT=1 JOGCLIP=1"), "{clip:?}");
+    let r = ask(&mut c, "MOVE X=75 F=3000");
+    assert!(r.is_ok(), "{r:?}");
+    assert_eq!(
+        r.value("PX"),
+        Some("14000"),
+        "X at 70, the travel's end: {r:?}"
+    );
+    assert!(ask(&mut c, "MOVE X=60 F=3000").is_ok());
+    let r = ask(&mut c, "MOVE X=80 Z=-1 F=3000");
+    assert_eq!(r.value("PX"), Some("14000"), "X at 70 again: {r:?}");
+    assert_eq!(
+        r.value("PZ"),
+        Some("-100"),
+        "Z not homed, not clipped: {r:?}"
+    );
+    assert!(ask(&mut c, "SYNC").is_ok());
+    assert!(
+        (carriage(&board).0 - home.0).abs() < 0.09,
+        "the carriage at home, no switch tripped"
+    );
+    let r = ask(&mut c, "G01 X71 F500");
+    assert!(
+        r.last.starts_with("ERR RANGE X would leave its travel"),
+        "{r:?}"
+    );
+    assert_eq!(ask(&mut c, "UNLOCK").last, "OK LOST=0");
+    assert!(ask(&mut c, "MOVE X=69 Z=0 F=3000").is_ok());
+    assert!(ask(&mut c, "SYNC").is_ok());
     // Set by hand: the machine position is no longer homing's.
     assert!(ask(&mut c, "ZERO X=0").is_ok());
     assert!(ask(&mut c, "MOVE X=5").is_ok());
@@ -250,6 +282,15 @@ fn a_grbl_sender_homes_with_grbls_settings() {
     let r = say(&mut c, "$J=G91 G21 X0.5 F500");
     assert_eq!(r.last().map(String::as_str), Some("error:15"), "{r:?}");
     assert_eq!(say(&mut c, "$J=G91 G21 X-0.5 F500"), ["ok"]);
+    // $40=1 (grblHAL's jog soft limits): a jog past the travel runs up to
+    // it, X back at 0.
+    assert_eq!(say(&mut c, "$40=1"), ["ok"]);
+    assert_eq!(say(&mut c, "$J=G91 G21 X2 F500"), ["ok"]);
+    assert_eq!(say(&mut c, "G4 P0.1"), ["ok"]);
+    c.write_raw(b"?").expect("status");
+    let report = c.read_line().expect("report");
+    assert!(report.contains("|MPos:0.0000,0.0000,0.0000|"), "{report}");
+    assert_eq!(say(&mut c, "$40=0"), ["ok"]);
     // A program's block beyond: ALARM:2, its error, and the lines after
     // it refused until $X (grbl's soft-limit alarm; nothing moved).
     let r = say(&mut c, "G01 X1 F500");

@@ -131,7 +131,7 @@ pub const REQUESTS: [Spec; 28] = [
     spec(Command::Input, "INPUT USED INVERT FILTER"),
     spec(
         Command::Homing,
-        "HOMING AXES DIRX DIRZ HOMEX HOMEZ TRAVELX TRAVELZ SEEK LOCATE PULLOFF ORDER REQUIRED SOFT",
+        "HOMING AXES DIRX DIRZ HOMEX HOMEZ TRAVELX TRAVELZ SEEK LOCATE PULLOFF ORDER REQUIRED SOFT JOGCLIP",
     ),
     spec(Command::Home, "HOME AXES"),
     spec(Command::Gear, "GEAR N TOP"),
@@ -203,7 +203,7 @@ impl Command {
             Command::Reset => &["RESET"],
             Command::Unlock => &["UNLOCK"],
             Command::Input => &["INPUT [USED=names|-] [INVERT=names|-] [FILTER=0..100]"],
-            Command::Homing => &["HOMING [AXES=X|Z|XZ|-] [DIRX=+|-] [DIRZ=+|-] [HOMEX=] [HOMEZ=] [TRAVELX=] [TRAVELZ=] [SEEK=] [LOCATE=] [PULLOFF=] [ORDER=XZ|ZX] [REQUIRED=0|1] [SOFT=0|1]"],
+            Command::Homing => &["HOMING [AXES=X|Z|XZ|-] [DIRX=+|-] [DIRZ=+|-] [HOMEX=] [HOMEZ=] [TRAVELX=] [TRAVELZ=] [SEEK=] [LOCATE=] [PULLOFF=] [ORDER=XZ|ZX] [REQUIRED=0|1] [SOFT=0|1] [JOGCLIP=0|1]"],
             Command::Home => &["HOME [AXES=X|Z|XZ]"],
             Command::Gear => &["GEAR [N=1..4 TOP=]"],
             Command::Mcode => &["MCODE [M= [DO=STOP|NONE|ON|OFF|HIGH|LOW] [N=1..4]]"],

@@ -95,7 +95,7 @@ pub(super) const fn setting(n: u16, place: Place) -> Setting {
 /// this board to act on (inverted pins, limit and home switches) accept
 /// only the value that leaves the machine as it is; the rest of grbl's
 /// list is kept and read back.
-pub(super) const SETTINGS: [Setting; 34] = [
+pub(super) const SETTINGS: [Setting; 35] = [
     setting(
         0,
         Place::Request(Command::Drive, "PULSE", |s, l| {
@@ -213,6 +213,13 @@ pub(super) const SETTINGS: [Setting; 34] = [
     setting(
         32,
         Place::Fixed(b"2", 3, "this is a lathe: grblHAL's lathe mode 2"),
+    ),
+    // grblHAL's jog soft limits: a jog past the travel runs up to it.
+    setting(
+        40,
+        Place::Request(Command::Homing, "JOGCLIP", |s, l| {
+            let _ = write!(l, "{}", u8::from(s.homing().jog_clip));
+        }),
     ),
     setting(100, Place::StepsPerMm("HX")),
     setting(102, Place::StepsPerMm("HZ")),

@@ -90,7 +90,7 @@ impl Session {
     /// [TRAVELZ=] [SEEK=] [LOCATE=] [PULLOFF=] [ORDER=XZ|ZX]
     /// [REQUIRED=0|1]`.
     pub(super) fn homing_command<'a, I: Io>(&mut self, args: &Args<'a>, io: &mut I) -> Outcome<'a> {
-        let [axes, dir_x, dir_z, home_x, home_z, travel_x, travel_z, seek, locate, pulloff, order, required, soft] =
+        let [axes, dir_x, dir_z, home_x, home_z, travel_x, travel_z, seek, locate, pulloff, order, required, soft, jog_clip] =
             args.values();
         let mut h = self.offsets.homing;
         if let Some(v) = axes {
@@ -158,6 +158,9 @@ impl Session {
         if let Some(v) = soft {
             h.soft = parse_flag("SOFT", v)?;
         }
+        if let Some(v) = jog_clip {
+            h.jog_clip = parse_flag("JOGCLIP", v)?;
+        }
         let mut offsets = self.offsets;
         offsets.homing = h;
         self.take_offsets(offsets);
@@ -185,10 +188,11 @@ impl Session {
         exact(&mut line, "PULLOFF", h.pulloff.as_angstrom());
         let _ = write!(
             line,
-            " ORDER={} REQUIRED={} SOFT={}",
+            " ORDER={} REQUIRED={} SOFT={} JOGCLIP={}",
             if h.z_first { "ZX" } else { "XZ" },
             u8::from(h.required),
-            u8::from(h.soft)
+            u8::from(h.soft),
+            u8::from(h.jog_clip)
         );
         io.send(line.finish());
         Ok(())
@@ -419,6 +423,36 @@ impl Session {
             }
         }
         Ok(())
+    }
+
+    /// A jog's end (`MOVE`, grbl's `$J=`), with soft limits and `JOGCLIP=1`:
+    /// each axis homed held within its travel, on the impulse grid inside
+    /// it, so that what is left of the jog runs up to the limit.
+    pub(super) fn jog_clip(&self, target: [Length; 2]) -> [Length; 2] {
+        let h = &self.offsets.homing;
+        if !(h.soft && h.jog_clip) {
+            return target;
+        }
+        let mut t = target;
+        let prices = [self.cfg.hx.as_angstrom(), self.cfg.hz.as_angstrom()];
+        for (((at, a), homed), price) in t.iter_mut().zip(&h.axes).zip(self.homed).zip(prices) {
+            let Some((lo, hi)) = a.window().filter(|_| homed && price > 0) else {
+                continue;
+            };
+            // The first and the last impulse within the travel.
+            let first = -(-lo.as_angstrom()).div_euclid(price) * price;
+            let last = hi.as_angstrom().div_euclid(price) * price;
+            let v = at.as_angstrom();
+            let clipped = if v < first {
+                first
+            } else if v > last {
+                last
+            } else {
+                continue;
+            };
+            *at = Length::from_angstrom(clipped).unwrap_or(*at);
+        }
+        t
     }
 
     /// Moves `axis` by `by` at `rate` (10⁻³ mm/min), stopping where

@@ -449,6 +449,7 @@ impl Session {
             let from = if inc { self.cmd[1] } else { off[1] };
             target[1] = step(from, word, true, "Z beyond 99999.999999 mm")?;
         }
+        let target = self.jog_clip(target);
         let block = self.linear_block(target)?;
         self.soft_check(block.to())?;
         let crc = block_crc(&block, Crc32::new());

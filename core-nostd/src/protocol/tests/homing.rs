@@ -11,7 +11,7 @@ fn the_settings_are_kept_as_set_and_read_back_in_the_line() {
     assert_eq!(
         ask1(&mut dev, "HOMING"),
         "OK AXES=- DIRX=+ DIRZ=+ HOMEX=0 HOMEZ=0 TRAVELX=0 TRAVELZ=0 SEEK=500 LOCATE=25 PULLOFF=1 \
-         ORDER=XZ REQUIRED=0 SOFT=0",
+         ORDER=XZ REQUIRED=0 SOFT=0 JOGCLIP=0",
         "power-on: grbl's rates and pull-off, no axis homed"
     );
     // X is a diameter at power-on: HOMEX=150 is 75 on the radius.
@@ -22,7 +22,7 @@ fn the_settings_are_kept_as_set_and_read_back_in_the_line() {
     assert_eq!(
         r,
         "OK AXES=XZ DIRX=+ DIRZ=- HOMEX=150 HOMEZ=-2.5 TRAVELX=80 TRAVELZ=410 SEEK=1500.5 LOCATE=40 \
-         PULLOFF=2 ORDER=ZX REQUIRED=1 SOFT=0"
+         PULLOFF=2 ORDER=ZX REQUIRED=1 SOFT=0 JOGCLIP=0"
     );
     let h = *dev.session().homing();
     assert_eq!(h.axes[0].home.as_angstrom(), 75 * 10_000_000);
