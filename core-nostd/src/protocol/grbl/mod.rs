@@ -285,6 +285,16 @@ pub fn line<I: Io + ?Sized>(
                 t.line(b"$N0=");
                 t.line(b"$N1=");
             }
+            (Some(b'X'), 2) if session.alarm() == Some(11) => {
+                // Homing required at power-on: only `$H` clears it, as
+                // grblHAL answers (`error:46`); the pendant's `UNLOCK`
+                // is the operator's override.
+                t.outcome = Some(Err(46));
+                t.message = ReplyLine::new();
+                t.message.push_bytes(
+                    b"homing required: $H homes the machine ($22 bit 2 asks for it at power-on)",
+                );
+            }
             (Some(b'X'), 2) => {
                 front.alarm = None;
                 if session.alarm().is_some() {

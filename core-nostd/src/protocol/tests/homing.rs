@@ -108,6 +108,14 @@ fn home_is_refused_before_anything_moves_when_it_cannot_run() {
     assert!(r.contains("spindle or coolant on"), "{r}");
 }
 
+/// What a grbl front sends, as it is.
+struct Out(Vec<u8>);
+impl Io for Out {
+    fn send(&mut self, line: &[u8]) {
+        self.0.extend_from_slice(line);
+    }
+}
+
 #[test]
 fn homing_required_locks_at_power_on_until_unlocked() {
     let mut dev = Device::new();
@@ -126,6 +134,17 @@ fn homing_required_locks_at_power_on_until_unlocked() {
         r.starts_with("ERR ALARM 11: the machine must be homed"),
         "{r}"
     );
+    // A grbl sender's $X is refused as grblHAL refuses it (error 46):
+    // only $H clears it there.
+    let mut out = Out(Vec::new());
+    next.set_grbl(true, &mut out);
+    out.0.clear();
+    next.receive_bytes(b"$X\n", &mut out);
+    assert_eq!(
+        String::from_utf8_lossy(&out.0),
+        "[MSG:homing required: $H homes the machine ($22 bit 2 asks for it at power-on)]\r\nerror:46\r\n"
+    );
+    next.set_grbl(false, &mut out);
     assert_eq!(ask1(&mut next, "UNLOCK"), "OK LOST=1");
     assert!(ask1(&mut next, "MOVE X=1").starts_with("OK"));
     // Not required: power-on is unlocked.
@@ -154,19 +173,16 @@ fn probing_needs_a_machine_that_reads_the_probe() {
 /// gains PROBE, the other inputs kept.
 #[test]
 fn grbls_probe_setting_wires_the_probe() {
-    struct Out;
-    impl Io for Out {
-        fn send(&mut self, _: &[u8]) {}
-    }
+    let mut out = Out(Vec::new());
     let mut dev = Device::new();
-    dev.receive_bytes(b"INPUT USED=X+\n", &mut Out);
-    dev.set_grbl(true, &mut Out);
-    dev.receive_bytes(b"$6=1\n", &mut Out);
+    dev.receive_bytes(b"INPUT USED=X+\n", &mut out);
+    dev.set_grbl(true, &mut out);
+    dev.receive_bytes(b"$6=1\n", &mut out);
     let w = dev.session().offsets().wiring;
     let probe = crate::inputs::Input::Probe.bit();
     let x = crate::inputs::Input::LimitXPlus.bit();
     assert_eq!((w.used, w.invert), (x | probe, probe));
-    dev.receive_bytes(b"$6=0\n", &mut Out);
+    dev.receive_bytes(b"$6=0\n", &mut out);
     let w = dev.session().offsets().wiring;
     assert_eq!((w.used, w.invert), (x | probe, 0));
 }
