@@ -188,11 +188,16 @@ fn soft_limits_refuse_motion_beyond_the_travel_once_homed() {
         (carriage(&board).0 - home.0).abs() < 0.09,
         "the carriage at home, no switch tripped"
     );
+    // The spindle turning, a block past the travel: refused, and once the
+    // motion before it has run the spindle stops, as at grbl's alarm 2.
+    assert!(ask(&mut c, "M03 S300").is_ok());
+    assert_ne!(board.state().spindle, 0, "turning");
     let r = ask(&mut c, "G01 X71 F500");
     assert!(
         r.last.starts_with("ERR RANGE X would leave its travel"),
         "{r:?}"
     );
+    assert_eq!(board.state().spindle, 0, "stopped at the alarm");
     assert_eq!(ask(&mut c, "UNLOCK").last, "OK LOST=0");
     assert!(ask(&mut c, "MOVE X=69 Z=0 F=3000").is_ok());
     assert!(ask(&mut c, "SYNC").is_ok());

@@ -368,10 +368,14 @@ impl Session {
     /// A G-code block was refused for leaving the travel: the program
     /// stops there as grbl's alarm 2 stops it (`!ALARM CODE=2`, locked
     /// until `UNLOCK`), so that a sender going on past a refused line moves
-    /// nothing more. The motion queued before it runs on: it is within the
-    /// travel.
+    /// nothing more. The motion queued before it runs on (it is within the
+    /// travel, and a cut is not broken off); once it has, the spindle and
+    /// the coolant stop, as grbl stops them at an alarm.
     pub(super) fn travel_alarm<I: Io>(&mut self, io: &mut I) {
         self.lock(Halt::Travel, 0, None, io);
+        self.machine.flush(&mut Sink::new(io, self.drive));
+        self.aux = self.aux.stopped();
+        self.switch_outputs(self.outputs_for(&self.aux, self.modal.units), io);
     }
 
     /// Locks the machine with `halt`, nothing dropped (what was to move
