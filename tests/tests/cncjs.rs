@@ -580,3 +580,41 @@ fn cncjs_streams_to_the_firmware_with_a_stop_a_hold_and_overrides() {
         "{s}"
     );
 }
+
+/// A tool setter's touch-off streamed by CNCjs to `serve` with a lathe
+/// whose setter trips at machine Z −50: `$6=0` wires the probe, a fast and
+/// a slow `G38.2` onto it, `G10 L20` makes Z0 there, a `G38.3` touches it
+/// again at Z0. CNCjs reads a `[PRB:…:1]` at Z −50 for each of the three,
+/// no error or alarm, and the carriage ends at Z20 in the work system set
+/// (machine Z −30).
+#[test]
+fn cncjs_streams_a_tool_setter_touch_off() {
+    if !cncjs_available() {
+        return;
+    }
+    let device = serve_at(20.0);
+    let lathe = "[z]\ntravel = [-400.0, 5.0]\nbacklash = 0.15\n\
+                 [[z.switch]]\ninput = \"PROBE\"\nside = \"-\"\nat = -50.0\n";
+    let file = host_sim::lathe::MachineFile::parse(lathe).expect("the lathe");
+    device._board.as_ref().expect("a board").set_lathe(file);
+    let program = std::env::temp_dir().join(format!("cncjs-setter-{}.nc", std::process::id()));
+    std::fs::write(
+        &program,
+        "(tool setter touch-off)\n$6=0\nG21 G18 G90 G94\nG0 Z0\nG38.2 Z-60 F300\nG0 Z-45\n\
+         G38.2 Z-60 F50\nG10 L20 P1 Z0\nG0 Z10\nG38.3 Z-3 F100\nG0 Z20\nM2\n",
+    )
+    .expect("write the program");
+    let json = cncjs(device.path(), &program, &[]);
+    ended_at(&json, "tool setter", &program, (0.0, -30.0));
+    let probes: Vec<String> = strings(&json, "read")
+        .into_iter()
+        .filter(|l| l.starts_with("[PRB:"))
+        .collect();
+    assert_eq!(
+        probes,
+        ["[PRB:0.0000,0.0000,-50.0000:1]"; 3],
+        "{}",
+        summary(&json)
+    );
+    let _ = std::fs::remove_file(&program);
+}
