@@ -75,3 +75,20 @@ pub fn lathe_board(
     let c = host_sim::link::Client::open(&path, std::time::Duration::from_secs(30)).expect("open");
     (board, c)
 }
+
+/// Sends `line` on a grbl link and reads to its `ok` or `error:`, the
+/// lines before included (a board's greeting, blank lines aside).
+pub fn grbl_say(c: &mut host_sim::link::Client, line: &str) -> Vec<String> {
+    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
+    let mut got = Vec::new();
+    loop {
+        let l = c.read_line().expect("line");
+        let end = l == "ok" || l.starts_with("error:");
+        if !l.is_empty() && !l.starts_with("Grbl 1.1h") {
+            got.push(l);
+        }
+        if end {
+            return got;
+        }
+    }
+}

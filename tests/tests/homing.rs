@@ -247,18 +247,7 @@ fn a_grbl_sender_homes_with_grbls_settings() {
     // A board greets the sender that opens its port.
     assert_eq!(c.read_line().expect("banner"), "");
     assert!(c.read_line().expect("banner").starts_with("Grbl 1.1h"));
-    let say = |c: &mut Client, line: &str| -> Vec<String> {
-        c.write_raw(format!("{line}\n").as_bytes()).expect("write");
-        let mut got = Vec::new();
-        loop {
-            let l = c.read_line().expect("line");
-            let end = l == "ok" || l.starts_with("error:");
-            got.push(l);
-            if end {
-                return got;
-            }
-        }
-    };
+    let say = tests::grbl_say;
     assert_eq!(
         say(&mut c, "$H"),
         [

@@ -190,20 +190,7 @@ fn a_probing_block_is_refused_before_it_moves() {
 #[test]
 fn a_grbl_sender_reads_prb() {
     let (_board, mut c) = lathe(true);
-    let say = |c: &mut Client, line: &str| -> Vec<String> {
-        c.write_raw(format!("{line}\n").as_bytes()).expect("write");
-        let mut got = Vec::new();
-        loop {
-            let l = c.read_line().expect("line");
-            let end = l == "ok" || l.starts_with("error:");
-            if !l.is_empty() && !l.starts_with("Grbl") {
-                got.push(l);
-            }
-            if end {
-                return got;
-            }
-        }
-    };
+    let say = tests::grbl_say;
     let unwired = say(&mut c, "G38.2 Z-60 F200");
     assert_eq!(
         unwired.first().map(String::as_str),
