@@ -605,6 +605,13 @@ fn check_mode_runs_nothing_and_reports_what_it_would_refuse() {
     assert_eq!(text(&mut dev, b"$C\n"), "[MSG:Enabled]\r\nok\r\n");
     assert!(text(&mut dev, b"?").starts_with("<Check|MPos:10.0000,0.0000,-5.0000|"));
     assert_eq!(text(&mut dev, b"G01 X40 Z-50 F100\n"), "ok\r\n");
+    // A probing block is checked as a feed move: no probe is read, no
+    // PRB, no alarm (the in-process board has none).
+    assert_eq!(text(&mut dev, b"G38.2 Z-60 F50\n"), "ok\r\n");
+    assert_eq!(
+        text(&mut dev, b"G38.2 Z-60 F50\n"),
+        "[MSG:GEOMETRY G38.2 to G38.5 end where the tool already is]\r\nerror:33\r\n"
+    );
     let refused = text(&mut dev, b"G02 X50 Z-60 I0 K3\n");
     assert!(refused.ends_with("error:33\r\n"), "{refused}");
     assert_eq!(text(&mut dev, b"M30\n"), "ok\r\n");
