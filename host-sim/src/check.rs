@@ -112,7 +112,8 @@ fn leading(line: &str) -> usize {
 
 /// The lines where the program stops for the operator: a gear range
 /// (`M41`–`M44`) and the machine's own M codes (each does what the
-/// machine's table says, `MCODE`; one not in it stops with a message).
+/// machine's table says, `MCODE`; one not in it stops with a message);
+/// and the probing blocks, which only the machine can run as they are.
 pub fn warnings_in(text: &str, dialect: Dialect) -> Vec<Item> {
     let Ok(lines) = program_lines(text, dialect) else {
         return Vec::new();
@@ -137,6 +138,18 @@ pub fn warnings_in(text: &str, dialect: Dialect) -> Vec<Item> {
                 ),
             });
         }
+        if let Some(core_nostd::gcode::Special::Probe(mode)) = b.special {
+            let g = mode.code();
+            out.push(Item {
+                line: i + 1,
+                column: line.find(['G', 'g']).map_or(1, |c| c + 1),
+                what: format!(
+                    "G{}.{}: probes on the machine, stopping where the probe changes; run and checked here as a feed move to its end",
+                    g / 10,
+                    g % 10
+                ),
+            });
+        }
         if let Some(code) = b.machine_m {
             out.push(Item {
                 line: i + 1,
@@ -154,6 +167,28 @@ pub fn warnings_in(text: &str, dialect: Dialect) -> Vec<Item> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A probing program passes: its probing blocks are warnings (only the
+    /// machine probes), run here as feed moves to their end, and what comes
+    /// after them is checked from there.
+    #[test]
+    fn probing_blocks_are_warnings_and_run_to_their_end() {
+        let program =
+            "G21 G18 G90 G94\nG0 Z0\nG38.2 Z-60 F300\nG10 L20 P1 Z0\nG0 Z10\n  G38.5 X4\nM2\n";
+        assert_eq!(check(program), [], "nothing refused");
+        let w = warnings_in(program, Dialect::Iso);
+        let at: Vec<(usize, usize)> = w.iter().map(|i| (i.line, i.column)).collect();
+        assert_eq!(at, [(3, 1), (6, 3)], "{w:?}");
+        assert!(
+            w[0].what.starts_with("G38.2: probes on the machine"),
+            "{w:?}"
+        );
+        assert!(w[1].what.starts_with("G38.5: "), "{w:?}");
+        // Past the probe: a block beyond the range still refused, by line.
+        let bad = check("G21 G18 G90 G94\nG38.2 Z-60 F300\nG02 X10 Z-70 R1\n");
+        assert_eq!(bad.len(), 1, "{bad:?}");
+        assert_eq!(bad[0].line, 3);
+    }
 
     #[test]
     fn every_refused_line_is_listed_with_its_place() {

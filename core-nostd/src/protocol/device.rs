@@ -240,4 +240,10 @@ impl Device {
     pub fn restore_offsets(&mut self, offsets: crate::interp::Offsets) {
         self.session.restore_offsets(offsets);
     }
+
+    /// Probing blocks run as feed moves to their end
+    /// ([`Session::set_probe_as_feed`]): a host's run of a program.
+    pub fn set_probe_as_feed(&mut self, on: bool) {
+        self.session.set_probe_as_feed(on);
+    }
 }

@@ -445,10 +445,12 @@ impl Session {
         let machine_m = b
             .machine_m
             .map(|code| (code, self.offsets.mcodes.get(code)));
-        // In grbl's check mode a probing block is checked as a feed move to
-        // its end: nothing moves, nothing is probed.
+        // In grbl's check mode, and where only the path is wanted, a
+        // probing block is a feed move to its end: nothing is probed.
         let probe = match special {
-            Some(Special::Probe(mode)) if self.checking.is_none() => Some(mode),
+            Some(Special::Probe(mode)) if self.checking.is_none() && !self.probe_as_feed => {
+                Some(mode)
+            }
             _ => None,
         };
         if let Some(mode) = probe {

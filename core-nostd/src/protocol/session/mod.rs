@@ -138,6 +138,10 @@ pub struct Session {
     pub(super) homed: [bool; 2],
     /// Where the last probing move ended (grbl's `PRB:`).
     pub(super) probe: Option<crate::inputs::ProbeResult>,
+    /// A probing block runs as a feed move to its end (where nothing
+    /// reads a probe and the program's path is wanted: `host-sim run`,
+    /// `check`, `plot`).
+    pub(super) probe_as_feed: bool,
     /// The BCK-5 tape read so far by `TAPE` requests.
     #[cfg(feature = "calc")]
     pub(super) tape: crate::calc::tape::Bck5Verifier,
@@ -189,6 +193,7 @@ impl Session {
             lost: false,
             homed: [false; 2],
             probe: None,
+            probe_as_feed: false,
             element_feed: None,
             top: None,
             spinup_us: 0,

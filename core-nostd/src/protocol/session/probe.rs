@@ -8,6 +8,13 @@ use crate::gcode::ProbeMode;
 use crate::inputs::{Halt, Input, ProbeResult, FAULTS, LIMITS};
 
 impl Session {
+    /// Where nothing reads a probe and the program's path is what is
+    /// wanted (a host's run of a program): `on`, a probing block runs as a
+    /// feed move to its end, as in grbl's check mode, and probes nothing.
+    pub fn set_probe_as_feed(&mut self, on: bool) {
+        self.probe_as_feed = on;
+    }
+
     /// Where the last probing move ended, since power-on.
     pub const fn last_probe(&self) -> Option<ProbeResult> {
         self.probe
