@@ -65,7 +65,10 @@ pub fn as_reference(b: &Block) -> RefBlock {
         offset: b.tool.and_then(|t| t.offset),
         from_u_w: [b.incremental_x, b.incremental_z],
         wcs: b.wcs,
-        set_work: b.set_work.map(|w| (w.register, w.here)),
+        // A tool's register (G10 L1/L10) as 100 + n.
+        set_work: b
+            .set_work
+            .map(|w| (w.register + if w.tool { 100 } else { 0 }, w.here)),
         tool_offset: b.tool_offset.map(|t| match t {
             ToolOffset::On(h) => (true, h),
             ToolOffset::Off => (false, None),
@@ -80,6 +83,7 @@ pub fn as_reference(b: &Block) -> RefBlock {
             Special::Shift => 920,
             Special::ClearShift(keep) => 921 + u16::from(keep),
             Special::RestoreShift => 923,
+            Special::Probe(mode) => mode.code(),
         }),
         m: [
             b.stop.map(|s| match s {

@@ -1011,7 +1011,8 @@ pub struct RefBlock {
     pub offset: Option<u8>,
     /// G54 … G59 as 0 … 5.
     pub wcs: Option<u8>,
-    /// G10 L2/L20 P: the register and whether L20.
+    /// G10 L2/L20 P: the register and whether L20; (ISO) G10 L1/L10 P: 100
+    /// + the tool's register and whether L10.
     pub set_work: Option<(u8, bool)>,
     /// ISO G43 (true, with its H) / G49 (false).
     pub tool_offset: Option<(bool, Option<u8>)>,
@@ -1363,6 +1364,14 @@ pub fn reference_block_in(
                         }
                         (90 | 91, 1) if fanuc => return Err(RefBlockError::OtherDialect),
                         (90 | 91, 1) => put(&mut b.arc_distance, code * 10 + 1)?,
+                        // Probing (ISO; docs/inputs.md §10).
+                        (38, 2..=5) if fanuc => return Err(RefBlockError::OtherDialect),
+                        (38, 2..=5) => {
+                            if group0 {
+                                return Err(RefBlockError::Repeated(b'G'));
+                            }
+                            b.special = Some(code * 10 + tenth);
+                        }
                         (_, 1..) => return Err(RefBlockError::UnsupportedG),
                         (50, _) if fanuc => {
                             if group0 {
@@ -1540,10 +1549,14 @@ pub fn reference_block_in(
         b.dwell_us = Some(us);
     }
     if g10 {
-        if !matches!(l, Some(2 | 20)) {
+        // ISO's L1/L10: a tool's register, 1 … 32.
+        let tool = !fanuc && matches!(l, Some(1 | 10));
+        if !matches!(l, Some(2 | 20)) && !tool {
             return Err(RefBlockError::Form);
         }
         match p {
+            Some(r @ 1..=32) if tool => b.set_work = Some((100 + r as u8, l == Some(10))),
+            Some(_) if tool => return Err(RefBlockError::Range(b'P')),
             Some(r @ 1..=6) => b.set_work = Some((r as u8, l == Some(20))),
             // ISO: P0, the system in effect (docs/protocol.md §5.2); in
             // Fanuc the external offset, which the control has not.
@@ -1577,6 +1590,10 @@ pub fn reference_block_in(
         Some(281 | 301 | 921 | 922 | 923) if motion_words => return Err(RefBlockError::Form),
         Some(530 | 920) if ikr || u_w => return Err(RefBlockError::Form),
         Some(920) if !axes => return Err(RefBlockError::Form),
+        // G38.2–G38.5: a line to X/Z of its own, no motion code.
+        Some(382..=385) if ikr || !axes || b.motion.is_some() => {
+            return Err(RefBlockError::Form)
+        }
         _ => {}
     }
     if g50 {
