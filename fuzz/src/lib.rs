@@ -1591,9 +1591,7 @@ pub fn reference_block_in(
         Some(530 | 920) if ikr || u_w => return Err(RefBlockError::Form),
         Some(920) if !axes => return Err(RefBlockError::Form),
         // G38.2–G38.5: a line to X/Z of its own, no motion code.
-        Some(382..=385) if ikr || !axes || b.motion.is_some() => {
-            return Err(RefBlockError::Form)
-        }
+        Some(382..=385) if ikr || !axes || b.motion.is_some() => return Err(RefBlockError::Form),
         _ => {}
     }
     if g50 {
