@@ -196,8 +196,13 @@ pub fn canonical(b: &RefBlock) -> String {
     if let Some(w) = b.wcs {
         words.push(format!("G{}", 54 + w));
     }
-    if let Some((p, here)) = b.set_work {
-        words.push(format!("G10 L{} P{p}", if here { 20 } else { 2 }));
+    match b.set_work {
+        // A tool's register is written 100 + n by the reference.
+        Some((p, l10)) if p > 100 => {
+            words.push(format!("G10 L{} P{}", if l10 { 10 } else { 1 }, p - 100))
+        }
+        Some((p, here)) => words.push(format!("G10 L{} P{p}", if here { 20 } else { 2 })),
+        None => {}
     }
     if let Some(g) = b.special {
         words.push(format!("G{}.{}", g / 10, g % 10));
