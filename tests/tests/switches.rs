@@ -9,6 +9,7 @@ use core_nostd::inputs::Input;
 use host_sim::device::LocalDevice;
 use host_sim::link::Client;
 use host_sim::qemu::{build_firmware, qemu_or_skip, Panel, Qemu};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 use tests::board_line;
 
@@ -19,15 +20,21 @@ const QUIET: u16 = Input::Estop.bit();
 /// The firmware of `feature` booted with its panel on a socket named
 /// after `name` (instruction counting unless paced), the link to it, and
 /// the panel.
-fn booted(name: &str, feature: &str) -> (Qemu, Client, Panel) {
+///
+/// A paced firmware runs in wall-clock time and the tests time it, so the
+/// paced ones run one at a time: with two of them on two cores, each ran
+/// at a third of its speed and a carriage was not where the test looked.
+fn booted(name: &str, feature: &str) -> (Qemu, Client, Panel, Option<MutexGuard<'static, ()>>) {
+    static PACED: Mutex<()> = Mutex::new(());
+    let paced = feature.starts_with("qemu-paced");
+    let one = paced.then(|| PACED.lock().unwrap_or_else(PoisonError::into_inner));
     let sock = std::env::temp_dir().join(format!("lathe-{name}-{}.sock", std::process::id()));
     let _ = std::fs::remove_file(&sock);
     let elf = build_firmware(feature).unwrap();
-    let paced = feature.starts_with("qemu-paced");
     let mut qemu = Qemu::boot_with_panel(&elf, !paced, &sock).unwrap();
     let client = qemu.connect(Duration::from_secs(30)).unwrap();
     let panel = Panel::connect(&sock).unwrap();
-    (qemu, client, panel)
+    (qemu, client, panel, one)
 }
 
 fn lines(bytes: &[u8]) -> Vec<String> {
@@ -70,6 +77,63 @@ fn ask(client: &mut Client, line: &str) -> String {
     }
 }
 
+/// A switch the carriage passes: the harness follows the carriage while
+/// `line` runs, asking for status by byte, and sets `pin` (one sample)
+/// each time whether it reads active changes; `active(pz, was)` says
+/// whether it does at `PZ=` (10⁻² mm), given what it read before.
+struct Passed {
+    /// The `!` lines the request sent (not `!STATUS`).
+    reports: Vec<String>,
+    /// The request's last line.
+    last: String,
+    /// How many times the pin became active.
+    trips: usize,
+    /// Whether it reads active at the end.
+    active: bool,
+}
+
+fn follow(
+    client: &mut Client,
+    panel: &mut Panel,
+    line: &str,
+    pin: u16,
+    active_at_start: bool,
+    active: impl Fn(i64, bool) -> bool,
+) -> Passed {
+    client.write_raw(format!("{line}\n").as_bytes()).unwrap();
+    let (mut now, mut trips, mut reports) = (active_at_start, 0, Vec::new());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        assert!(Instant::now() < deadline, "{line} did not end");
+        client.write_raw(b"\x80").unwrap();
+        let l = board_line(&client.read_line().unwrap());
+        if l.starts_with("DATA") {
+            continue;
+        }
+        if !l.starts_with("!STATUS") {
+            if l.starts_with('!') {
+                reports.push(l);
+                continue;
+            }
+            return Passed {
+                reports,
+                last: l,
+                trips,
+                active: now,
+            };
+        }
+        let next = active(value(&l, "PZ"), now);
+        if next != now {
+            now = next;
+            trips += usize::from(now);
+            panel
+                .sample(if now { QUIET | pin } else { QUIET }, 1)
+                .unwrap();
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 /// The whole number `key=` holds in a line (its `*HH` aside).
 fn value(line: &str, key: &str) -> i64 {
     let body = line.rsplit_once('*').map_or(line, |(b, _)| b);
@@ -83,7 +147,7 @@ fn the_switches_stop_and_lock_the_firmware_as_in_process() {
     if !qemu_or_skip() {
         return;
     }
-    let (_qemu, mut client, mut panel) = booted("switches", "qemu");
+    let (_qemu, mut client, mut panel, _one) = booted("switches", "qemu");
     let mut local = LocalDevice::new();
     let same = |client: &mut Client, local: &mut LocalDevice, bytes: &[u8]| {
         let want = lines(&local.feed(bytes));
@@ -162,7 +226,7 @@ fn the_estop_stops_a_cut_mid_way_on_the_paced_firmware() {
     if !qemu_or_skip() {
         return;
     }
-    let (_qemu, mut client, mut panel) = booted("estop-paced", "qemu-paced");
+    let (_qemu, mut client, mut panel, _one) = booted("estop-paced", "qemu-paced");
     assert!(ask(&mut client, "INPUT USED=ESTOP INVERT=ESTOP FILTER=2").starts_with("OK"));
     panel.sample(QUIET, 5).unwrap();
     // 30 mm of Z at 600 mm/min: 3 s; SYNC starts it and waits.
@@ -211,7 +275,7 @@ fn the_door_holds_a_cut_until_closed_and_cycle_start_on_the_paced_firmware() {
     if !qemu_or_skip() {
         return;
     }
-    let (_qemu, mut client, mut panel) = booted("door-paced", "qemu-paced");
+    let (_qemu, mut client, mut panel, _one) = booted("door-paced", "qemu-paced");
     let line = |client: &mut Client| board_line(&client.read_line().unwrap());
     let door = Input::Door.bit();
     let start = Input::Start.bit();
@@ -276,7 +340,7 @@ fn the_paced_firmware_homes_on_its_switch() {
     if !qemu_or_skip() {
         return;
     }
-    let (_qemu, mut client, mut panel) = booted("homing-paced", "qemu-paced");
+    let (_qemu, mut client, mut panel, _one) = booted("homing-paced", "qemu-paced");
     assert!(ask(&mut client, "INPUT USED=Z- FILTER=0").starts_with("OK"));
     let set = ask(
         &mut client,
@@ -284,30 +348,18 @@ fn the_paced_firmware_homes_on_its_switch() {
     );
     assert!(set.starts_with("OK AXES=Z DIRX=+ DIRZ=-"), "{set}");
     panel.sample(QUIET, 3).unwrap();
-    client.write_raw(b"HOME\n").unwrap();
-    let (mut pressed, mut trips) = (false, 0);
-    let deadline = Instant::now() + Duration::from_secs(60);
-    let last = loop {
-        assert!(Instant::now() < deadline, "HOME did not end");
-        client.write_raw(b"\x80").unwrap();
-        let l = board_line(&client.read_line().unwrap());
-        if !l.starts_with("!STATUS") {
-            break l;
-        }
-        let pz = value(&l, "PZ");
-        let now = if pressed { pz <= -1_980 } else { pz <= -2_000 };
-        if now != pressed {
-            pressed = now;
-            trips += usize::from(now);
-            let pins = if now {
-                QUIET | Input::LimitZMinus.bit()
-            } else {
-                QUIET
-            };
-            panel.sample(pins, 1).unwrap();
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    };
+    // The switch reads active from −20 mm down, released from −19.8 mm
+    // up (a switch's hysteresis).
+    let home = follow(
+        &mut client,
+        &mut panel,
+        "HOME",
+        Input::LimitZMinus.bit(),
+        false,
+        |pz, was| if was { pz <= -1_980 } else { pz <= -2_000 },
+    );
+    let (last, trips, pressed) = (home.last, home.trips, home.active);
+    assert!(home.reports.is_empty(), "{:?}", home.reports);
     assert_eq!(last, host_sim::link::with_checksum("OK MX=0 MZ=-1.5"));
     assert_eq!(trips, 2, "seek and locate");
     assert!(!pressed, "pulled off the switch");
@@ -330,43 +382,19 @@ fn the_paced_firmware_stops_a_probing_move_on_the_probe() {
     if !qemu_or_skip() {
         return;
     }
-    let (_qemu, mut client, mut panel) = booted("probe-paced", "qemu-paced");
+    let (_qemu, mut client, mut panel, _one) = booted("probe-paced", "qemu-paced");
     assert!(ask(&mut client, "INPUT USED=PROBE FILTER=0").starts_with("OK"));
     panel.sample(QUIET, 3).unwrap();
     // Sends `line` and follows the carriage: the probe reads pressed while
     // Z is at `at` (10⁻² mm) or below. Returns the `!PROBE` line and the
     // request's last line.
     let probe = |client: &mut Client, panel: &mut Panel, line: &str, at: i64, pressed: bool| {
-        client.write_raw(format!("{line}\n").as_bytes()).unwrap();
-        let mut pressed = pressed;
-        let mut found = None;
-        let deadline = Instant::now() + Duration::from_secs(60);
-        loop {
-            assert!(Instant::now() < deadline, "{line} did not end");
-            client.write_raw(b"\x80").unwrap();
-            let l = board_line(&client.read_line().unwrap());
-            if l.starts_with("!PROBE") {
-                found = Some(l);
-                continue;
-            }
-            if l.starts_with("DATA") {
-                continue;
-            }
-            if !l.starts_with("!STATUS") {
-                return (found.expect("a !PROBE line"), l);
-            }
-            let now = value(&l, "PZ") <= at;
-            if now != pressed {
-                pressed = now;
-                let pins = if now {
-                    QUIET | Input::Probe.bit()
-                } else {
-                    QUIET
-                };
-                panel.sample(pins, 1).unwrap();
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
+        let passed = follow(client, panel, line, Input::Probe.bit(), pressed, |pz, _| {
+            pz <= at
+        });
+        let [found]: [String; 1] = passed.reports.try_into().expect("one !PROBE line");
+        assert!(found.starts_with("!PROBE"), "{found}");
+        (found, passed.last)
     };
     let (touched, ok) = probe(&mut client, &mut panel, "G38.2 Z-30 F300", -1_000, false);
     assert!(touched.contains(" OK=1"), "{touched}");
