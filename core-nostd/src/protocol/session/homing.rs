@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::homing::{home_switch, HomingConfig, MAX_LENGTH, MAX_PULLOFF, MAX_RATE};
-use crate::inputs::{write_names, Halt, Input, FAULTS, LIMITS};
+use crate::inputs::{write_names, Halt, Input};
 use crate::plan::Feed;
 
 /// How one homing move ended.
@@ -475,18 +475,10 @@ impl Session {
         let block = self.linear_block(target).map_err(|_| Failed::Alarm(9))?;
         let feed = Length::from_um(i64::from(rate)).and_then(Feed::new);
         self.queue_line(target, block, feed, io);
-        self.machine.flush(&mut Sink::new(io, self.drive));
-        let wired = self.offsets.wiring.used;
-        let now = io.inputs_now().unwrap_or(0) & wired;
-        let rose = now & !self.levels;
-        let stopping = Input::Estop.bit() | LIMITS | FAULTS;
-        if rose & stopping & !switch.bit() != 0 {
-            // Another switch: it stops and locks as it would anywhere.
-            self.inputs(now, io);
-            return Err(Failed::Input);
-        }
+        let (_, rose) = self
+            .watched_move_end(switch.bit(), io)
+            .ok_or(Failed::Input)?;
         let tripped = rose & switch.bit() != 0;
-        self.levels = now;
         if tripped {
             // The transport stopped the steps on the switch's edge: the
             // registers keep the steps issued.

@@ -92,6 +92,24 @@ impl Session {
         io.send(line.finish());
     }
 
+    /// After a move the transport stops on a switch's edge (a homing
+    /// move, a probing move): waits for it to end and reads the switches.
+    /// A stopping switch other than `own` that became active meanwhile
+    /// stops and locks as it would anywhere (`None`). Otherwise the levels
+    /// become those read, and what is returned is the switches active now
+    /// and those that became active.
+    pub(super) fn watched_move_end<I: Io>(&mut self, own: u16, io: &mut I) -> Option<(u16, u16)> {
+        self.machine.flush(&mut Sink::new(io, self.drive));
+        let now = io.inputs_now().unwrap_or(0) & self.offsets.wiring.used;
+        let rose = now & !self.levels;
+        if rose & (Input::Estop.bit() | LIMITS | FAULTS) & !own != 0 {
+            self.inputs(now, io);
+            return None;
+        }
+        self.levels = now;
+        Some((now, rose))
+    }
+
     /// A reset moves an E-stop released on to `UNLOCK`.
     pub(super) fn reset_halt(&mut self) {
         if self.halt == Halt::Estop(EstopStage::Released) {

@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::gcode::ProbeMode;
-use crate::inputs::{Halt, Input, ProbeResult, FAULTS, LIMITS};
+use crate::inputs::{Halt, Input, ProbeResult};
 
 impl Session {
     /// Where nothing reads a probe and the program's path is what is
@@ -28,19 +28,19 @@ impl Session {
         mode: ProbeMode,
         io: &mut I,
     ) -> Result<(), Refusal<'static>> {
-        if io.inputs_now().is_none() {
+        // What is queued runs first: the probe is read at rest.
+        self.machine.flush(&mut Sink::new(io, self.drive));
+        let Some(now) = io.inputs_now() else {
             return Err(Refusal::Missing(
                 "G38.2 to G38.5 need a machine with switches (the probe)",
             ));
-        }
+        };
         if self.offsets.wiring.used & Input::Probe.bit() == 0 {
             return Err(Refusal::Missing(
                 "G38.2 to G38.5 need the probe wired: INPUT USED= with PROBE",
             ));
         }
-        // What is queued runs first: the probe is read at rest.
-        self.machine.flush(&mut Sink::new(io, self.drive));
-        let now = io.inputs_now().unwrap_or(0) & self.offsets.wiring.used;
+        let now = now & self.offsets.wiring.used;
         let touching = now & Input::Probe.bit() != 0;
         if touching == mode.toward {
             self.lock(Halt::Probe(4), now & Input::Probe.bit(), None, io);
@@ -59,16 +59,11 @@ impl Session {
         io: &mut I,
     ) -> Result<(), Refusal<'static>> {
         let end = self.pos;
-        self.machine.flush(&mut Sink::new(io, self.drive));
+        let ended = self.watched_move_end(0, io);
         io.probe_arm(None);
-        let now = io.inputs_now().unwrap_or(0) & self.offsets.wiring.used;
-        let rose = now & !self.levels;
-        if rose & (Input::Estop.bit() | LIMITS | FAULTS) != 0 {
-            // Another switch: it stops and locks as it would anywhere.
-            self.inputs(now, io);
+        let Some((now, _)) = ended else {
             return Err(Refusal::Halted(self.halt));
-        }
-        self.levels = now;
+        };
         let changed = (now & Input::Probe.bit() != 0) == mode.toward;
         // The transport stopped the steps on the probe's edge: the
         // registers keep the steps issued, and the point is theirs.
