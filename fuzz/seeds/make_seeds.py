@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the seed corpus of the fuzz targets from the request lines the
-tests use: the protocol unit tests (core-nostd/src/protocol/tests.rs), the
+tests use: the protocol unit tests (core-nostd/src/protocol/tests/), the
 host simulator's mixed session and the Kosenko / Krylenko programs
 (host-sim/src/scenario.rs). Run from the repository root:
 
@@ -66,7 +66,8 @@ def is_request(l):
 
 
 # --- request lines of the protocol unit tests -------------------------------
-tests = read("core-nostd/src/protocol/tests.rs")
+TESTS = "core-nostd/src/protocol/tests"
+tests = "".join(read(os.path.join(TESTS, f)) for f in sorted(os.listdir(os.path.join(ROOT, TESTS))))
 lits = [unescape(l) for l in re.findall(r'"((?:[^"\\]|\\.)*)"', tests)]
 lines = [l.rstrip("\r\n") for l in lits if is_request(l.split("\n")[0])]
 # Numbered requests carry a CRC word, as the tests send them.
@@ -182,7 +183,10 @@ blocks += ["G01 X1 X2", "G01 G02", "G1.5", "Q5", "G01 X", "G01 X1 $", "G01 (open
            # Numbers apart from their letters.
            "G0 X 2 Z\t-3", "T1 MG 71 M7 G4", "X1 2",
            # G41/G42 D: the tool whose nose compensates.
-           "g42 d1", "G41 D0 G01 X2", "G42 D33", "G96 S100 G42 D1"]
+           "g42 d1", "G41 D0 G01 X2", "G42 D33", "G96 S100 G42 D1",
+           # Probing, and a tool's offsets set from the block or from here.
+           "G38.2 Z-50 F100", "G38.3 X10 F50", "G38.4 Z0 F20", "G38.5 X-1 Z-1 F20",
+           "G10 L1 P1 X5 Z-3", "G10 L10 P2 Z0", "G10 L1 P32 R0.4 Q3", "G10 L10 P0 X1"]
 for b in dict.fromkeys(blocks):
     write("gcode", None, b.encode())
 print({t: len(os.listdir(os.path.join(SEEDS, t))) for t in ("protocol", "length", "gcode")})
