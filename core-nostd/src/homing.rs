@@ -35,7 +35,36 @@ impl AxisHoming {
     };
 }
 
-/// The homing cycle's settings (kept with the table).
+/// The handwheel (a manual pulse generator, `docs/inputs.md` §11): which
+/// axis it moves, by how many impulses per count, how fast.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Wheel {
+    /// The axis it moves: 0 X, 1 Z; `None`: off.
+    pub axis: Option<u8>,
+    /// Impulses per count: 1, 10 or 100.
+    pub scale: u8,
+    /// Its feed, 10⁻³ mm/min.
+    pub feed: u32,
+}
+
+impl Wheel {
+    /// Power-on: off, ×1, 500 mm/min.
+    pub const OFF: Wheel = Wheel {
+        axis: None,
+        scale: 1,
+        feed: 500_000,
+    };
+
+    /// Whether every value is in range.
+    pub fn valid(&self) -> bool {
+        matches!(self.axis, None | Some(0 | 1))
+            && matches!(self.scale, 1 | 10 | 100)
+            && (1..=MAX_RATE).contains(&self.feed)
+    }
+}
+
+/// The homing cycle's settings, with the soft limits and the handwheel's
+/// (kept with the table).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HomingConfig {
     /// X's and Z's.
@@ -58,6 +87,8 @@ pub struct HomingConfig {
     /// With soft limits, a jog past the travel runs up to it instead of
     /// being refused (grblHAL's `$40`).
     pub jog_clip: bool,
+    /// The handwheel.
+    pub wheel: Wheel,
 }
 
 /// `n` mm, for the constants (within the length's limit).
@@ -87,6 +118,7 @@ impl HomingConfig {
         required: false,
         soft: false,
         jog_clip: false,
+        wheel: Wheel::OFF,
     };
 
     /// The axes homed (0 X, 1 Z), in the cycle's order.
@@ -102,6 +134,7 @@ impl HomingConfig {
             && rate(self.locate)
             && self.pulloff > Length::ZERO
             && self.pulloff <= MAX_PULLOFF
+            && self.wheel.valid()
             && self.axes.iter().all(|a| {
                 (a.dir == 1 || a.dir == -1)
                     && a.home.as_angstrom().unsigned_abs() <= MAX_LENGTH.as_angstrom() as u64

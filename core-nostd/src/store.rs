@@ -139,7 +139,16 @@ fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
         | i64::from(h.z_first) << 4
         | i64::from(h.required) << 5
         | i64::from(h.soft) << 6
-        | i64::from(h.jog_clip) << 7;
+        | i64::from(h.jog_clip) << 7
+        // The wheel: bits 8-9 its axis (0 off, 1 X, 2 Z), 10-11 its scale
+        // (0 ×1, 1 ×10, 2 ×100), from bit 12 its feed.
+        | i64::from(h.wheel.axis.map_or(0, |a| a + 1)) << 8
+        | i64::from(match h.wheel.scale {
+            100 => 2u8,
+            10 => 1,
+            _ => 0,
+        }) << 10
+        | i64::from(h.wheel.feed) << 12;
     let homing = [
         flags,
         i64::from(h.seek),
@@ -309,7 +318,7 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
     }
     if with_homing {
         let flags = next();
-        if flags & !0xFF != 0 {
+        if flags & !0xFFFF_FFFF_FFFF != 0 {
             return None;
         }
         let rate = |v: i64| u32::try_from(v).ok();
@@ -323,6 +332,19 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
         h.required = flags & 32 != 0;
         h.soft = flags & 64 != 0;
         h.jog_clip = flags & 128 != 0;
+        h.wheel = crate::homing::Wheel {
+            axis: match flags >> 8 & 3 {
+                0 => None,
+                a => Some(a as u8 - 1),
+            },
+            scale: match flags >> 10 & 3 {
+                0 => 1,
+                1 => 10,
+                2 => 100,
+                _ => return None,
+            },
+            feed: u32::try_from(flags >> 12).ok()?,
+        };
         h.seek = rate(next())?;
         h.locate = rate(next())?;
         h.pulloff = Length::from_angstrom(next())?;
@@ -453,6 +475,11 @@ mod tests {
         o.homing.required = k % 3 == 0;
         o.homing.soft = k % 4 == 1;
         o.homing.jog_clip = k % 2 == 0;
+        o.homing.wheel = crate::homing::Wheel {
+            axis: [None, Some(0), Some(1)][(k % 3) as usize],
+            scale: [1, 10, 100][(k % 3) as usize],
+            feed: 20_000_000 - k as u32,
+        };
         o
     }
 

@@ -30,7 +30,7 @@ use core_nostd::step::Record;
 use core_nostd::stepdir::DriveTiming;
 use core_nostd::stepper::{Aborted, AxesState, Item, Pulled, Stepper, AHEAD};
 use std::io::{Read, Write};
-use std::sync::atomic::{AtomicBool, AtomicU16, AtomicU8, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicU16, AtomicU8, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
@@ -131,6 +131,8 @@ struct Shared {
     /// X's and Z's impulse prices (Å) and whether X reads as a diameter, as
     /// the session last had them (for the panel's `STATE?`).
     prices: Mutex<(i64, i64, bool)>,
+    /// The handwheel's counts not yet handed to the protocol.
+    wheel: AtomicI32,
 }
 
 /// What the panel reads off the simulated machine (`STATE?`).
@@ -180,6 +182,7 @@ const WANT_RESET: u8 = 2;
 const WANT_BANNER: u8 = 4;
 const WANT_COMMAND: u8 = 8;
 const WANT_INPUTS: u8 = 16;
+const WANT_WHEEL: u8 = 32;
 
 impl Shared {
     fn axes(&self) -> MutexGuard<'_, Axes> {
@@ -753,6 +756,11 @@ fn protocol_loop<W: Write>(
             io.grbl = device.grbl_extras();
             continue;
         }
+        // The handwheel turned: what it counted since.
+        if shared.take(WANT_WHEEL) {
+            device.wheel(shared.wheel.swap(0, Ordering::AcqRel), io);
+            continue;
+        }
         // Real-time requests the receiver acted on: the protocol's part.
         if shared.take(WANT_RESET) {
             shared
@@ -885,6 +893,7 @@ impl Board {
             wired: AtomicU16::new(0),
             probe: AtomicU8::new(0),
             prices: Mutex::new((50_000, 100_000, true)),
+            wheel: AtomicI32::new(0),
         });
         let (tx, rx) = mpsc::channel();
         let axes = {
@@ -942,6 +951,13 @@ impl Board {
         self.shared.panel(active);
     }
 
+    /// The handwheel turned by `counts` (signed); the protocol takes them
+    /// on its next round, with any turned meanwhile.
+    pub fn wheel(&self, counts: i32) {
+        self.shared.wheel.fetch_add(counts, Ordering::AcqRel);
+        self.shared.wanted.fetch_or(WANT_WHEEL, Ordering::AcqRel);
+    }
+
     /// Puts the lathe of `file` behind the axes: from now on its
     /// carriages follow the steps issued and trip its switches.
     pub fn set_lathe(&self, file: crate::lathe::MachineFile) {
@@ -985,7 +1001,8 @@ impl Board {
 
     /// One line of the panel (`serve --pty`'s standard input): `ESTOP
     /// 1|0`, `DOOR 1|0`, `PROBE 1|0`, `LIMIT X-|X+|Z-|Z+ 1|0`, `FAULT X|Z
-    /// 1|0`, `HOLD` and `START` (a press: on, then off), and `STATE?`.
+    /// 1|0`, `HOLD` and `START` (a press: on, then off), `WHEEL n` (the
+    /// handwheel turned by `n` counts), and `STATE?`.
     /// Returns what to print (`STATE?`'s line), or why the line is not one.
     pub fn panel_line(&self, line: &str) -> Result<Option<String>, String> {
         use core_nostd::inputs::Input;
@@ -1000,6 +1017,13 @@ impl Board {
         let (input, on) = match u.as_slice() {
             [] => return Ok(None),
             ["STATE?"] => return Ok(Some(self.state().line())),
+            ["WHEEL", n] => {
+                let counts = n
+                    .parse()
+                    .map_err(|_| format!("{line:?}: WHEEL takes a whole count, as -12 or 40"))?;
+                self.wheel(counts);
+                return Ok(None);
+            }
             ["HOLD"] | ["START"] => {
                 let i = if u[0] == "HOLD" { Input::Hold } else { Input::Start };
                 let was = self.inputs();
@@ -1032,7 +1056,7 @@ impl Board {
             ),
             _ => {
                 return Err(format!(
-                    "{line:?}: not a panel line (ESTOP, DOOR, PROBE 1|0; LIMIT X-|X+|Z-|Z+ 1|0; FAULT X|Z 1|0; HOLD; START; STATE?)"
+                    "{line:?}: not a panel line (ESTOP, DOOR, PROBE 1|0; LIMIT X-|X+|Z-|Z+ 1|0; FAULT X|Z 1|0; HOLD; START; WHEEL n; STATE?)"
                 ))
             }
         };

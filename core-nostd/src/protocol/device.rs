@@ -206,6 +206,14 @@ impl Device {
         }
     }
 
+    /// The handwheel turned by `counts` since the last call
+    /// ([`Session::wheel`]).
+    pub fn wheel<I: Io>(&mut self, counts: i32, io: &mut I) {
+        let mut t = self.link(io);
+        t.statuses = false;
+        self.session.wheel(counts, &mut t);
+    }
+
     /// The inputs wired, for the board's filter.
     pub const fn wiring(&self) -> crate::inputs::InputConfig {
         self.session.wiring()

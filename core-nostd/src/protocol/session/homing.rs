@@ -25,7 +25,7 @@ enum Failed {
 }
 
 /// A rate word in mm/min, kept in 10⁻³ mm/min.
-fn parse_homing_rate(key: &'static str, v: &str) -> Result<u32, Refusal<'static>> {
+pub(super) fn parse_homing_rate(key: &'static str, v: &str) -> Result<u32, Refusal<'static>> {
     let why = "must be 0.001 to 20000 mm/min, at most 3 decimals";
     let l = parse_rate(key, v, Refusal::Value(key, why))?;
     let a = l.as_angstrom();
@@ -433,8 +433,17 @@ impl Session {
     /// each axis homed held within its travel, on the impulse grid inside
     /// it, so that what is left of the jog runs up to the limit.
     pub(super) fn jog_clip(&self, target: [Length; 2]) -> [Length; 2] {
+        if !self.offsets.homing.jog_clip {
+            return target;
+        }
+        self.clip_to_travel(target)
+    }
+
+    /// `target` with each homed axis kept within its travel, when soft
+    /// limits are on: the first or last impulse within it.
+    pub(super) fn clip_to_travel(&self, target: [Length; 2]) -> [Length; 2] {
         let h = &self.offsets.homing;
-        if !(h.soft && h.jog_clip) {
+        if !h.soft {
             return target;
         }
         let mut t = target;

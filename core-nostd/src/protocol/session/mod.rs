@@ -43,6 +43,7 @@ mod offsets;
 mod probe;
 mod realtime;
 mod settings;
+mod wheel;
 pub(super) mod wire;
 
 pub(super) use blocks::block_crc;
@@ -103,6 +104,12 @@ pub struct Session {
     pub(super) checking: Option<ImpulsePoint>,
     /// The last reset dropped motion answered and not all run.
     pub(super) reset_dropped: bool,
+    /// What runs is the handwheel's alone (its counts add to it); any
+    /// request or block ends it.
+    pub(super) wheeling: bool,
+    /// The wheel's counts were refused and it said so (once until it moves
+    /// the axis again).
+    pub(super) wheel_ignored: bool,
     /// The top speed of each gear range (`GEAR N= TOP=`), rpm.
     pub(super) gears: [Option<Length>; 4],
     /// The nose `G41.1`/`G42.1` gave, while its compensation is on.
@@ -182,6 +189,8 @@ impl Session {
             generation: 0,
             checking: None,
             reset_dropped: false,
+            wheeling: false,
+            wheel_ignored: false,
             gears: [None; 4],
             dynamic_tool: None,
             cycles: Cycles::new(),
@@ -398,9 +407,16 @@ impl Session {
     /// Runs a request: one handler per command of the table.
     fn execute<'a, I: Io>(&mut self, request: &Request<'a>, io: &mut I) -> Outcome<'a> {
         let (command, args) = match request {
-            Request::Block(text) => return self.gcode(text, io),
+            Request::Block(text) => {
+                self.wheeling = false;
+                return self.gcode(text, io);
+            }
             Request::Command(command, args) => (*command, args),
         };
+        if !matches!(command, Command::Status | Command::Pos) {
+            // The wheel's moves end with what the request queues.
+            self.wheeling = false;
+        }
         if matches!(command, Command::Move | Command::Arc | Command::Sync) {
             // Nothing moves while an input holds the machine locked.
             self.unlocked()?;
@@ -444,6 +460,7 @@ impl Session {
             Command::Reset => self.reset_command(io),
             Command::Unlock => self.unlock_command(io),
             Command::Homing => self.homing_command(args, io),
+            Command::Wheel => self.wheel_command(args, io),
             Command::Home => self.home_command(args, io),
             Command::Input => self.input_command(args, io),
             Command::Pos => {

@@ -15,6 +15,7 @@ mod inputs;
 mod machine;
 mod programs;
 mod requests;
+mod wheel;
 
 #[derive(Default)]
 struct Lines {
