@@ -15,7 +15,7 @@
 //! USART2 ([`crate::board::Panel`]).
 
 use crate::board;
-use core::sync::atomic::{AtomicBool, AtomicU16, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicI32, AtomicU16, AtomicU8, Ordering};
 use core_nostd::inputs::{Filter, Input, InputConfig, FAULTS, LIMITS};
 use stm32f4::stm32f405::{Interrupt, NVIC};
 
@@ -41,6 +41,11 @@ static RESUME: AtomicBool = AtomicBool::new(false);
 static PROBE: AtomicU8 = AtomicU8::new(0);
 const PROBE_TOUCH: u8 = 1;
 const PROBE_LEAVE: u8 = 2;
+
+/// The handwheel's edges counted and not yet taken by thread mode.
+static WHEEL: AtomicI32 = AtomicI32::new(0);
+/// The edges thread mode took short of a whole detent (thread mode only).
+static WHEEL_PART: AtomicI32 = AtomicI32::new(0);
 
 /// The inputs that stop everything at once.
 const STOPS: u16 = Input::Estop.bit() | LIMITS | FAULTS;
@@ -87,6 +92,19 @@ pub fn changed() -> bool {
     CHANGED.load(Ordering::Acquire)
 }
 
+/// The handwheel's whole detents turned since thread mode last took them
+/// (signed), or `None` if none; a part of a detent waits for the rest.
+pub fn take_wheel() -> Option<i32> {
+    let edges = WHEEL.swap(0, Ordering::AcqRel);
+    if edges == 0 {
+        return None;
+    }
+    let all = WHEEL_PART.load(Ordering::Relaxed).saturating_add(edges);
+    WHEEL_PART.store(all.rem_euclid(4), Ordering::Relaxed);
+    let detents = all.div_euclid(4);
+    (detents != 0).then_some(detents)
+}
+
 /// Whether the door or the hold button asks for a feed hold (taken).
 pub fn take_hold() -> bool {
     HOLD.swap(false, Ordering::AcqRel)
@@ -108,9 +126,10 @@ pub fn take_stop() -> bool {
     STOPPED.swap(false, Ordering::AcqRel)
 }
 
-/// The sampler's state: the filter.
+/// The sampler's state: the filter, the wheel's counter as last read.
 pub struct Sampler {
     filter: Filter,
+    wheel_at: u16,
 }
 
 impl Default for Sampler {
@@ -124,13 +143,27 @@ impl Sampler {
     pub const fn new() -> Sampler {
         Sampler {
             filter: Filter::new(),
+            wheel_at: 0,
         }
     }
 
     /// One sample of the pins (the sampling interrupt).
     #[inline(always)]
     pub fn sample(&mut self) {
+        self.wheel(board::wheel_edges());
         self.sample_pins(board::input_pins());
+    }
+
+    /// The wheel's counter read (`edges`, modulo 2¹⁶): what it counted
+    /// since the last sample goes to thread mode. A millisecond holds far
+    /// fewer than 2¹⁵ edges of any hand-turned wheel.
+    #[inline(always)]
+    pub fn wheel(&mut self, edges: u16) {
+        let by = edges.wrapping_sub(self.wheel_at) as i16;
+        if by != 0 {
+            self.wheel_at = edges;
+            WHEEL.fetch_add(i32::from(by), Ordering::AcqRel);
+        }
     }
 
     /// One sample of `pins` (bit set: the pin reads high): a stopping input

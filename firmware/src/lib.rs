@@ -121,6 +121,8 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Controller<P, S> {
                 // never silently.
                 device.realtime(Realtime::Reset, self);
             }
+        } else if let Some(detents) = inputs::take_wheel() {
+            device.wheel(detents, self);
         } else if let Some(asked) = motion::take_status() {
             self.asked = Some(asked);
             device.realtime(Realtime::Status, self);

@@ -396,7 +396,8 @@ impl crate::reliable::ByteLink for QemuLink {
 /// The switches' panel of a firmware booted with
 /// [`Qemu::boot_with_panel`]: each sample of the pin levels goes to USART2
 /// as two bytes (pins 0–6 with bit 7 set, then pins 7–13); the firmware
-/// filters the samples as it filters its pins' every millisecond.
+/// filters the samples as it filters its pins' every millisecond. A sample
+/// with pin 13 set is the handwheel's count instead ([`Panel::wheel`]).
 pub struct Panel(std::os::unix::net::UnixStream);
 
 impl Panel {
@@ -412,6 +413,17 @@ impl Panel {
                 Err(_) => std::thread::sleep(Duration::from_millis(20)),
             }
         }
+    }
+
+    /// The handwheel turned by `detents` (−4096 … 4095): one sample with
+    /// pin 13 set, bits 0–12 the count.
+    pub fn wheel(&mut self, detents: i16) -> Result<(), LinkError> {
+        if !(-4096..4096).contains(&detents) {
+            return Err(other(format!(
+                "{detents} detents: a panel sample holds -4096 to 4095"
+            )));
+        }
+        self.sample(1 << 13 | (detents as u16 & 0x1FFF), 1)
     }
 
     /// Sends `n` samples of `pins` (bit set: the pin reads high).

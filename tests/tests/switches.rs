@@ -415,3 +415,45 @@ fn the_paced_firmware_stops_a_probing_move_on_the_probe() {
     assert!((-999..=-900).contains(&back), "{left}");
     assert_eq!(value(&ok, "PZ"), back);
 }
+
+/// The handwheel on the firmware: the panel turns it in bursts (detents,
+/// both ways) and the axis it selects ends exactly the detents' sum times
+/// the scale away, the other axis unmoved; with no axis selected the
+/// wheel moves nothing.
+#[test]
+fn the_firmware_moves_the_axis_the_wheel_selects_by_its_detents() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client, mut panel, _one) = booted("wheel", "qemu");
+    panel.sample(QUIET, 3).unwrap();
+    // No axis selected: nothing moves.
+    panel.wheel(25).unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    let pos = ask(&mut client, "POS");
+    assert!(pos.starts_with("OK PX=0 PZ=0 "), "{pos}");
+    let set = ask(&mut client, "WHEEL AXIS=Z SCALE=10 FEED=600");
+    assert!(set.starts_with("OK AXIS=Z SCALE=10 FEED=600"), "{set}");
+    let turns: [i16; 8] = [7, -3, 12, 1, -40, 5, 5, 400];
+    for n in turns {
+        panel.wheel(n).unwrap();
+    }
+    let sum: i64 = turns.iter().map(|&n| i64::from(n)).sum();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let status = loop {
+        assert!(Instant::now() < deadline, "the wheel's moves did not end");
+        let s = ask(&mut client, "STATUS");
+        if s.starts_with("OK STATE=IDLE") && value(&s, "PZ") == sum * 10 {
+            break s;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(value(&status, "PX"), 0, "{status}");
+    // And no farther.
+    std::thread::sleep(Duration::from_millis(300));
+    let pos = ask(&mut client, "POS");
+    assert!(
+        pos.starts_with(&format!("OK PX=0 PZ={} ", sum * 10)),
+        "{pos}"
+    );
+}

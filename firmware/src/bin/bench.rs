@@ -1111,7 +1111,9 @@ fn switches(tim: &StepTimer) {
     let mut sampler = firmware::inputs::Sampler::new();
     let quiet = Input::Estop.bit();
     sampler.sample_pins(quiet);
+    // A whole sample: the handwheel's counter read unchanged, the pins.
     let idle = measure(tim, || {
+        sampler.wheel(core::hint::black_box(0));
         core::hint::black_box(sampler.sample_pins(core::hint::black_box(quiet)));
     });
     let stop = measure(tim, || {

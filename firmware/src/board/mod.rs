@@ -9,7 +9,9 @@
 //! | spindle and coolant | PB6 … PB10 | [`spindle`] |
 //! | E-stop, X−, X+, Z−, Z+ | PA0, PA1, PA4, PA5, PA6 | inputs, pull-up ([`input_pins`]) |
 //! | door, feed hold | PA7, PA8 | inputs, pull-up |
-//! | cycle start, probe, X fault, Z fault | PC4, PC5, PC6, PC7 | inputs, pull-up |
+//! | cycle start, probe | PC4, PC5 | inputs, pull-up |
+//! | X fault, Z fault | PB0, PB1 | inputs, pull-up |
+//! | handwheel A / B | PC6 / PC7 (TIM8 CH1 / CH2, AF3) | quadrature, pull-up ([`wheel_edges`]) |
 //! | the test harness's panel (`qemu` builds) | USART2 | [`Panel`] |
 //!
 //! Two configurations. The real board runs from an 8 MHz crystal through the
@@ -169,6 +171,12 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
             .pupdr7()
             .bits(0b01)
     });
+    // SAFETY: as above.
+    dp.GPIOB
+        .pupdr()
+        .modify(|_, w| unsafe { w.pupdr0().bits(0b01).pupdr1().bits(0b01) });
+    #[cfg(not(feature = "qemu"))]
+    wheel_counter(&dp.RCC, gpioc, dp.TIM8);
     #[cfg(feature = "qemu")]
     let panel = Panel::start(&dp.RCC, dp.USART2);
     #[cfg(not(feature = "qemu"))]
@@ -285,9 +293,60 @@ pub struct Board {
     pub panel: Panel,
 }
 
+/// The handwheel's quadrature counter: TIM8 in encoder mode on PC6 / PC7
+/// (AF3), counting every edge of both channels (four per detent), each
+/// channel filtered over 8 samples at its timer clock / 128 (APB2's
+/// timers run at 168 MHz: a glitch under 6 µs counts nothing, and edges
+/// up to about 150 kHz count, far above a hand-turned wheel's few kHz).
+#[cfg(not(feature = "qemu"))]
+fn wheel_counter(rcc: &pac::RCC, gpioc: &pac::GPIOC, tim: pac::TIM8) {
+    rcc.apb2enr().modify(|_, w| w.tim8en().set_bit());
+    // SAFETY: raw bits of fields the reference manual (RM0090) documents, values in their range.
+    gpioc
+        .afrl()
+        .modify(|_, w| unsafe { w.afrl6().bits(3).afrl7().bits(3) });
+    // SAFETY: as above.
+    gpioc
+        .moder()
+        .modify(|_, w| unsafe { w.moder6().bits(0b10).moder7().bits(0b10) });
+    // SAFETY: as above: TI1 and TI2 as inputs, filter fDTS/32 × 8 (fDTS
+    // the timer clock / 4, CKD below).
+    tim.ccmr1_input().write(|w| unsafe {
+        w.cc1s()
+            .bits(0b01)
+            .cc2s()
+            .bits(0b01)
+            .ic1f()
+            .bits(0b1111)
+            .ic2f()
+            .bits(0b1111)
+    });
+    tim.cr1().write(|w| w.ckd().div4());
+    tim.smcr().write(|w| w.sms().encoder_mode_3());
+    // SAFETY: as above: the full 16-bit range.
+    tim.arr().write(|w| unsafe { w.bits(0xFFFF) });
+    tim.cr1().modify(|_, w| w.cen().set_bit());
+}
+
+/// The handwheel's edges counted so far, modulo 2¹⁶ (four per detent).
+/// Under QEMU, which models no encoder, what the panel's wheel samples
+/// added.
+#[inline(always)]
+pub fn wheel_edges() -> u16 {
+    #[cfg(feature = "qemu")]
+    {
+        PANEL_WHEEL.load(core::sync::atomic::Ordering::Acquire)
+    }
+    #[cfg(not(feature = "qemu"))]
+    {
+        // SAFETY: a read of the counter, which only the timer writes.
+        unsafe { (*pac::TIM8::ptr()).cnt().read().bits() as u16 }
+    }
+}
+
 /// The switches' pin levels as the bits of `core_nostd::inputs::Input`
 /// (set: the pin reads high): PA0 E-stop, PA1 X−, PA4 X+, PA5 Z−, PA6 Z+,
-/// PA7 door, PA8 feed hold, PC4 cycle start, PC5 probe, PC6 X's fault, PC7
+/// PA7 door, PA8 feed hold, PC4 cycle start, PC5 probe, PB0 X's fault, PB1
 /// Z's fault. Under QEMU, which has no GPIO, the last sample the panel
 /// gave.
 #[inline(always)]
@@ -299,23 +358,29 @@ pub fn input_pins() -> u16 {
     #[cfg(not(feature = "qemu"))]
     {
         // SAFETY: reads of the input registers, which nothing writes.
-        let (a, c) = unsafe {
+        let (a, b, c) = unsafe {
             (
                 (*pac::GPIOA::ptr()).idr().read().bits(),
+                (*pac::GPIOB::ptr()).idr().read().bits(),
                 (*pac::GPIOC::ptr()).idr().read().bits(),
             )
         };
-        ((a & 0b11) | ((a >> 4) & 0b1_1111) << 2 | ((c >> 4) & 0b1111) << 7) as u16
+        ((a & 0b11) | ((a >> 4) & 0b1_1111) << 2 | ((c >> 4) & 0b11) << 7 | (b & 0b11) << 9) as u16
     }
 }
 
 /// The last sample the panel gave (`qemu` builds).
 #[cfg(feature = "qemu")]
 static PANEL_PINS: core::sync::atomic::AtomicU16 = core::sync::atomic::AtomicU16::new(0);
+/// The handwheel's edges the panel gave, modulo 2¹⁶ (`qemu` builds).
+#[cfg(feature = "qemu")]
+static PANEL_WHEEL: core::sync::atomic::AtomicU16 = core::sync::atomic::AtomicU16::new(0);
 
 /// The test harness's panel under QEMU: USART2 receives samples of the
 /// switches' pin levels, two bytes each (the first with bit 7 set and pins
-/// 0–6, the second with pins 7–13). The board reads its pins instead.
+/// 0–6, the second with pins 7–13). A sample with pin 13 set is the
+/// handwheel's instead: bits 0–12 the detents it turned, signed (two's
+/// complement). The board reads its pins and its counter instead.
 pub struct Panel {
     #[cfg(feature = "qemu")]
     usart: pac::USART2,
@@ -352,7 +417,18 @@ impl Panel {
                 return false;
             };
             let pins = u16::from(low) | u16::from(b) << 7;
-            PANEL_PINS.store(pins, core::sync::atomic::Ordering::Release);
+            if pins & 1 << 13 != 0 {
+                // 13 bits, signed: four edges a detent, as the counter's.
+                let detents = ((pins << 3) as i16) >> 3;
+                let edges = (detents as u16).wrapping_mul(4);
+                let was = PANEL_WHEEL.load(core::sync::atomic::Ordering::Acquire);
+                PANEL_WHEEL.store(
+                    was.wrapping_add(edges),
+                    core::sync::atomic::Ordering::Release,
+                );
+            } else {
+                PANEL_PINS.store(pins, core::sync::atomic::Ordering::Release);
+            }
             true
         }
         #[cfg(not(feature = "qemu"))]
