@@ -76,6 +76,18 @@ pub fn lathe_board(
     (board, c)
 }
 
+/// The simulated lathe's carriages where they are (their own positions,
+/// the leadscrew's play included), mm, from the panel's `STATE?`.
+pub fn carriage(board: &host_sim::board::Board) -> (f64, f64) {
+    let state = board.panel_line("STATE?").expect("state").expect("a line");
+    let v = |k: &str| -> f64 {
+        host_sim::link::words_value(&state, k)
+            .and_then(|v| v.parse().ok())
+            .expect(&state)
+    };
+    (v("X"), v("Z"))
+}
+
 /// Sends `line` on a grbl link and reads to its `ok` or `error:`, the
 /// lines before included (a board's greeting, blank lines aside).
 pub fn grbl_say(c: &mut host_sim::link::Client, line: &str) -> Vec<String> {

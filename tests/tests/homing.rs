@@ -6,6 +6,7 @@ use host_sim::board::Board;
 use host_sim::link::{Client, Reply};
 use std::path::PathBuf;
 use std::time::Duration;
+use tests::carriage;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -41,17 +42,6 @@ fn homing_failed(c: &mut Client, code: u8, why: &str) {
         reply.last.starts_with(&format!("ERR ALARM {code}: {why}")),
         "{reply:?}"
     );
-}
-
-/// The carriages' own positions (play included), mm, from the panel.
-fn carriage(board: &Board) -> (f64, f64) {
-    let state = board.panel_line("STATE?").expect("state").expect("a line");
-    let v = |k: &str| -> f64 {
-        host_sim::link::words_value(&state, k)
-            .and_then(|v| v.parse().ok())
-            .expect(&state)
-    };
-    (v("X"), v("Z"))
 }
 
 /// Homing twice from two different places ends with the carriages at the

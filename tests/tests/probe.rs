@@ -64,14 +64,6 @@ fn num(line: &str, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("{key} in {line}"))
 }
 
-/// The carriage's own Z (play included), mm, from the panel.
-fn carriage_z(board: &Board) -> f64 {
-    let state = board.panel_line("STATE?").expect("state").expect("a line");
-    words_value(&state, "Z")
-        .and_then(|v| v.parse().ok())
-        .expect(&state)
-}
-
 /// `G38.2` stops where the carriage touches the setter: the result is
 /// that point, to the impulse, and the registers are there. `G38.4` back
 /// off it stops where it leaves: later by the screw's play, which the
@@ -95,7 +87,7 @@ fn a_probing_move_stops_where_the_probe_changes() {
         words_value(&probe, "PZ").map(str::to_string)
     );
     assert!(
-        (carriage_z(&board) - mz).abs() < 1e-9,
+        (tests::carriage(&board).1 - mz).abs() < 1e-9,
         "the carriage is where it stopped"
     );
     // The program goes on from there: the point is the probe's.
@@ -138,13 +130,13 @@ fn a_probing_move_stops_where_the_probe_changes() {
     // nothing.
     assert!(ask(&mut c, "G00 Z-55").is_ok());
     assert!(ask(&mut c, "SYNC").is_ok());
-    let before = carriage_z(&board);
+    let before = tests::carriage(&board).1;
     c.write_raw(b"G38.2 Z-60 F100\n").expect("write");
     let alarm = c.read_line().expect("alarm");
     assert!(alarm.starts_with("!ALARM CODE=4 INPUT=PROBE "), "{alarm}");
     let r = c.read_reply().expect("reply");
     assert!(r.last.starts_with("ERR ALARM 4"), "{r:?}");
-    assert_eq!(carriage_z(&board), before, "nothing moved");
+    assert_eq!(tests::carriage(&board).1, before, "nothing moved");
     assert!(ask(&mut c, "UNLOCK").is_ok());
 }
 
@@ -170,7 +162,7 @@ fn a_probing_block_is_refused_before_it_moves() {
     ] {
         let r = ask(&mut c, line);
         assert!(r.last.starts_with(why), "{line}: {r:?}");
-        assert_eq!(carriage_z(&board), 0.0, "{line} moved nothing");
+        assert_eq!(tests::carriage(&board).1, 0.0, "{line} moved nothing");
         assert!(ask(&mut c, "G94").is_ok());
     }
     // Not wired: refused, nothing moved.
@@ -181,7 +173,7 @@ fn a_probing_block_is_refused_before_it_moves() {
             .starts_with("ERR SYNTAX G38.2 to G38.5 need the probe wired"),
         "{r:?}"
     );
-    assert_eq!(carriage_z(&board), 0.0);
+    assert_eq!(tests::carriage(&board).1, 0.0);
 }
 
 /// A grbl sender probes as on grbl: `$6` (how the probe reads) wires it;

@@ -6,6 +6,7 @@ use host_sim::board::Board;
 use host_sim::link::{Client, Reply};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
+use tests::carriage;
 
 fn lathe() -> (Board, Client) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -33,17 +34,6 @@ fn at_rest(c: &mut Client) -> (i64, i64) {
             return (v("PX"), v("PZ"));
         }
     }
-}
-
-/// The carriages' own positions (play included), mm, from the panel.
-fn carriage(board: &Board) -> (f64, f64) {
-    let state = board.panel_line("STATE?").expect("state").expect("a line");
-    let v = |k: &str| -> f64 {
-        host_sim::link::words_value(&state, k)
-            .and_then(|v| v.parse().ok())
-            .expect(&state)
-    };
-    (v("X"), v("Z"))
 }
 
 /// Turned both ways in bursts, faster than the carriage follows: Z ends
