@@ -118,6 +118,13 @@ fn the_wheel_stops_at_the_end_of_the_travel_once_homed() {
     board_turns(&_board, &[-10]);
     // 1000 impulses of 0.005 mm: 5 mm below home.
     assert_eq!(at_rest(&mut c).0, 14_000 - 1_000);
-    board_turns(&_board, &[40, 40]);
+    board_turns(&_board, &[40]);
     assert_eq!(at_rest(&mut c).0, 14_000, "up to the travel's end");
+    // Turned on at the end: nothing moves, and the wheel says why once.
+    board_turns(&_board, &[5]);
+    let line = c.read_line().expect("the wheel's notice");
+    let body = host_sim::link::check_reply_line(&line).expect("checksum");
+    assert_eq!(body, "!WHEEL IGNORED=TRAVEL COUNTS=5");
+    board_turns(&_board, &[-3]);
+    assert_eq!(at_rest(&mut c).0, 14_000 - 300, "back from the end");
 }

@@ -68,35 +68,45 @@ impl Session {
             return;
         }
         if let Err(why) = self.wheel_may_move(io) {
-            if !self.wheel_ignored {
-                self.wheel_ignored = true;
-                let mut line = ReplyLine::new();
-                let _ = write!(line, "!WHEEL IGNORED={why} COUNTS={counts}");
-                io.send(line.finish());
-            }
+            self.wheel_ignore(why, counts, io);
             return;
         }
-        self.wheel_ignored = false;
         let axis = usize::from(axis & 1);
         let price = [self.cfg.hx, self.cfg.hz][axis].as_angstrom();
         let by = i64::from(counts) * i64::from(w.scale) * price;
         let mut target = self.cmd;
         let Some(to) = Length::from_angstrom(self.cmd[axis].as_angstrom().saturating_add(by))
         else {
+            self.wheel_ignore("RANGE", counts, io);
             return;
         };
         target[axis] = to;
         let target = self.clip_to_travel(target);
         if target == self.cmd {
+            self.wheel_ignore("TRAVEL", counts, io);
             return;
         }
         let Ok(block) = self.linear_block(target) else {
+            self.wheel_ignore("RANGE", counts, io);
             return;
         };
+        self.wheel_ignored = false;
         let feed = Length::from_um(i64::from(w.feed)).and_then(Feed::new);
         self.queue_line(target, block, feed, io);
         self.release(io);
         self.wheeling = true;
+    }
+
+    /// Counts the wheel may not act on: the first of an episode says why
+    /// (`!WHEEL IGNORED=<why> COUNTS=<n>`); the episode ends when the
+    /// wheel moves the axis again.
+    fn wheel_ignore<I: Io>(&mut self, why: &str, counts: i32, io: &mut I) {
+        if !self.wheel_ignored {
+            self.wheel_ignored = true;
+            let mut line = ReplyLine::new();
+            let _ = write!(line, "!WHEEL IGNORED={why} COUNTS={counts}");
+            io.send(line.finish());
+        }
     }
 
     /// Why the wheel may not move the axis now, in a word.

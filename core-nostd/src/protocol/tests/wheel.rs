@@ -113,3 +113,18 @@ fn the_wheel_moves_nothing_while_compensating_or_locked_and_says_so_once() {
     assert_eq!(wheel(&mut dev, -2), Vec::<String>::new());
     assert_eq!(registers(&mut dev), (at.0, at.1 - 2));
 }
+
+/// Counts that would carry the axis beyond the lengths the device holds
+/// move nothing and say so, once; the wheel goes on afterwards.
+#[test]
+fn counts_beyond_the_range_move_nothing_and_say_so() {
+    let mut dev = Device::new();
+    assert!(ask1(&mut dev, "WHEEL AXIS=Z SCALE=100").starts_with("OK"));
+    assert_eq!(
+        wheel(&mut dev, i32::MAX),
+        std::vec![std::format!("!WHEEL IGNORED=RANGE COUNTS={}", i32::MAX)]
+    );
+    assert_eq!(registers(&mut dev), (0, 0));
+    assert_eq!(wheel(&mut dev, -1), Vec::<String>::new());
+    assert_eq!(registers(&mut dev), (0, -100));
+}
