@@ -23,6 +23,9 @@ pub struct AxisHoming {
     /// How far the axis can go from one end of its travel to the other:
     /// the seek gives up beyond it.
     pub travel: Length,
+    /// The play of its leadscrew, taken up at each reversal (X on the
+    /// radius: the cross-slide's own).
+    pub backlash: Length,
 }
 
 impl AxisHoming {
@@ -32,6 +35,7 @@ impl AxisHoming {
         dir: 1,
         home: Length::ZERO,
         travel: Length::ZERO,
+        backlash: Length::ZERO,
     };
 }
 
@@ -103,6 +107,10 @@ const fn mm(n: i64) -> Length {
 pub const MAX_LENGTH: Length = mm(10_000);
 /// The longest pull-off, 100 mm.
 pub const MAX_PULLOFF: Length = mm(100);
+
+/// The most backlash an axis may be given (a worn leadscrew has 0.05 to
+/// 0.3 mm).
+pub const MAX_BACKLASH: Length = mm(5);
 /// The fastest homing feed, 10⁻³ mm/min (20 m/min).
 pub const MAX_RATE: u32 = 20_000_000;
 
@@ -140,6 +148,8 @@ impl HomingConfig {
                     && a.home.as_angstrom().unsigned_abs() <= MAX_LENGTH.as_angstrom() as u64
                     && a.travel >= Length::ZERO
                     && a.travel <= MAX_LENGTH
+                    && a.backlash >= Length::ZERO
+                    && a.backlash <= MAX_BACKLASH
             })
     }
 }

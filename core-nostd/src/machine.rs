@@ -9,7 +9,7 @@
 //! records it.
 
 use crate::arc::DirectSteps;
-use crate::impulse::ImpulsePrice;
+use crate::impulse::{ImpulsePrice, Impulses};
 use crate::interleave::{ImpulsePoint, LinearBlock, StepEvent};
 use crate::plan::{Block, Feed, Limits, Planner, Point, Rates, WINDOW};
 use crate::step::{FixedRate, Record, TickRate};
@@ -33,6 +33,8 @@ pub trait Background {
     fn drain(&mut self);
     /// The registers of the steps issued.
     fn issued(&mut self) -> ImpulsePoint;
+    /// The backlash take-up steps issued, net, per axis (X, Z).
+    fn lash(&mut self) -> [i32; 2];
     /// Sets them, at rest (`ZERO`, a price change).
     fn set_issued(&mut self, registers: ImpulsePoint);
     /// What was recorded since this was last called (`SYNC`); the record
@@ -141,6 +143,11 @@ pub struct Machine {
     /// How the blocks queued from now on join the block before: at the
     /// junction deviation given (Å; `None` the limits' `JD`), or at rest.
     join: Join,
+    /// Each axis' backlash, impulses (`docs/motion.md` §7).
+    backlash: [i32; 2],
+    /// The take-up steps of the blocks queued so far, net, per axis: 0
+    /// after a move towards minus, the backlash after one towards plus.
+    lash: [i32; 2],
 }
 
 /// How a queued block joins the one before it (path control).
@@ -177,12 +184,27 @@ impl Machine {
             starved: 0,
             spindle: 0,
             join: Join::Blend,
+            backlash: [0, 0],
+            lash: [0, 0],
         }
     }
 
     /// How the blocks queued from now on join the block before.
     pub fn set_join(&mut self, join: Join) {
         self.join = join;
+    }
+
+    /// Each axis' backlash (impulses, X then Z), taken up from the next
+    /// reversal on.
+    /// The motors stay where they are in their play: the next block
+    /// towards plus takes up the difference.
+    pub fn set_backlash(&mut self, impulses: [u32; 2]) {
+        self.backlash = impulses.map(|b| i32::try_from(b).unwrap_or(i32::MAX));
+    }
+
+    /// The take-up steps of the blocks queued so far, net, per axis.
+    pub const fn lash(&self) -> [i32; 2] {
+        self.lash
     }
 
     /// The spindle speed commanded for the blocks queued from now on (10⁻³
@@ -250,7 +272,57 @@ impl Machine {
         let Some(block) = Block::new(from, to, events, feed, h, &self.rates) else {
             return;
         };
-        let block = block.with_spindle(self.spindle);
+        self.take_up(events.delta(), h, sink);
+        self.push_block(block.with_spindle(self.spindle), sink);
+    }
+
+    /// Before a block whose steps go `delta` (X, Z impulses): each axis it
+    /// moves whose motor stands on the other side of its play turns
+    /// through it first, in a block of its own (`docs/motion.md` §7).
+    fn take_up<S: StepSink>(&mut self, delta: (i32, i32), h: [ImpulsePrice; 2], sink: &mut S) {
+        let step = |d: i32, backlash: i32, lash: i32| match d {
+            0 => 0,
+            d if d > 0 => backlash.saturating_sub(lash),
+            _ => 0i32.saturating_sub(lash),
+        };
+        let steps = [
+            step(delta.0, self.backlash[0], self.lash[0]),
+            step(delta.1, self.backlash[1], self.lash[1]),
+        ];
+        if steps == [0, 0] {
+            return;
+        }
+        // On the grid from the origin: the take-up moves no point.
+        let origin = ImpulsePoint {
+            x: Impulses(0),
+            z: Impulses(0),
+        };
+        let end = ImpulsePoint {
+            x: Impulses(steps[0]),
+            z: Impulses(steps[1]),
+        };
+        let q = |n: i32, h: ImpulsePrice| (i128::from(n) * i128::from(h.as_angstrom())) << 32;
+        let Ok(events) = LinearBlock::new(origin, end) else {
+            return;
+        };
+        let Some(block) = Block::new(
+            [0, 0],
+            [q(steps[0], h[0]), q(steps[1], h[1])],
+            events,
+            None,
+            h,
+            &self.rates,
+        ) else {
+            return;
+        };
+        self.push_block(block.with_spindle(self.spindle).as_takeup(), sink);
+        self.lash[0] = self.lash[0].saturating_add(steps[0]);
+        self.lash[1] = self.lash[1].saturating_add(steps[1]);
+    }
+
+    /// Plans `block` behind those queued; the first starts when the window
+    /// is full.
+    fn push_block<S: StepSink>(&mut self, block: Block, sink: &mut S) {
         if self.planner.window_full() {
             self.start_one(sink);
         }
@@ -327,14 +399,20 @@ impl Machine {
     }
 
     /// A flush, then `events` at a fixed rate as a run of their own (the
-    /// ЭМ-907's direct arc), ending at point `end`.
+    /// ЭМ-907's direct arc, within one quadrant: its steps go `delta`, at
+    /// prices `h`), ending at point `end`.
     pub fn fixed_rate<S: StepSink>(
         &mut self,
         events: DirectSteps,
+        delta: (i32, i32),
+        h: [ImpulsePrice; 2],
         rate_hz: u32,
         end: Point,
         sink: &mut S,
     ) {
+        // Within one quadrant each axis keeps its direction: its play is
+        // taken up before the run.
+        self.take_up(delta, h, sink);
         self.flush(sink);
         let rate = FixedRate::new(self.rates.tick(), rate_hz);
         self.start_item(Item::Fixed(FixedRun::new(rate, events)), sink);
@@ -417,15 +495,24 @@ impl Machine {
         };
         found.dropped |= queued;
         self.stepper.set_issued(issued);
+        // Where the motors stand in their play: what was issued of it.
+        self.lash = match sink.background() {
+            Some(b) => b.lash(),
+            None => self.stepper.lash(),
+        };
+        self.stepper.set_lash(self.lash);
         (found, issued)
     }
 
     /// Forgets what was queued and started without issuing it anywhere
-    /// (check mode's motion, which went nowhere), the registers as given.
-    pub fn forget(&mut self, registers: ImpulsePoint) {
+    /// (check mode's motion, which went nowhere), the registers and the
+    /// motors' take-up as given.
+    pub fn forget(&mut self, registers: ImpulsePoint, lash: [i32; 2]) {
         self.planner.clear();
         self.stepper.abort();
         self.stepper.set_issued(registers);
+        self.stepper.set_lash(lash);
+        self.lash = lash;
     }
 
     /// Where the next queued block starts from now on (after a reset: the

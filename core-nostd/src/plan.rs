@@ -343,9 +343,23 @@ pub struct Block {
     /// The spindle speed commanded while it runs, 10⁻³ rpm (0: stopped):
     /// the output follows it at the block's start.
     spindle: u32,
+    /// A backlash take-up: its steps turn the leadscrew through its play
+    /// and move no register (`docs/motion.md` §7).
+    takeup: bool,
 }
 
 impl Block {
+    /// The block as a backlash take-up: its steps move no register.
+    pub const fn as_takeup(mut self) -> Block {
+        self.takeup = true;
+        self
+    }
+
+    /// Whether it is a backlash take-up.
+    pub const fn takeup(&self) -> bool {
+        self.takeup
+    }
+
     /// The block with the spindle speed commanded while it runs (10⁻³
     /// rpm).
     pub const fn with_spindle(mut self, milli_rpm: u32) -> Block {
@@ -479,6 +493,7 @@ impl Block {
             skip: 0,
             count: nx.unsigned_abs().max(nz.unsigned_abs()),
             spindle: 0,
+            takeup: false,
             per_min: rates.ticks_per_min() as u64,
             axis_vmax: match source {
                 // Under the rapid override, the axis's rate scaled as v² is.

@@ -328,6 +328,8 @@ impl ReadyRx<'_> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Issued {
     registers: ImpulsePoint,
+    /// Backlash take-up steps issued, net, per axis.
+    lash: [i32; 2],
     events: u64,
     crc: Crc32,
     run_ticks: u64,
@@ -354,6 +356,7 @@ impl Issued {
                 x: crate::impulse::Impulses(0),
                 z: crate::impulse::Impulses(0),
             },
+            lash: [0, 0],
             events: 0,
             crc: Crc32::new(),
             run_ticks: 0,
@@ -365,6 +368,11 @@ impl Issued {
     /// The registers of the steps issued.
     pub const fn registers(&self) -> ImpulsePoint {
         self.registers
+    }
+
+    /// The backlash take-up steps issued, net, per axis.
+    pub const fn lash(&self) -> [i32; 2] {
+        self.lash
     }
 
     /// The record of what was issued since it was last taken.
@@ -494,6 +502,7 @@ impl Prep {
         };
         let after = Issued {
             registers: s.issued(),
+            lash: s.lash(),
             events: record.events(),
             crc: record.crc(),
             run_ticks: record.run_ticks(),
@@ -591,6 +600,7 @@ impl Prep {
             }
         };
         self.stepper.set_issued(issued.registers);
+        self.stepper.set_lash(issued.lash);
         self.stepper.set_record(issued.record());
         // What the dropped entries would have set is unknown to the pins.
         self.dirs = [None; 2];

@@ -144,6 +144,11 @@ pub struct Stepper<const R: usize> {
     exit2: u128,
     /// The spindle speed of the block that started last, 10⁻³ rpm.
     spindle: u32,
+    /// Backlash take-up steps issued, net, per axis: where each motor
+    /// stands from its register (`docs/motion.md` §7).
+    lash: [i32; 2],
+    /// The event pulled last was a take-up's.
+    last_takeup: bool,
 }
 
 impl<const R: usize> Default for Stepper<R> {
@@ -169,6 +174,8 @@ impl<const R: usize> Stepper<R> {
             end: 0,
             exit2: 0,
             spindle: 0,
+            lash: [0, 0],
+            last_takeup: false,
         }
     }
 
@@ -242,8 +249,11 @@ impl<const R: usize> Stepper<R> {
     pub fn pull(&mut self) -> Option<Pulled> {
         loop {
             match &mut self.now {
-                Now::Timed(events, _) => match events.next() {
-                    Some((e, tick)) => return Some(self.issue(e, tick)),
+                Now::Timed(events, block) => match events.next() {
+                    Some((e, tick)) => {
+                        let takeup = block.takeup();
+                        return Some(self.issue(e, tick, takeup));
+                    }
                     None => {
                         self.now = Now::Idle;
                         if let Hold::Braking(_, Some(_)) = self.hold {
@@ -255,7 +265,7 @@ impl<const R: usize> Stepper<R> {
                     Some(e) => {
                         run.n += 1;
                         let tick = run.rate.tick(run.n);
-                        return Some(self.issue(e, tick));
+                        return Some(self.issue(e, tick, false));
                     }
                     None => {
                         let ticks = run.rate.tick(run.n);
@@ -515,13 +525,20 @@ impl<const R: usize> Stepper<R> {
         aborted
     }
 
-    /// Records an event and moves the registers by its steps.
+    /// Records an event and moves the registers by its steps (a take-up's
+    /// move the motors' lash instead).
     #[inline(always)]
-    fn issue(&mut self, e: StepEvent, tick: u64) -> Pulled {
+    fn issue(&mut self, e: StepEvent, tick: u64, takeup: bool) -> Pulled {
         self.record.event(e, tick);
         let (dx, dz) = e.moves();
-        self.issued.x.0 += i32::from(dx);
-        self.issued.z.0 += i32::from(dz);
+        self.last_takeup = takeup;
+        if takeup {
+            self.lash[0] += i32::from(dx);
+            self.lash[1] += i32::from(dz);
+        } else {
+            self.issued.x.0 += i32::from(dx);
+            self.issued.z.0 += i32::from(dz);
+        }
         Pulled::Step(e, tick)
     }
 
@@ -530,13 +547,28 @@ impl<const R: usize> Stepper<R> {
         self.issued
     }
 
+    /// The take-up steps issued, net, per axis (X, Z).
+    pub const fn lash(&self) -> [i32; 2] {
+        self.lash
+    }
+
+    /// Sets them, at rest (a reset, check mode's end).
+    pub fn set_lash(&mut self, lash: [i32; 2]) {
+        self.lash = lash;
+    }
+
     /// Takes back `e`, the event last pulled: it was never issued (a reset
     /// came while it waited for its tick). The registers and the record
     /// no longer count it. At most once after a pull.
     pub fn take_back(&mut self, e: StepEvent) {
         let (dx, dz) = e.moves();
-        self.issued.x.0 -= i32::from(dx);
-        self.issued.z.0 -= i32::from(dz);
+        if self.last_takeup {
+            self.lash[0] -= i32::from(dx);
+            self.lash[1] -= i32::from(dz);
+        } else {
+            self.issued.x.0 -= i32::from(dx);
+            self.issued.z.0 -= i32::from(dz);
+        }
         self.record.forget_last();
     }
 

@@ -20,10 +20,12 @@ use crate::crc32::Crc32;
 use crate::interp::{MAction, Offsets, Reading, ToolEntry, MCODES, TOOL_REGISTERS, WORK_SYSTEMS};
 use crate::length::Length;
 
-/// `LTO5`: the record of this layout (the table, the offsets, the
+/// `LTO6`: the record of this layout (the table, the offsets, the
 /// stored positions, the machine's M codes, how lines are read, the
-/// switches' wiring, the homing cycle's settings).
-const MAGIC: u32 = u32::from_le_bytes(*b"LTO5");
+/// switches' wiring, the homing cycle's settings, the backlash).
+const MAGIC: u32 = u32::from_le_bytes(*b"LTO6");
+/// `LTO5`: the layout before the backlash, still read (none).
+const MAGIC_5: u32 = u32::from_le_bytes(*b"LTO5");
 /// `LTO4`: the layout before the homing settings, still read (no axis
 /// homed).
 const MAGIC_4: u32 = u32::from_le_bytes(*b"LTO4");
@@ -49,9 +51,15 @@ const MCODE_VALUES: usize = MCODES * 2;
 /// per axis home and travel.
 const HOMING_VALUES: usize = 8;
 
+/// Per axis its backlash.
+const BACKLASH_VALUES: usize = 2;
+
 /// Payload words: two per value, the reading's bits
-/// ([`crate::interp::Reading::bits`]), the wiring and the homing last.
-const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES + 2 + HOMING_VALUES) * 2;
+/// ([`crate::interp::Reading::bits`]), the wiring, the homing and the
+/// backlash last.
+const PAYLOAD_WORDS: usize = (LENGTHS + MCODE_VALUES + 2 + HOMING_VALUES + BACKLASH_VALUES) * 2;
+/// Those of an `LTO5` record.
+const PAYLOAD_WORDS_5: usize = (LENGTHS + MCODE_VALUES + 2 + HOMING_VALUES) * 2;
 /// Those of an `LTO4` record.
 const PAYLOAD_WORDS_4: usize = (LENGTHS + MCODE_VALUES + 2) * 2;
 /// Those of an `LTO3` record.
@@ -159,12 +167,17 @@ fn lengths(o: &Offsets) -> impl Iterator<Item = i64> + '_ {
         h.axes[0].travel.as_angstrom(),
         h.axes[1].travel.as_angstrom(),
     ];
+    let backlash = [
+        h.axes[0].backlash.as_angstrom(),
+        h.axes[1].backlash.as_angstrom(),
+    ];
     work.chain(tools)
         .chain(reference)
         .chain(mcodes)
         .chain(reading)
         .chain(wiring)
         .chain(homing)
+        .chain(backlash)
 }
 
 /// The words of the record of `offsets` with sequence number `seq`,
@@ -190,6 +203,7 @@ fn crc_of(words: impl Iterator<Item = u32>) -> u32 {
 fn layout<F: Flash>(flash: &mut F, slot: usize) -> Option<usize> {
     match (flash.read(slot, 0), flash.read(slot, 2)) {
         (MAGIC, n) if n == (PAYLOAD_WORDS * 4) as u32 => Some(PAYLOAD_WORDS),
+        (MAGIC_5, n) if n == (PAYLOAD_WORDS_5 * 4) as u32 => Some(PAYLOAD_WORDS_5),
         (MAGIC_4, n) if n == (PAYLOAD_WORDS_4 * 4) as u32 => Some(PAYLOAD_WORDS_4),
         (MAGIC_3, n) if n == (PAYLOAD_WORDS_3 * 4) as u32 => Some(PAYLOAD_WORDS_3),
         (MAGIC_2, n) if n == (PAYLOAD_WORDS_2 * 4) as u32 => Some(PAYLOAD_WORDS_2),
@@ -244,14 +258,18 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
     let words = layout(flash, slot);
     let with_mcodes = matches!(
         words,
-        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_4 | PAYLOAD_WORDS_3 | PAYLOAD_WORDS_2)
+        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_5 | PAYLOAD_WORDS_4 | PAYLOAD_WORDS_3 | PAYLOAD_WORDS_2)
     );
     let with_reading = matches!(
         words,
-        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_4 | PAYLOAD_WORDS_3)
+        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_5 | PAYLOAD_WORDS_4 | PAYLOAD_WORDS_3)
     );
-    let with_wiring = matches!(words, Some(PAYLOAD_WORDS | PAYLOAD_WORDS_4));
-    let with_homing = words == Some(PAYLOAD_WORDS);
+    let with_wiring = matches!(
+        words,
+        Some(PAYLOAD_WORDS | PAYLOAD_WORDS_5 | PAYLOAD_WORDS_4)
+    );
+    let with_homing = matches!(words, Some(PAYLOAD_WORDS | PAYLOAD_WORDS_5));
+    let with_backlash = words == Some(PAYLOAD_WORDS);
     let mut i = 3;
     let mut next = || {
         let lo = u64::from(flash.read(slot, i));
@@ -352,6 +370,10 @@ fn decode<F: Flash>(flash: &mut F, slot: usize) -> Option<Offsets> {
         h.axes[1].home = Length::from_angstrom(next())?;
         h.axes[0].travel = Length::from_angstrom(next())?;
         h.axes[1].travel = Length::from_angstrom(next())?;
+        if with_backlash {
+            h.axes[0].backlash = Length::from_angstrom(next())?;
+            h.axes[1].backlash = Length::from_angstrom(next())?;
+        }
         if !h.valid() {
             return None;
         }
@@ -466,6 +488,7 @@ mod tests {
             dir: if k % 3 == 0 { -1 } else { 1 },
             home: Length::from_angstrom(-3_000_000 * k).unwrap(),
             travel: l("120.5"),
+            backlash: Length::from_angstrom(100_000 * k).unwrap(),
         };
         o.homing.axes[1].homes = true;
         o.homing.axes[1].travel = l("400");
@@ -564,6 +587,37 @@ mod tests {
             3,
         );
         assert!(got.homing.required);
+        // LTO5: up to the homing; no backlash.
+        let got = older_layout(
+            5,
+            (MAGIC_5, LENGTHS + MCODE_VALUES + 2 + HOMING_VALUES),
+            (0, 14),
+            |o| {
+                for a in o.homing.axes.iter_mut() {
+                    a.backlash = Length::ZERO;
+                }
+            },
+            6,
+        );
+        assert_eq!(
+            got.homing.axes[0].backlash,
+            Length::from_mm_str("0.06").unwrap()
+        );
+    }
+
+    #[test]
+    fn a_backlash_beyond_5_mm_or_below_0_is_a_broken_record() {
+        for bad in [50_000_001i64, -1] {
+            let mut f = Nor::new();
+            let seq = save(&mut f, &table(1), 0);
+            save(&mut f, &table(2), seq);
+            let last = RECORD_WORDS - 1;
+            let at = last - 2;
+            f.slots[1][at] = bad as u64 as u32;
+            f.slots[1][at + 1] = ((bad as u64) >> 32) as u32;
+            f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
+            assert_eq!(load(&mut f).offsets, kept(&table(1)), "{bad}");
+        }
     }
 
     #[test]
@@ -575,7 +629,7 @@ mod tests {
             let seq = save(&mut f, &table(1), 0);
             save(&mut f, &table(2), seq);
             let last = RECORD_WORDS - 1;
-            let at = last - 2 * HOMING_VALUES + 2 * index;
+            let at = last - 2 * (HOMING_VALUES + BACKLASH_VALUES) + 2 * index;
             f.slots[1][at] = bad as u64 as u32;
             f.slots[1][at + 1] = ((bad as u64) >> 32) as u32;
             f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
@@ -590,7 +644,7 @@ mod tests {
             let seq = save(&mut f, &table(1), 0);
             save(&mut f, &table(2), seq);
             let last = RECORD_WORDS - 1;
-            let at = last - 2 * HOMING_VALUES - 2;
+            let at = last - 2 * (HOMING_VALUES + BACKLASH_VALUES) - 2;
             f.slots[1][at] = bad as u64 as u32;
             f.slots[1][at + 1] = ((bad as u64) >> 32) as u32;
             f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
@@ -606,7 +660,7 @@ mod tests {
         // The newer record (slot 1) with the reading's word set to 8 and
         // its CRC made whole: refused, the older one loads.
         let last = RECORD_WORDS - 1;
-        f.slots[1][last - 2 * HOMING_VALUES - 4] = 8;
+        f.slots[1][last - 2 * (HOMING_VALUES + BACKLASH_VALUES) - 4] = 8;
         f.slots[1][last] = crc_of(f.slots[1][..last].iter().copied());
         assert_eq!(sequence(&mut f, 1), Some(seq));
         assert_eq!(load(&mut f).offsets, kept(&table(1)));

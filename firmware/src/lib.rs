@@ -286,6 +286,10 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P
         self.motion.issued()
     }
 
+    fn lash(&mut self) -> [i32; 2] {
+        self.motion.lash()
+    }
+
     fn set_issued(&mut self, registers: ImpulsePoint) {
         self.motion.set_issued(registers);
     }

@@ -342,6 +342,15 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Shared<P, S> {
         })
     }
 
+    /// The backlash take-up steps issued, net, per axis.
+    pub fn lash(&mut self) -> [i32; 2] {
+        let step = &mut self.step;
+        self.prep.lock(|p| {
+            let passed = step.lock(|s| s.passed());
+            p.prep.issued(passed).lash()
+        })
+    }
+
     /// Sets them, at rest.
     pub fn set_issued(&mut self, registers: ImpulsePoint) {
         let step = &mut self.step;

@@ -133,6 +133,9 @@ struct Shared {
     prices: Mutex<(i64, i64, bool)>,
     /// The handwheel's counts not yet handed to the protocol.
     wheel: AtomicI32,
+    /// A pendant's selectors set and not yet handed over: axis + 1, and
+    /// the scale from bit 8 (0: none).
+    wheel_select: AtomicU16,
 }
 
 /// What the panel reads off the simulated machine (`STATE?`).
@@ -305,7 +308,7 @@ impl Shared {
         if a.lathe.is_none() {
             return;
         }
-        let p = issued_of(a);
+        let p = motor_of(a);
         let seen = std::mem::replace(&mut a.lathe_seen, p);
         let (hx, hz) = a.prices;
         let Some(lathe) = a.lathe.as_mut() else {
@@ -496,6 +499,21 @@ fn motion_of(a: &Axes) -> AxesState {
     }
 }
 
+/// Where the motors stand: the registers and the backlash take-up steps
+/// issued (the event waiting for its tick not).
+fn motor_of(a: &Axes) -> ImpulsePoint {
+    let mut p = a.stepper.issued();
+    let lash = a.stepper.lash();
+    p.x.0 += lash[0];
+    p.z.0 += lash[1];
+    if let Some((e, _)) = a.next {
+        let (dx, dz) = e.moves();
+        p.x.0 -= i32::from(dx);
+        p.z.0 -= i32::from(dz);
+    }
+    p
+}
+
 /// The registers of the steps issued: the event waiting for its tick is
 /// not.
 fn issued_of(a: &Axes) -> ImpulsePoint {
@@ -607,11 +625,15 @@ impl<W: Write> Background for Protocol<W> {
         issued_of(&self.shared.axes())
     }
 
+    fn lash(&mut self) -> [i32; 2] {
+        self.shared.axes().stepper.lash()
+    }
+
     fn set_issued(&mut self, registers: ImpulsePoint) {
         let mut a = self.shared.axes();
         a.stepper.set_issued(registers);
         // The registers set at rest: the lathe's nuts stay where they are.
-        a.lathe_seen = issued_of(&a);
+        a.lathe_seen = motor_of(&a);
     }
 
     fn take_record(&mut self) -> Record {
@@ -758,6 +780,11 @@ fn protocol_loop<W: Write>(
         }
         // The handwheel turned: what it counted since.
         if shared.take(WANT_WHEEL) {
+            let select = shared.wheel_select.swap(0, Ordering::AcqRel);
+            if select != 0 {
+                // The panel's selectors: axis + 1 in the low byte, scale above.
+                let _ = device.wheel_select((select & 0xFF) as u8 - 1, (select >> 8) as u8);
+            }
             device.wheel(shared.wheel.swap(0, Ordering::AcqRel), io);
             continue;
         }
@@ -894,6 +921,7 @@ impl Board {
             probe: AtomicU8::new(0),
             prices: Mutex::new((50_000, 100_000, true)),
             wheel: AtomicI32::new(0),
+            wheel_select: AtomicU16::new(0),
         });
         let (tx, rx) = mpsc::channel();
         let axes = {
@@ -958,6 +986,14 @@ impl Board {
         self.shared.wanted.fetch_or(WANT_WHEEL, Ordering::AcqRel);
     }
 
+    /// A pendant with its own selectors: the wheel's axis (0 X, 1 Z) and
+    /// scale (1, 10, 100) set, then turned by `counts`.
+    pub fn mpg(&self, axis: u8, scale: u8, counts: i32) {
+        let select = u16::from(axis + 1) | u16::from(scale) << 8;
+        self.shared.wheel_select.store(select, Ordering::Release);
+        self.wheel(counts);
+    }
+
     /// Puts the lathe of `file` behind the axes: from now on its
     /// carriages follow the steps issued and trip its switches.
     pub fn set_lathe(&self, file: crate::lathe::MachineFile) {
@@ -968,7 +1004,7 @@ impl Board {
         let mut lathe = crate::lathe::Lathe::new(file);
         let active = lathe.moved([mm(p.x.0, hx), mm(p.z.0, hz)]);
         a.lathe = Some(lathe);
-        a.lathe_seen = p;
+        a.lathe_seen = motor_of(&a);
         let panel = self.shared.panel.load(Ordering::Acquire) | active;
         self.shared.panel_locked(&mut a, panel);
     }
@@ -1002,7 +1038,8 @@ impl Board {
     /// One line of the panel (`serve --pty`'s standard input): `ESTOP
     /// 1|0`, `DOOR 1|0`, `PROBE 1|0`, `LIMIT X-|X+|Z-|Z+ 1|0`, `FAULT X|Z
     /// 1|0`, `HOLD` and `START` (a press: on, then off), `WHEEL n` (the
-    /// handwheel turned by `n` counts), and `STATE?`.
+    /// handwheel turned by `n` counts), `MPG X|Z COUNTS=n SCALE=1|10|100`
+    /// (a pendant with its own selectors), and `STATE?`.
     /// Returns what to print (`STATE?`'s line), or why the line is not one.
     pub fn panel_line(&self, line: &str) -> Result<Option<String>, String> {
         use core_nostd::inputs::Input;
@@ -1017,6 +1054,26 @@ impl Board {
         let (input, on) = match u.as_slice() {
             [] => return Ok(None),
             ["STATE?"] => return Ok(Some(self.state().line())),
+            ["MPG", axis, rest @ ..] => {
+                let axis = match *axis {
+                    "X" => 0,
+                    "Z" => 1,
+                    _ => return Err(format!("{line:?}: MPG takes X or Z")),
+                };
+                let (mut counts, mut scale) = (None, None);
+                for w in rest {
+                    match w.split_once('=') {
+                        Some(("COUNTS", n)) => counts = n.parse::<i32>().ok(),
+                        Some(("SCALE", s @ ("1" | "10" | "100"))) => scale = s.parse::<u8>().ok(),
+                        _ => return Err(format!("{line:?}: MPG X|Z COUNTS=n SCALE=1|10|100")),
+                    }
+                }
+                let (Some(counts), Some(scale)) = (counts, scale) else {
+                    return Err(format!("{line:?}: MPG X|Z COUNTS=n SCALE=1|10|100"));
+                };
+                self.mpg(axis, scale, counts);
+                return Ok(None);
+            }
             ["WHEEL", n] => {
                 let counts = n
                     .parse()
@@ -1056,7 +1113,7 @@ impl Board {
             ),
             _ => {
                 return Err(format!(
-                    "{line:?}: not a panel line (ESTOP, DOOR, PROBE 1|0; LIMIT X-|X+|Z-|Z+ 1|0; FAULT X|Z 1|0; HOLD; START; WHEEL n; STATE?)"
+                    "{line:?}: not a panel line (ESTOP, DOOR, PROBE 1|0; LIMIT X-|X+|Z-|Z+ 1|0; FAULT X|Z 1|0; HOLD; START; WHEEL n; MPG X|Z COUNTS=n SCALE=1|10|100; STATE?)"
                 ))
             }
         };

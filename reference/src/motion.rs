@@ -741,6 +741,24 @@ impl RefMotion {
         }
     }
 
+    /// A backlash take-up block (`docs/motion.md` §7): `steps` impulses per
+    /// axis (X radius, Z), a rapid block from a point on the grid at the
+    /// origin with registers 0, planned and timed as any; the commanded
+    /// point and the registers stay where they are.
+    pub fn push_takeup(&mut self, steps: [i64; 2]) {
+        let (point, registers) = (self.point, self.registers);
+        self.point = Point::from_units(0, 0);
+        self.registers = [0, 0];
+        // Prices in 10⁻⁶ mm; points in 10⁻⁷ mm.
+        let to = Point::from_units(
+            steps[0] * self.price_q[0] * 10,
+            steps[1] * self.price_q[1] * 10,
+        );
+        self.push(to, steps, None);
+        self.point = point;
+        self.registers = registers;
+    }
+
     /// A flush: every queued block starts in turn, the last ends at rest and
     /// the run (if any) ends.
     pub fn flush(&mut self) {
@@ -1869,5 +1887,45 @@ mod tests {
         }
         assert!(p.iter().all(|b| b.v_cruise <= 5.0 + 1e-12));
         check_monotone(m.events());
+    }
+}
+
+/// The backlash rule of `docs/motion.md` §7: each axis' play in impulses
+/// and the take-up steps issued, net.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RefBacklash {
+    /// `B_a`, impulses (X radius, Z).
+    pub play: [i64; 2],
+    /// `U_a`: 0 after a move towards minus, `B_a` after one towards plus.
+    pub taken: [i64; 2],
+}
+
+impl RefBacklash {
+    /// The play of `backlash_mm` (X radius, Z) at prices `price_mm`,
+    /// `Q(backlash/h)` rounded half away from zero; nothing taken up.
+    pub fn new(backlash_mm: [f64; 2], price_mm: [f64; 2]) -> RefBacklash {
+        let q = prices(price_mm);
+        let b = backlash_mm.map(|b| decimal_micro(b).expect("a decimal of at most 6 decimals"));
+        let n = |b: i64, h: i64| (2 * b + h) / (2 * h);
+        RefBacklash {
+            play: [n(b[0], q[0]), n(b[1], q[1])],
+            taken: [0, 0],
+        }
+    }
+
+    /// Before a block whose impulses go `delta` (X, Z): the take-up block's
+    /// steps, if any axis it moves must turn through its play first.
+    pub fn before(&mut self, delta: [i64; 2]) -> Option<[i64; 2]> {
+        let mut steps = [0; 2];
+        for a in 0..2 {
+            let want = match delta[a].signum() {
+                1 => self.play[a],
+                -1 => 0,
+                _ => self.taken[a],
+            };
+            steps[a] = want - self.taken[a];
+            self.taken[a] = want;
+        }
+        (steps != [0, 0]).then_some(steps)
     }
 }

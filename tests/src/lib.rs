@@ -10,6 +10,10 @@
 //!   tests that stream corpus programs through real senders).
 //! - [`board_line`]: a firmware's reply line as the in-process device
 //!   writes it (the QEMU tests).
+//! - [`compare_events`]: the device's timed step events against the
+//!   reference's, event by event.
+//! - [`ask`], [`one`], [`units_word`]: a request over a link or to the
+//!   in-process device, and a length as a request's word.
 
 pub mod modules;
 pub mod rs274;
@@ -58,6 +62,16 @@ pub fn lathe_board(
     setup: &str,
     grbl: bool,
 ) -> (host_sim::board::Board, host_sim::link::Client) {
+    lathe_board_paced(text, setup, grbl, host_sim::board::Pace::Wall(8.0))
+}
+
+/// As [`lathe_board`], the axes at `pace`.
+pub fn lathe_board_paced(
+    text: &str,
+    setup: &str,
+    grbl: bool,
+    pace: host_sim::board::Pace,
+) -> (host_sim::board::Board, host_sim::link::Client) {
     use core_nostd::protocol::{Device, Io};
     struct Nowhere;
     impl Io for Nowhere {
@@ -69,8 +83,7 @@ pub fn lathe_board(
     if grbl {
         device.set_grbl(true, &mut Nowhere);
     }
-    let (path, board) =
-        host_sim::board::serve_pty(device, host_sim::board::Pace::Wall(8.0)).expect("pty");
+    let (path, board) = host_sim::board::serve_pty(device, pace).expect("pty");
     board.set_lathe(file);
     let c = host_sim::link::Client::open(&path, std::time::Duration::from_secs(30)).expect("open");
     (board, c)
@@ -101,6 +114,53 @@ pub fn grbl_say(c: &mut host_sim::link::Client, line: &str) -> Vec<String> {
         }
         if end {
             return got;
+        }
+    }
+}
+
+/// Sends `line` on a pendant link and reads its whole reply.
+pub fn ask(c: &mut host_sim::link::Client, line: &str) -> host_sim::link::Reply {
+    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
+    c.read_reply().expect("reply")
+}
+
+/// A request to the in-process device answered by one line: its body,
+/// the checksum checked.
+pub fn one(dev: &mut host_sim::device::LocalDevice, line: &str) -> String {
+    let r = dev.request(line);
+    assert_eq!(r.len(), 1, "{line}: {r:?}");
+    host_sim::link::check_reply_line(&r[0])
+        .expect("checksum")
+        .to_owned()
+}
+
+/// A length in 10⁻⁷ mm as a request's word (`12.5`, `-0.0000001`).
+pub fn units_word(units: i64) -> String {
+    let sign = if units < 0 { "-" } else { "" };
+    let a = units.unsigned_abs();
+    format!("{sign}{}.{:07}", a / 10_000_000, a % 10_000_000)
+        .trim_end_matches('0')
+        .trim_end_matches('.')
+        .to_string()
+}
+
+/// Event by event: bytes and ticks, ticks strictly increasing within a
+/// block.
+pub fn compare_events(
+    got: &[host_sim::device::Issued],
+    expected: &[reference::motion::TimedEvent],
+) {
+    assert_eq!(got.len(), expected.len(), "number of events");
+    for (i, (g, e)) in got.iter().zip(expected).enumerate() {
+        assert_eq!(
+            (g.bits, g.tick),
+            (e.byte, e.tick),
+            "event {i}: device {g:?}, reference {e:?}"
+        );
+    }
+    for w in expected.windows(2) {
+        if w[0].block == w[1].block && w[0].run == w[1].run {
+            assert!(w[1].tick > w[0].tick, "ticks within a block: {w:?}");
         }
     }
 }

@@ -386,7 +386,7 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
     let all = text(&mut dev, b"$$\n");
     for n in [
         0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 14, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32, 100,
-        102, 110, 112, 120, 122, 130, 132,
+        102, 110, 112, 120, 122, 130, 132, 160, 162,
     ] {
         assert!(
             all.contains(&format!("\r\n${n}=")) || all.starts_with(&format!("${n}=")),
@@ -399,6 +399,8 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
         ("$24=50.5", "$24=50.500\r\n"),
         ("$27=2", "$27=2.000\r\n"),
         ("$130=310", "$130=310.000\r\n"),
+        ("$160=0.08", "$160=0.080\r\n"),
+        ("$162=0.15", "$162=0.150\r\n"),
         ("$23=4", "$23=4\r\n"),
         ("$22=5", "$22=7\r\n"),
         ("$20=1", "$20=1\r\n"),
@@ -435,6 +437,7 @@ fn the_standard_settings_are_accepted_or_refused_with_their_error() {
         ("$22=8", "error:3"),
         ("$23=2", "error:3"),
         ("$27=0", "error:20"),
+        ("$160=5.5", "error:20"),
         ("$13=1", "error:3"),
         ("$32=1", "error:3"),
         ("$100=1280", "error:3"),

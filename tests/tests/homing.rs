@@ -3,10 +3,10 @@
 //! tripping their switches where the file puts them.
 
 use host_sim::board::Board;
-use host_sim::link::{Client, Reply};
+use host_sim::link::Client;
 use std::path::PathBuf;
 use std::time::Duration;
-use tests::carriage;
+use tests::{ask, carriage};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -23,11 +23,6 @@ fn lathe() -> (Board, Client) {
 
 /// Radius mode, the four limit switches wired.
 const SETUP: &str = "CFG DIAM=0\nINPUT USED=X-,X+,Z-,Z+\n";
-
-fn ask(c: &mut Client, line: &str) -> Reply {
-    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
-    c.read_reply().expect("reply")
-}
 
 /// Reads a failed `HOME` of X on its plus switch: the alarm line of
 /// `code`, then the request's `ERR ALARM` saying `why`.

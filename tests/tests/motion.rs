@@ -2,28 +2,12 @@
 //! reference of `docs/motion.md`, event by event, and `SYNC` against the
 //! reference's report.
 
-use host_sim::device::{Issued, LocalDevice};
+use host_sim::device::LocalDevice;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use reference::impulse::{RefConfig, RefMachine};
-use reference::motion::{MotionLimits, Point, RefMotion, TimedEvent};
-
-/// A length in 10⁻⁷ mm as a request word.
-fn word(units: i64) -> String {
-    let sign = if units < 0 { "-" } else { "" };
-    let a = units.unsigned_abs();
-    format!("{sign}{}.{:07}", a / 10_000_000, a % 10_000_000)
-        .trim_end_matches('0')
-        .trim_end_matches('.')
-        .to_string()
-}
-
-fn one(dev: &mut LocalDevice, line: &str) -> String {
-    let r = dev.request(line);
-    assert_eq!(r.len(), 1, "{line} -> {r:?}");
-    let (body, _) = r[0].rsplit_once('*').unwrap();
-    body.to_string()
-}
+use reference::motion::{MotionLimits, Point, RefMotion};
+use tests::{one, units_word};
 
 /// A device and the two references driven alike, DIAM=0.
 struct Pair {
@@ -49,7 +33,7 @@ impl Pair {
 
     /// `MOVE` to a point (10⁻⁷ mm) at a feed (mm/min) or rapid.
     fn to(&mut self, x: i64, z: i64, feed: Option<&str>) {
-        let (wx, wz) = (word(x), word(z));
+        let (wx, wz) = (units_word(x), units_word(z));
         let f = feed.map(|f| format!(" F={f}")).unwrap_or_default();
         let r = one(&mut self.dev, &format!("MOVE X={wx} Z={wz}{f}"));
         let b = self.imp.move_block(Some(&wx), Some(&wz), false);
@@ -77,26 +61,8 @@ impl Pair {
         );
         let got = self.dev.take_events();
         let expected = self.time.take_events();
-        compare(&got, &expected);
+        tests::compare_events(&got, &expected);
         (want.ev, want.t)
-    }
-}
-
-/// Event by event: bytes and ticks, ticks strictly increasing within a
-/// block.
-fn compare(got: &[Issued], expected: &[TimedEvent]) {
-    assert_eq!(got.len(), expected.len(), "number of events");
-    for (i, (g, e)) in got.iter().zip(expected).enumerate() {
-        assert_eq!(
-            (g.bits, g.tick),
-            (e.byte, e.tick),
-            "event {i}: device {g:?}, reference {e:?}"
-        );
-    }
-    for w in expected.windows(2) {
-        if w[0].block == w[1].block && w[0].run == w[1].run {
-            assert!(w[1].tick > w[0].tick, "ticks within a block: {w:?}");
-        }
     }
 }
 

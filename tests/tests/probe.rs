@@ -4,7 +4,8 @@
 //! result, for the pendant protocol (`!PROBE`) and a grbl sender (`PRB:`).
 
 use host_sim::board::Board;
-use host_sim::link::{words_value, Client, Reply};
+use host_sim::link::{words_value, Client};
+use tests::ask;
 
 /// A lathe with 0.15 mm of play in Z and a tool setter the carriage
 /// touches at Z −50 (machine coordinates) coming from plus.
@@ -36,11 +37,6 @@ fn lathe(grbl: bool) -> (Board, Client) {
     let (board, mut c) = tests::lathe_board(LATHE, wiring, grbl);
     c.drain();
     (board, c)
-}
-
-fn ask(c: &mut Client, line: &str) -> Reply {
-    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
-    c.read_reply().expect("reply")
 }
 
 /// Sends `line` and reads to its `!PROBE` line (the block's `DATA`

@@ -42,6 +42,54 @@ fn firmware_answers_the_mixed_session_like_the_in_process_device() {
     );
 }
 
+/// Backlash compensation on the board: a zig-zag of requests and G-code
+/// lines with the play set, the take-ups prepared and issued by the
+/// firmware; every reply equal to the in-process device's, `SYNC`'s `EV`,
+/// `T` and `TSEQ` (every event and its tick, the take-ups' included) and
+/// the registers with them.
+#[test]
+fn backlash_take_ups_run_on_the_firmware_as_in_process() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let mut session = String::new();
+    for l in ["CFG DIAM=0", "BACKLASH X=0.08 Z=0.15", "BACKLASH"] {
+        session.push_str(l);
+        session.push_str("\r\n");
+    }
+    for i in 0..120 {
+        let sign = if i % 2 == 0 { -1.0 } else { 1.0 };
+        let (x, z) = (
+            3.0 + sign * f64::from(i % 7 + 1) * 0.25,
+            -5.0 + sign * f64::from(i % 5 + 1) * 0.4,
+        );
+        let line = match i % 4 {
+            0 => format!("MOVE X={x:.3} Z={z:.3}"),
+            1 => format!("MOVE X={x:.3} F=800"),
+            2 => format!("G01 Z{z:.3} F250"),
+            _ => format!("G00 X{x:.3} Z{z:.3}"),
+        };
+        session.push_str(&line);
+        session.push_str("\r\n");
+        if i % 30 == 29 {
+            session.push_str("SYNC\r\nPOS\r\nSTATUS\r\n");
+        }
+    }
+    session.push_str("BACKLASH X=0 Z=0\r\nMOVE X=0 Z=0\r\nSYNC\r\nPOS\r\n");
+    let expected = LocalDevice::new().feed(session.as_bytes());
+    let (_qemu, mut client) = booted();
+    let got = host_sim::qemu::one_by_one(&mut client, session.as_bytes()).unwrap();
+    let (got, expected) = (
+        String::from_utf8_lossy(&got),
+        String::from_utf8_lossy(&expected),
+    );
+    assert_eq!(got, expected);
+    assert!(
+        expected.contains("OK X=0.08 Z=0.15 NX=16 NZ=15"),
+        "{expected}"
+    );
+}
+
 #[test]
 fn the_calculators_answer_on_the_board_as_in_process() {
     if !qemu_or_skip() {
@@ -326,6 +374,7 @@ fn the_offsets_survive_a_power_cycle() {
         "G92 X0 Z0",
         "OPT DIALECT=FANUC OPTSTOP=1",
         "INPUT USED=ESTOP,Z+,DOOR INVERT=DOOR FILTER=4",
+        "BACKLASH X=0.05 Z=0.125",
     ] {
         assert!(ask(&mut link, set).starts_with("OK"), "{set}");
     }
@@ -343,6 +392,7 @@ fn the_offsets_survive_a_power_cycle() {
         ask(&mut link, "INPUT"),
         "OK USED=ESTOP,Z+,DOOR INVERT=DOOR FILTER=4"
     );
+    assert_eq!(ask(&mut link, "BACKLASH"), "OK X=0.05 Z=0.125 NX=10 NZ=13");
     assert!(ask(&mut link, "OPT DIALECT=ISO").starts_with("OK"));
     // The stored position is back (G28 returns to X10 Z5 from here); the
     // shift is not (the position reads in machine coordinates again).

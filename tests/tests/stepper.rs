@@ -86,6 +86,9 @@ impl Background for Later {
     fn issued(&mut self) -> ImpulsePoint {
         self.stepper.issued()
     }
+    fn lash(&mut self) -> [i32; 2] {
+        self.stepper.lash()
+    }
     fn set_issued(&mut self, registers: ImpulsePoint) {
         self.stepper.set_issued(registers);
     }

@@ -3,10 +3,10 @@
 //! operator turns it, in bursts while the carriage still moves.
 
 use host_sim::board::Board;
-use host_sim::link::{Client, Reply};
+use host_sim::link::Client;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-use tests::carriage;
+use tests::{ask, carriage};
 
 fn lathe() -> (Board, Client) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -14,11 +14,6 @@ fn lathe() -> (Board, Client) {
     let (board, mut c) = tests::lathe_board(&text, "CFG DIAM=0\nINPUT USED=X-,X+,Z-,Z+\n", false);
     c.drain();
     (board, c)
-}
-
-fn ask(c: &mut Client, line: &str) -> Reply {
-    c.write_raw(format!("{line}\n").as_bytes()).expect("write");
-    c.read_reply().expect("reply")
 }
 
 /// Waits for the axes to come to rest with nothing queued (`STATUS`, which
@@ -127,4 +122,31 @@ fn the_wheel_stops_at_the_end_of_the_travel_once_homed() {
     assert_eq!(body, "!WHEEL IGNORED=TRAVEL COUNTS=5");
     board_turns(&_board, &[-3]);
     assert_eq!(at_rest(&mut c).0, 14_000 - 300, "back from the end");
+}
+
+/// A pendant with its own selectors (the panel's `MPG`): the axis and
+/// scale it selects are the wheel's, kept as `WHEEL` keeps them, and the
+/// axis moves by the counts times that scale; a malformed line is refused
+/// by name and turns nothing.
+#[test]
+fn a_pendant_with_its_own_selectors_moves_the_axis_it_selects() {
+    let (board, mut c) = lathe();
+    let before = at_rest(&mut c);
+    assert_eq!(board.panel_line("MPG Z COUNTS=-7 SCALE=10"), Ok(None));
+    assert_eq!(at_rest(&mut c), (before.0, before.1 - 70));
+    let w = ask(&mut c, "WHEEL");
+    assert_eq!(w.value("AXIS"), Some("Z"), "{w:?}");
+    assert_eq!(w.value("SCALE"), Some("10"), "{w:?}");
+    assert_eq!(board.panel_line("mpg x counts=3 scale=100"), Ok(None));
+    assert_eq!(at_rest(&mut c), (before.0 + 300, before.1 - 70));
+    for bad in [
+        "MPG Y COUNTS=1 SCALE=1",
+        "MPG X COUNTS=1 SCALE=5",
+        "MPG X COUNTS=many SCALE=1",
+        "MPG X SCALE=1",
+    ] {
+        let r = board.panel_line(bad);
+        assert!(r.as_ref().is_err_and(|e| e.contains("MPG")), "{bad}: {r:?}");
+    }
+    assert_eq!(at_rest(&mut c), (before.0 + 300, before.1 - 70));
 }

@@ -214,6 +214,14 @@ impl Device {
         self.session.wheel(counts, &mut t);
     }
 
+    /// The pendant's own selectors set the handwheel's axis (0 X, 1 Z) and
+    /// scale (1, 10, 100), as `WHEEL AXIS= SCALE=` would
+    /// ([`Session::wheel_select`]); false, and nothing changed, for
+    /// another value.
+    pub fn wheel_select(&mut self, axis: u8, scale: u8) -> bool {
+        self.session.wheel_select(axis, scale)
+    }
+
     /// The inputs wired, for the board's filter.
     pub const fn wiring(&self) -> crate::inputs::InputConfig {
         self.session.wiring()

@@ -60,6 +60,8 @@ pub enum Command {
     Home,
     /// `WHEEL`: the handwheel's axis, scale and feed.
     Wheel,
+    /// `BACKLASH`: each axis' play, taken up at reversals.
+    Backlash,
     /// `TOOL`: a row of the tool table.
     Tool,
     /// `WORK`: a work offset.
@@ -112,7 +114,7 @@ const fn calc(mut s: Spec) -> Spec {
 
 /// Every request of the pendant protocol, in the order `docs/protocol.md`
 /// gives them.
-pub const REQUESTS: [Spec; 29] = [
+pub const REQUESTS: [Spec; 30] = [
     spec(Command::Ver, "VER"),
     spec(Command::Cfg, "CFG HX HZ DIAM RN TIP TOL PASS"),
     spec(Command::Cone, "CONE A RN"),
@@ -137,6 +139,7 @@ pub const REQUESTS: [Spec; 29] = [
     ),
     spec(Command::Home, "HOME AXES"),
     spec(Command::Wheel, "WHEEL AXIS SCALE FEED"),
+    spec(Command::Backlash, "BACKLASH X Z"),
     spec(Command::Gear, "GEAR N TOP"),
     spec(Command::Mcode, "MCODE M DO N"),
     spec(Command::Session, "SESSION TOKEN"),
@@ -209,6 +212,7 @@ impl Command {
             Command::Homing => &["HOMING [AXES=X|Z|XZ|-] [DIRX=+|-] [DIRZ=+|-] [HOMEX=] [HOMEZ=] [TRAVELX=] [TRAVELZ=] [SEEK=] [LOCATE=] [PULLOFF=] [ORDER=XZ|ZX] [REQUIRED=0|1] [SOFT=0|1] [JOGCLIP=0|1]"],
             Command::Home => &["HOME [AXES=X|Z|XZ]"],
             Command::Wheel => &["WHEEL [AXIS=X|Z|-] [SCALE=1|10|100] [FEED=]"],
+            Command::Backlash => &["BACKLASH [X=] [Z=]"],
             Command::Gear => &["GEAR [N=1..4 TOP=]"],
             Command::Mcode => &["MCODE [M= [DO=STOP|NONE|ON|OFF|HIGH|LOW] [N=1..4]]"],
             Command::Session => &["SESSION [TOKEN=n]"],

@@ -95,7 +95,7 @@ pub(super) const fn setting(n: u16, place: Place) -> Setting {
 /// this board to act on (inverted pins, limit and home switches) accept
 /// only the value that leaves the machine as it is; the rest of grbl's
 /// list is kept and read back.
-pub(super) const SETTINGS: [Setting; 35] = [
+pub(super) const SETTINGS: [Setting; 37] = [
     setting(
         0,
         Place::Request(Command::Drive, "PULSE", |s, l| {
@@ -257,6 +257,18 @@ pub(super) const SETTINGS: [Setting; 35] = [
         132,
         Place::Request(Command::Homing, "TRAVELZ", |s, l| {
             write_mm3(l, s.homing().axes[1].travel.as_angstrom());
+        }),
+    ),
+    setting(
+        160,
+        Place::Request(Command::Backlash, "X", |s, l| {
+            write_mm3(l, s.homing().axes[0].backlash.as_angstrom());
+        }),
+    ),
+    setting(
+        162,
+        Place::Request(Command::Backlash, "Z", |s, l| {
+            write_mm3(l, s.homing().axes[1].backlash.as_angstrom());
         }),
     ),
     // This controller's own, in the range grblHAL leaves to no public

@@ -59,6 +59,7 @@ impl Session {
         }
         self.cfg = cfg;
         self.pos = pos;
+        self.apply_backlash();
         let c = &self.cfg;
         send_ok(
             io,

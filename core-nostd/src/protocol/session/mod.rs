@@ -30,6 +30,7 @@ use crate::stepper::{Aborted, AxesState as Axes};
 use core::fmt::{self, Write};
 
 mod auxiliary;
+mod backlash;
 mod blocks;
 mod configure;
 mod cycle_moves;
@@ -99,9 +100,9 @@ pub struct Session {
     pub(super) token: u32,
     /// Changes of the table, the work offsets and the stored positions.
     pub(super) generation: u32,
-    /// Check mode (grbl's `$C`): the registers where it began, put back
-    /// when it ends.
-    pub(super) checking: Option<ImpulsePoint>,
+    /// Check mode (grbl's `$C`): the registers and the motors' take-up
+    /// where it began, put back when it ends.
+    pub(super) checking: Option<(ImpulsePoint, [i32; 2])>,
     /// The last reset dropped motion answered and not all run.
     pub(super) reset_dropped: bool,
     /// What runs is the handwheel's alone (its counts add to it); any
@@ -461,6 +462,7 @@ impl Session {
             Command::Unlock => self.unlock_command(io),
             Command::Homing => self.homing_command(args, io),
             Command::Wheel => self.wheel_command(args, io),
+            Command::Backlash => self.backlash_command(args, io),
             Command::Home => self.home_command(args, io),
             Command::Input => self.input_command(args, io),
             Command::Pos => {

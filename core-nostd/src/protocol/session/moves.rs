@@ -169,8 +169,11 @@ impl Session {
         self.prog = self.work_point(points.end);
         self.pos = arc.to();
         let rate = self.drive.rate_hz();
+        let h = [self.cfg.hx, self.cfg.hz];
         self.machine.fixed_rate(
             arc.events(),
+            arc.delta(),
+            h,
             rate,
             point_q32(points.end),
             &mut Sink::new(io, self.drive),

@@ -235,6 +235,7 @@ impl Session {
         self.offsets = offsets;
         self.prog = self.work_point(self.cmd);
         self.power_on_homing();
+        self.apply_backlash();
     }
 
     /// New offsets; what a board keeps of them changed or not.
@@ -254,6 +255,7 @@ impl Session {
             self.generation = self.generation.wrapping_add(1);
         }
         self.offsets = new;
+        self.apply_backlash();
     }
 
     /// The offsets in effect (machine = work + this); always within range,

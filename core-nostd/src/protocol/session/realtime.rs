@@ -8,7 +8,7 @@ impl Session {
     /// the blocks waiting.
     pub(super) fn status_reply<I: Io>(&self, io: &mut I, prefix: &str) {
         let mut st = self.machine.status(&mut Sink::new(io, self.drive));
-        if let (Some(registers), None) = (self.checking, io.background()) {
+        if let (Some((registers, _)), None) = (self.checking, io.background()) {
             // Check mode on the virtual clock: its motion went nowhere.
             (st.issued, st.motion, st.queued) = (registers, Axes::Idle, 0);
         }
@@ -83,15 +83,15 @@ impl Session {
         if st.motion != Axes::Idle || st.queued > 0 {
             return false;
         }
-        self.checking = Some(st.issued);
+        self.checking = Some((st.issued, self.machine.lash()));
         true
     }
 
     /// Check mode ends: what its lines queued is forgotten and the
     /// registers are where it began; a reset follows (as grbl's).
     pub fn check_end(&mut self) {
-        if let Some(registers) = self.checking.take() {
-            self.machine.forget(registers);
+        if let Some((registers, lash)) = self.checking.take() {
+            self.machine.forget(registers, lash);
         }
     }
 

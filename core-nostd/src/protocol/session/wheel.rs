@@ -52,6 +52,24 @@ impl Session {
         Ok(())
     }
 
+    /// A pendant's axis and scale selectors: the wheel's axis (0 X, 1 Z)
+    /// and scale (1, 10, 100), kept as `WHEEL` keeps them; false, and
+    /// nothing changed, for another value.
+    pub fn wheel_select(&mut self, axis: u8, scale: u8) -> bool {
+        let mut w = self.offsets.homing.wheel;
+        w.axis = Some(axis);
+        w.scale = scale;
+        if !w.valid() {
+            return false;
+        }
+        if w != self.offsets.homing.wheel {
+            let mut offsets = self.offsets;
+            offsets.homing.wheel = w;
+            self.take_offsets(offsets);
+        }
+        true
+    }
+
     /// The handwheel turned by `counts` (signed, since the last call).
     /// With an axis selected and the machine at rest, or moving only for
     /// the wheel, the axis moves by `counts` × the scale impulses (up to
