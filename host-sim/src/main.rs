@@ -338,8 +338,10 @@ enum Command {
         /// Serve on a new pseudo-terminal and print its path; standard
         /// input is then the machine's panel, a line each: `ESTOP 1|0`,
         /// `DOOR 1|0`, `PROBE 1|0`, `LIMIT X-|X+|Z-|Z+ 1|0`, `FAULT X|Z
-        /// 1|0`, `HOLD`, `START`, and `STATE?` (the carriage, the inputs,
-        /// the spindle). Wire them first with the `INPUT` request.
+        /// 1|0`, `HOLD`, `START`, `WHEEL n` (the handwheel turned by n
+        /// detents), `MPG X|Z COUNTS=n SCALE=1|10|100` (a pendant with its
+        /// own selectors), and `STATE?` (the carriage, the inputs, the
+        /// spindle). Wire them first with the `INPUT` request.
         #[arg(long)]
         pty: bool,
         /// Speak the grbl 1.1 protocol from the start (for grbl senders:
