@@ -11,7 +11,8 @@
 //! - [`board_line`]: a firmware's reply line as the in-process device
 //!   writes it (the QEMU tests).
 //! - [`compare_events`]: the device's timed step events against the
-//!   reference's, event by event.
+//!   reference's, event by event; [`TimedPair`]: the in-process device and
+//!   the references driven alike by `MOVE`s, compared at each `SYNC`.
 //! - [`ask`], [`one`], [`units_word`]: a request over a link or to the
 //!   in-process device, and a length as a request's word.
 
@@ -162,5 +163,121 @@ pub fn compare_events(
         if w[0].block == w[1].block && w[0].run == w[1].run {
             assert!(w[1].tick > w[0].tick, "ticks within a block: {w:?}");
         }
+    }
+}
+
+/// The in-process device (recording its events, `DIAM=0`) and the
+/// references driven alike: the impulses (`RefMachine`), the motion in
+/// time (`RefMotion`) and the backlash rule (`RefBacklash`, none unless
+/// [`TimedPair::with_backlash`]).
+pub struct TimedPair {
+    /// The device.
+    pub dev: host_sim::device::LocalDevice,
+    imp: reference::impulse::RefMachine,
+    /// The reference of motion in time.
+    pub time: reference::motion::RefMotion,
+    lash: reference::motion::RefBacklash,
+    /// The registers of the program's points.
+    pub registers: [i64; 2],
+}
+
+impl Default for TimedPair {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl TimedPair {
+    /// At rest at the origin, the default limits, prices 0.005 (X radius)
+    /// and 0.01 mm, no backlash.
+    pub fn new() -> TimedPair {
+        use reference::impulse::{RefConfig, RefMachine};
+        use reference::motion::{MotionLimits, RefBacklash, RefMotion};
+        let mut dev = host_sim::device::LocalDevice::recording();
+        assert!(one(&mut dev, "CFG DIAM=0").starts_with("OK"));
+        let cfg = RefConfig {
+            diam: false,
+            ..RefConfig::default()
+        };
+        TimedPair {
+            dev,
+            imp: RefMachine::new(cfg),
+            time: RefMotion::new(MotionLimits::default(), [0.005, 0.01]),
+            lash: RefBacklash::default(),
+            registers: [0, 0],
+        }
+    }
+
+    /// Sets the play (mm, X radius and Z) on both with `BACKLASH`, whose
+    /// reply must give the impulses the reference takes up.
+    pub fn with_backlash(mut self, backlash: [&str; 2]) -> TimedPair {
+        let set = one(
+            &mut self.dev,
+            &format!("BACKLASH X={} Z={}", backlash[0], backlash[1]),
+        );
+        self.lash = reference::motion::RefBacklash::new(
+            backlash.map(|b| b.parse().expect("a decimal")),
+            [0.005, 0.01],
+        );
+        assert_eq!(
+            set,
+            format!(
+                "OK X={} Z={} NX={} NZ={}",
+                backlash[0], backlash[1], self.lash.play[0], self.lash.play[1]
+            )
+        );
+        self
+    }
+
+    /// `MOVE` to a point (10⁻⁷ mm) at a feed (mm/min) or rapid; the
+    /// reference takes up the play first where the rule says.
+    pub fn to(&mut self, x: i64, z: i64, feed: Option<&str>) {
+        let (wx, wz) = (units_word(x), units_word(z));
+        let f = feed.map(|f| format!(" F={f}")).unwrap_or_default();
+        let r = one(&mut self.dev, &format!("MOVE X={wx} Z={wz}{f}"));
+        let b = self.imp.move_block(Some(&wx), Some(&wz), false);
+        assert!(
+            r.starts_with(&format!(
+                "OK NX={} NZ={} PX={} PZ={}",
+                b.nx, b.nz, b.px, b.pz
+            )),
+            "{r}"
+        );
+        let delta = [b.px - self.registers[0], b.pz - self.registers[1]];
+        if let Some(steps) = self.lash.before(delta) {
+            self.time.push_takeup(steps);
+        }
+        self.registers = [b.px, b.pz];
+        self.time.push(
+            reference::motion::Point::from_units(x, z),
+            [b.px, b.pz],
+            feed.map(|f| f.parse().expect("a feed")),
+        );
+    }
+
+    /// `SYNC` on both, every event since the last one compared, and the
+    /// registers (`POS`) and those of the steps issued (`STATUS`) those of
+    /// the program's points; `(EV, T)`.
+    pub fn sync(&mut self) -> (u64, u64) {
+        let r = one(&mut self.dev, "SYNC");
+        let want = self.time.sync();
+        assert_eq!(
+            r,
+            format!(
+                "OK EV={} T={} TSEQ={:08X} STARVED=0",
+                want.ev, want.t, want.tseq
+            )
+        );
+        compare_events(&self.dev.take_events(), &self.time.take_events());
+        for ask in ["POS", "STATUS"] {
+            let pos = one(&mut self.dev, ask);
+            let reg = |k: &str| -> i64 {
+                host_sim::link::words_value(&pos, k)
+                    .and_then(|v| v.parse().ok())
+                    .expect(k)
+            };
+            assert_eq!([reg("PX"), reg("PZ")], self.registers, "{pos}");
+        }
+        (want.ev, want.t)
     }
 }

@@ -8,102 +8,9 @@ use host_sim::device::LocalDevice;
 use host_sim::link::Client;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use reference::impulse::{RefConfig, RefMachine};
-use reference::motion::{MotionLimits, Point, RefBacklash, RefMotion};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-use tests::{ask, carriage};
-use tests::{one, units_word};
-
-/// The device and the references driven alike (DIAM=0), with the play
-/// given to both.
-struct Pair {
-    dev: LocalDevice,
-    imp: RefMachine,
-    time: RefMotion,
-    lash: RefBacklash,
-    registers: [i64; 2],
-}
-
-impl Pair {
-    fn new(backlash: [&str; 2]) -> Pair {
-        let mut dev = LocalDevice::recording();
-        assert!(one(&mut dev, "CFG DIAM=0").starts_with("OK"));
-        let set = one(
-            &mut dev,
-            &format!("BACKLASH X={} Z={}", backlash[0], backlash[1]),
-        );
-        let lash = RefBacklash::new(backlash.map(|b| b.parse().unwrap()), [0.005, 0.01]);
-        assert_eq!(
-            set,
-            format!(
-                "OK X={} Z={} NX={} NZ={}",
-                backlash[0], backlash[1], lash.play[0], lash.play[1]
-            )
-        );
-        let cfg = RefConfig {
-            diam: false,
-            ..RefConfig::default()
-        };
-        Pair {
-            dev,
-            imp: RefMachine::new(cfg),
-            time: RefMotion::new(MotionLimits::default(), [0.005, 0.01]),
-            lash,
-            registers: [0, 0],
-        }
-    }
-
-    /// `MOVE` to a point (10⁻⁷ mm) at a feed (mm/min) or rapid.
-    fn to(&mut self, x: i64, z: i64, feed: Option<&str>) {
-        let (wx, wz) = (units_word(x), units_word(z));
-        let f = feed.map(|f| format!(" F={f}")).unwrap_or_default();
-        let r = one(&mut self.dev, &format!("MOVE X={wx} Z={wz}{f}"));
-        let b = self.imp.move_block(Some(&wx), Some(&wz), false);
-        assert!(
-            r.starts_with(&format!(
-                "OK NX={} NZ={} PX={} PZ={}",
-                b.nx, b.nz, b.px, b.pz
-            )),
-            "{r}"
-        );
-        let delta = [b.px - self.registers[0], b.pz - self.registers[1]];
-        if let Some(steps) = self.lash.before(delta) {
-            self.time.push_takeup(steps);
-        }
-        self.registers = [b.px, b.pz];
-        self.time.push(
-            Point::from_units(x, z),
-            [b.px, b.pz],
-            feed.map(|f| f.parse().unwrap()),
-        );
-    }
-
-    /// `SYNC` on both, every event since the last one compared; `EV`.
-    fn sync(&mut self) -> u64 {
-        let r = one(&mut self.dev, "SYNC");
-        let want = self.time.sync();
-        assert_eq!(
-            r,
-            format!(
-                "OK EV={} T={} TSEQ={:08X} STARVED=0",
-                want.ev, want.t, want.tseq
-            )
-        );
-        tests::compare_events(&self.dev.take_events(), &self.time.take_events());
-        // The registers (`POS`) and those of the steps issued (`STATUS`).
-        for ask in ["POS", "STATUS"] {
-            let pos = one(&mut self.dev, ask);
-            let reg = |k: &str| -> i64 {
-                host_sim::link::words_value(&pos, k)
-                    .and_then(|v| v.parse().ok())
-                    .expect(k)
-            };
-            assert_eq!([reg("PX"), reg("PZ")], self.registers, "{pos}");
-        }
-        want.ev
-    }
-}
+use tests::{ask, carriage, one, TimedPair};
 
 /// A thousand reversals on both axes, feeds and rapids, some blocks on
 /// one axis and some on both, with look-ahead: every event (the take-ups'
@@ -111,7 +18,7 @@ impl Pair {
 /// program's points alone.
 #[test]
 fn take_ups_are_timed_as_the_reference_and_the_registers_never_count_them() {
-    let mut p = Pair::new(["0.08", "0.15"]);
+    let mut p = TimedPair::new().with_backlash(["0.08", "0.15"]);
     let mut rng = ChaCha8Rng::seed_from_u64(0xBAC1);
     let (mut x, mut z) = (0i64, 0i64);
     let mut reversals = 0;
@@ -155,10 +62,10 @@ fn take_ups_are_timed_as_the_reference_and_the_registers_never_count_them() {
         }
         (x, z) = (nx, nz);
         if rng.random_bool(0.05) {
-            events += p.sync();
+            events += p.sync().0;
         }
     }
-    events += p.sync();
+    events += p.sync().0;
     // The take-ups' events are there, beyond the program's own.
     assert!(
         events > impulses + 900 * 8,
@@ -169,12 +76,12 @@ fn take_ups_are_timed_as_the_reference_and_the_registers_never_count_them() {
 /// With no play set nothing is taken up: the events are the program's own.
 #[test]
 fn no_play_no_take_up() {
-    let mut p = Pair::new(["0", "0"]);
+    let mut p = TimedPair::new().with_backlash(["0", "0"]);
     p.to(10_000_000, -10_000_000, Some("300"));
     p.to(0, 0, None);
     p.to(10_000_000, -10_000_000, Some("300"));
     // 200 + 200 + 200 events: the longer axis' (X, 0.005 mm).
-    assert_eq!(p.sync(), 600);
+    assert_eq!(p.sync().0, 600);
 }
 
 /// Bad values are refused by name and change nothing.

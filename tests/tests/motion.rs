@@ -2,73 +2,13 @@
 //! reference of `docs/motion.md`, event by event, and `SYNC` against the
 //! reference's report.
 
-use host_sim::device::LocalDevice;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use reference::impulse::{RefConfig, RefMachine};
-use reference::motion::{MotionLimits, Point, RefMotion};
-use tests::{one, units_word};
-
-/// A device and the two references driven alike, DIAM=0.
-struct Pair {
-    dev: LocalDevice,
-    imp: RefMachine,
-    time: RefMotion,
-}
-
-impl Pair {
-    fn new() -> Pair {
-        let mut dev = LocalDevice::recording();
-        assert!(one(&mut dev, "CFG DIAM=0").starts_with("OK"));
-        let cfg = RefConfig {
-            diam: false,
-            ..RefConfig::default()
-        };
-        Pair {
-            dev,
-            imp: RefMachine::new(cfg),
-            time: RefMotion::new(MotionLimits::default(), [0.005, 0.01]),
-        }
-    }
-
-    /// `MOVE` to a point (10⁻⁷ mm) at a feed (mm/min) or rapid.
-    fn to(&mut self, x: i64, z: i64, feed: Option<&str>) {
-        let (wx, wz) = (units_word(x), units_word(z));
-        let f = feed.map(|f| format!(" F={f}")).unwrap_or_default();
-        let r = one(&mut self.dev, &format!("MOVE X={wx} Z={wz}{f}"));
-        let b = self.imp.move_block(Some(&wx), Some(&wz), false);
-        assert!(
-            r.starts_with(&format!("OK NX={} NZ={} ", b.nx, b.nz)),
-            "{r}"
-        );
-        self.time.push(
-            Point::from_units(x, z),
-            [b.px, b.pz],
-            feed.map(|f| f.parse().unwrap()),
-        );
-    }
-
-    /// `SYNC` on both; every event since the last one compared.
-    fn sync(&mut self) -> (u64, u64) {
-        let r = one(&mut self.dev, "SYNC");
-        let want = self.time.sync();
-        assert_eq!(
-            r,
-            format!(
-                "OK EV={} T={} TSEQ={:08X} STARVED=0",
-                want.ev, want.t, want.tseq
-            )
-        );
-        let got = self.dev.take_events();
-        let expected = self.time.take_events();
-        tests::compare_events(&got, &expected);
-        (want.ev, want.t)
-    }
-}
+use tests::TimedPair;
 
 #[test]
 fn single_blocks_from_rest_to_rest() {
-    let mut p = Pair::new();
+    let mut p = TimedPair::new();
     // Rapids and feeds, along each axis and across, long and short.
     let moves: [(i64, i64, Option<&str>); 8] = [
         (0, -1_000_000_000, None),
@@ -90,7 +30,7 @@ fn single_blocks_from_rest_to_rest() {
 #[test]
 fn random_programs_with_look_ahead() {
     let mut rng = ChaCha8Rng::seed_from_u64(10);
-    let mut p = Pair::new();
+    let mut p = TimedPair::new();
     let (mut x, mut z) = (0i64, 0i64);
     let feeds = ["20", "100", "250.5", "600", "1200", "3000", "99999"];
     let mut events = 0;
