@@ -291,19 +291,21 @@ pub fn write_names<W: core::fmt::Write>(out: &mut W, bits: u16) -> core::fmt::Re
     Ok(())
 }
 
-/// Writes the letters grbl's `Pn:` gives the active inputs: `X`, `Z` a
-/// limit of the axis, `P` the probe, `D` the door, `H` the hold button,
-/// `S` cycle start, `E` the E-stop, `M` a drive's fault (grblHAL's).
+/// Writes the letters grblHAL's `Pn:` gives the active inputs, in its
+/// order: `X`, `Z` a limit of the axis, then `H` the hold button, `S`
+/// cycle start, `D` the door, `E` the E-stop, `F` a drive's fault
+/// (grblHAL's motor fault; its `M` is a motor's warning, which these
+/// drives do not give), `P` the probe.
 pub fn write_letters<W: core::fmt::Write>(out: &mut W, active: u16) -> core::fmt::Result {
     const LETTERS: [(u16, char); 8] = [
         (Input::LimitXMinus.bit() | Input::LimitXPlus.bit(), 'X'),
         (Input::LimitZMinus.bit() | Input::LimitZPlus.bit(), 'Z'),
-        (Input::Probe.bit(), 'P'),
-        (Input::Door.bit(), 'D'),
         (Input::Hold.bit(), 'H'),
         (Input::Start.bit(), 'S'),
+        (Input::Door.bit(), 'D'),
         (Input::Estop.bit(), 'E'),
-        (FAULTS, 'M'),
+        (FAULTS, 'F'),
+        (Input::Probe.bit(), 'P'),
     ];
     for (bits, letter) in LETTERS {
         if active & bits != 0 {
@@ -370,10 +372,15 @@ mod tests {
         let mut s = heapless::String::<16>::new();
         write_letters(
             &mut s,
-            Input::Estop.bit() | Input::LimitZPlus.bit() | Input::Door.bit() | Input::FaultX.bit(),
+            Input::Estop.bit()
+                | Input::LimitZPlus.bit()
+                | Input::Door.bit()
+                | Input::FaultX.bit()
+                | Input::Probe.bit()
+                | Input::Hold.bit(),
         )
         .unwrap();
-        assert_eq!(s.as_str(), "ZDEM");
+        assert_eq!(s.as_str(), "ZHDEFP");
         for i in ALL {
             assert_eq!(Input::from_name(i.name()), Some(i));
         }

@@ -247,4 +247,9 @@ fn a_grbl_sender_sees_alarms_pins_and_unlocks() {
     assert!(r.iter().any(|l| l == "[MSG:'$H'|'$X' to unlock]"), "{r:?}");
     assert_eq!(raw(&mut dev, b"$X\n"), ["[MSG:Caution: Unlocked]", "ok"]);
     assert!(raw(&mut dev, b"?")[0].starts_with("<Idle|"));
+    // A drive's fault: grblHAL's alarm 17 and its letter F (its M is a
+    // motor's warning).
+    assert_eq!(inputs(&mut dev, FAULT_Z), ["ALARM:17"]);
+    let status = raw(&mut dev, b"?");
+    assert!(status[0].contains("|Pn:F|"), "{status:?}");
 }
