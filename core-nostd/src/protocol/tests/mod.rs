@@ -8,6 +8,7 @@ use std::string::{String, ToString};
 use std::vec;
 use std::vec::Vec;
 
+mod backlash;
 mod compensation;
 mod cycles;
 mod homing;
