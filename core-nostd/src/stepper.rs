@@ -557,18 +557,26 @@ impl<const R: usize> Stepper<R> {
         self.lash = lash;
     }
 
+    /// The registers and the take-up steps without `e`, the event last
+    /// pulled and not yet issued (a board that waits for its tick).
+    pub fn issued_before(&self, e: StepEvent) -> (ImpulsePoint, [i32; 2]) {
+        let (dx, dz) = e.moves();
+        let (mut issued, mut lash) = (self.issued, self.lash);
+        if self.last_takeup {
+            lash[0] -= i32::from(dx);
+            lash[1] -= i32::from(dz);
+        } else {
+            issued.x.0 -= i32::from(dx);
+            issued.z.0 -= i32::from(dz);
+        }
+        (issued, lash)
+    }
+
     /// Takes back `e`, the event last pulled: it was never issued (a reset
     /// came while it waited for its tick). The registers and the record
     /// no longer count it. At most once after a pull.
     pub fn take_back(&mut self, e: StepEvent) {
-        let (dx, dz) = e.moves();
-        if self.last_takeup {
-            self.lash[0] -= i32::from(dx);
-            self.lash[1] -= i32::from(dz);
-        } else {
-            self.issued.x.0 -= i32::from(dx);
-            self.issued.z.0 -= i32::from(dz);
-        }
+        (self.issued, self.lash) = self.issued_before(e);
         self.record.forget_last();
     }
 

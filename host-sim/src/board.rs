@@ -499,30 +499,25 @@ fn motion_of(a: &Axes) -> AxesState {
     }
 }
 
-/// Where the motors stand: the registers and the backlash take-up steps
-/// issued (the event waiting for its tick not).
-fn motor_of(a: &Axes) -> ImpulsePoint {
-    let mut p = a.stepper.issued();
-    let lash = a.stepper.lash();
-    p.x.0 += lash[0];
-    p.z.0 += lash[1];
-    if let Some((e, _)) = a.next {
-        let (dx, dz) = e.moves();
-        p.x.0 -= i32::from(dx);
-        p.z.0 -= i32::from(dz);
+/// The registers of the steps issued and the backlash take-up steps
+/// issued: the event waiting for its tick is not.
+fn issued_and_lash(a: &Axes) -> (ImpulsePoint, [i32; 2]) {
+    match a.next {
+        Some((e, _)) => a.stepper.issued_before(e),
+        None => (a.stepper.issued(), a.stepper.lash()),
     }
-    p
 }
 
-/// The registers of the steps issued: the event waiting for its tick is
-/// not.
+/// The registers of the steps issued.
 fn issued_of(a: &Axes) -> ImpulsePoint {
-    let mut p = a.stepper.issued();
-    if let Some((e, _)) = a.next {
-        let (dx, dz) = e.moves();
-        p.x.0 -= i32::from(dx);
-        p.z.0 -= i32::from(dz);
-    }
+    issued_and_lash(a).0
+}
+
+/// Where the motors stand: the registers and the take-up steps.
+fn motor_of(a: &Axes) -> ImpulsePoint {
+    let (mut p, lash) = issued_and_lash(a);
+    p.x.0 += lash[0];
+    p.z.0 += lash[1];
     p
 }
 
@@ -626,7 +621,7 @@ impl<W: Write> Background for Protocol<W> {
     }
 
     fn lash(&mut self) -> [i32; 2] {
-        self.shared.axes().stepper.lash()
+        issued_and_lash(&self.shared.axes()).1
     }
 
     fn set_issued(&mut self, registers: ImpulsePoint) {
