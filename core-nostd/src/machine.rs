@@ -489,18 +489,20 @@ impl Machine {
     pub fn abort<S: StepSink>(&mut self, sink: &mut S) -> (Aborted, ImpulsePoint) {
         let queued = self.planner.queued() > 0;
         self.planner.clear();
-        let (mut found, issued) = match sink.background() {
-            Some(b) => (b.abort(), b.issued()),
-            None => (self.stepper.abort(), self.stepper.issued()),
+        // The registers, and where the motors stand in their play: what
+        // was issued of it.
+        let (mut found, issued, lash) = match sink.background() {
+            Some(b) => (b.abort(), b.issued(), b.lash()),
+            None => (
+                self.stepper.abort(),
+                self.stepper.issued(),
+                self.stepper.lash(),
+            ),
         };
         found.dropped |= queued;
         self.stepper.set_issued(issued);
-        // Where the motors stand in their play: what was issued of it.
-        self.lash = match sink.background() {
-            Some(b) => b.lash(),
-            None => self.stepper.lash(),
-        };
-        self.stepper.set_lash(self.lash);
+        self.stepper.set_lash(lash);
+        self.lash = lash;
         (found, issued)
     }
 

@@ -35,6 +35,7 @@ impl Session {
         let mut offsets = self.offsets;
         offsets.homing = h;
         self.take_offsets(offsets);
+        self.apply_backlash();
         let n = self.backlash_impulses();
         let mut line = ReplyLine::new();
         let _ = line.write_str("OK X=");
@@ -58,7 +59,8 @@ impl Session {
         [n(0, self.cfg.hx), n(1, self.cfg.hz)]
     }
 
-    /// Gives the machine the backlash of the settings and prices in force.
+    /// Gives the machine the backlash of the settings and prices in force
+    /// (after `BACKLASH`, a price change, the table restored at power-on).
     pub(super) fn apply_backlash(&mut self) {
         let n = self.backlash_impulses();
         self.machine.set_backlash(n);

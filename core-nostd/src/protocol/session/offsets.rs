@@ -255,7 +255,6 @@ impl Session {
             self.generation = self.generation.wrapping_add(1);
         }
         self.offsets = new;
-        self.apply_backlash();
     }
 
     /// The offsets in effect (machine = work + this); always within range,

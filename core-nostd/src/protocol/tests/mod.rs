@@ -45,6 +45,15 @@ fn ask(dev: &mut Device, request: &[u8]) -> Vec<String> {
     io.out
 }
 
+/// The whole number of ` KEY=` in a reply line.
+fn number(line: &str, key: &str) -> i64 {
+    let at = line.find(&std::format!(" {key}=")).expect(key) + key.len() + 2;
+    let rest = &line[at..];
+    rest[..rest.find(' ').unwrap_or(rest.len())]
+        .parse()
+        .expect(key)
+}
+
 fn ask1(dev: &mut Device, request: &str) -> String {
     let mut r = ask(dev, std::format!("{request}\n").as_bytes());
     assert_eq!(r.len(), 1, "{request:?} -> {r:?}");

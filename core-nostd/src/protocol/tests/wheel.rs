@@ -13,14 +13,7 @@ fn wheel(dev: &mut Device, counts: i32) -> Vec<String> {
 /// The position registers, `(PX, PZ)`.
 fn registers(dev: &mut Device) -> (i64, i64) {
     let pos = ask1(dev, "POS");
-    let value = |key: &str| -> i64 {
-        let at = pos.find(&std::format!(" {key}=")).expect(key) + key.len() + 2;
-        let rest = &pos[at..];
-        rest[..rest.find(' ').unwrap_or(rest.len())]
-            .parse()
-            .expect(key)
-    };
-    (value("PX"), value("PZ"))
+    (number(&pos, "PX"), number(&pos, "PZ"))
 }
 
 #[test]
