@@ -303,7 +303,7 @@ impl Shared {
 
     /// An event was issued: the lathe's carriages follow, and the switches
     /// they hold change with them (the panel's own switches kept).
-    fn carriage_moved(&self, a: &mut Axes) {
+    fn carriage_moved(&self, a: &mut Axes, tick: u64) {
         // Every event passes here: nothing to work out without a lathe.
         if a.lathe.is_none() {
             return;
@@ -315,8 +315,8 @@ impl Shared {
             return;
         };
         let before = lathe.active();
-        let mm = |n: i32, h: i64| n as f64 * h as f64 / 1e7;
-        let now = lathe.moved_by([mm(p.x.0 - seen.x.0, hx), mm(p.z.0 - seen.z.0, hz)]);
+        let steps = [p.x.0 - seen.x.0, p.z.0 - seen.z.0];
+        let now = lathe.event(steps, tick, [hx as f64 / 1e7, hz as f64 / 1e7]);
         if now != before {
             let panel = self.panel.load(Ordering::Acquire) & !before | now;
             self.panel_locked(a, panel);
@@ -378,7 +378,7 @@ fn axes_thread(shared: Arc<Shared>) {
             }
             let _ = event;
             a.next = None;
-            shared.carriage_moved(&mut a);
+            shared.carriage_moved(&mut a, tick);
         }
         match a.stepper.pull() {
             None => {
@@ -386,7 +386,12 @@ fn axes_thread(shared: Arc<Shared>) {
                 shared.changed.notify_all();
                 a = shared.work.wait(a).unwrap_or_else(|e| e.into_inner());
             }
-            Some(Pulled::RunStart) => a.run_start = Instant::now(),
+            Some(Pulled::RunStart) => {
+                a.run_start = Instant::now();
+                if let Some(lathe) = a.lathe.as_mut() {
+                    lathe.run_start();
+                }
+            }
             Some(Pulled::BlockStart(_)) => {
                 let rpm = a.stepper.spindle();
                 if a.outputs.spindle != core_nostd::gcode::Spindle::Off {
@@ -1112,6 +1117,12 @@ impl Board {
                 ))
             }
         };
+        if !on && matches!(input, Input::FaultX | Input::FaultZ) {
+            // A drive the lathe's own rate stalled: its fault clears too.
+            if let Some(lathe) = self.shared.axes().lathe.as_mut() {
+                lathe.clear_fault(input.bit());
+            }
+        }
         let was = self.inputs();
         self.panel(if on {
             was | input.bit()

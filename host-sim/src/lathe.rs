@@ -16,6 +16,9 @@
 use core_nostd::inputs::Input;
 use serde::Deserialize;
 
+/// The step clock, ticks per second.
+const TICK_HZ: f64 = 1e6;
+
 /// A nanometre, mm: how near a carriage at a switch's place counts as on it.
 const EPS: f64 = 1e-6;
 
@@ -37,6 +40,35 @@ pub struct Switch {
     pub hysteresis: f64,
 }
 
+/// An axis' drive: what one impulse turns the leadscrew by, and how fast
+/// it can follow the impulses.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Drive {
+    /// The leadscrew's pitch, mm per turn (with `steps_per_rev`: the nut
+    /// moves `pitch / steps_per_rev` per impulse; without them, by the
+    /// controller's impulse price).
+    #[serde(default)]
+    pub pitch: Option<f64>,
+    /// Impulses per turn of the leadscrew (the motor's steps times its
+    /// microstepping times any gearing).
+    #[serde(default)]
+    pub steps_per_rev: Option<f64>,
+    /// The most impulses per second the drive follows: two impulses closer
+    /// together stall the motor; the second is lost and the drive raises
+    /// its fault output (`FAULT X`/`FAULT Z` on the board, when wired)
+    /// until the panel clears it (`FAULT X 0`).
+    #[serde(default)]
+    pub max_rate: Option<f64>,
+}
+
+impl Drive {
+    /// How far the nut moves per impulse, mm, when the file says.
+    pub fn step_mm(&self) -> Option<f64> {
+        Some(self.pitch? / self.steps_per_rev?)
+    }
+}
+
 /// One axis of the lathe.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -50,6 +82,9 @@ pub struct Axis {
     /// Its switches.
     #[serde(default, rename = "switch")]
     pub switches: Vec<Switch>,
+    /// Its drive.
+    #[serde(default)]
+    pub drive: Drive,
 }
 
 /// The whole file.
@@ -72,6 +107,23 @@ impl MachineFile {
         for (name, axis, sides) in [("x", &m.x, ["X-", "X+"]), ("z", &m.z, ["Z-", "Z+"])] {
             if !(axis.backlash.is_finite() && (0.0..=5.0).contains(&axis.backlash)) {
                 return Err(format!("{name}.backlash: 0 to 5 mm, not {}", axis.backlash));
+            }
+            let d = &axis.drive;
+            if d.pitch.is_some() != d.steps_per_rev.is_some() {
+                return Err(format!(
+                    "{name}.drive: `pitch` and `steps_per_rev` go together"
+                ));
+            }
+            for (field, v) in [
+                ("pitch", d.pitch),
+                ("steps_per_rev", d.steps_per_rev),
+                ("max_rate", d.max_rate),
+            ] {
+                if let Some(v) = v {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(format!("{name}.drive.{field}: above 0, not {v}"));
+                    }
+                }
             }
             if let Some([lo, hi]) = axis.travel {
                 if !(lo.is_finite() && hi.is_finite() && lo < hi) {
@@ -125,6 +177,12 @@ pub struct Lathe {
     started: bool,
     /// The switches active now.
     active: u16,
+    /// The drives' faults raised (latched until cleared).
+    fault: u16,
+    /// Each axis' last impulse, ticks of its run.
+    last: [Option<u64>; 2],
+    /// The least and most each carriage has been at, mm.
+    range: [[f64; 2]; 2],
 }
 
 impl Lathe {
@@ -137,7 +195,59 @@ impl Lathe {
             nut: [0.0; 2],
             started: false,
             active: 0,
+            fault: 0,
+            last: [None; 2],
+            range: [[f64::INFINITY, f64::NEG_INFINITY]; 2],
         }
+    }
+
+    /// A step event issued at `tick` of its run: `steps` impulses per axis
+    /// (−1, 0 or 1), `price` the controller's impulse prices (mm), which
+    /// the nut moves by unless the axis' drive gives its own pitch. An
+    /// impulse closer to the axis' last than its drive's `max_rate` allows
+    /// is lost and raises the drive's fault. Returns the inputs active now.
+    pub fn event(&mut self, steps: [i32; 2], tick: u64, price: [f64; 2]) -> u16 {
+        let mut by = [0.0; 2];
+        for (i, axis) in [&self.file.x, &self.file.z].into_iter().enumerate() {
+            if steps[i] == 0 {
+                continue;
+            }
+            let stalled = match (axis.drive.max_rate, self.last[i]) {
+                // A tick before the last: a new run (after a reset, say)
+                // whose start was not seen.
+                (Some(rate), Some(last)) => tick >= last && ((tick - last) as f64) < TICK_HZ / rate,
+                _ => false,
+            };
+            self.last[i] = Some(tick);
+            if stalled {
+                self.fault |= [Input::FaultX, Input::FaultZ][i].bit();
+                continue;
+            }
+            by[i] = f64::from(steps[i]) * axis.drive.step_mm().unwrap_or(price[i]);
+        }
+        self.moved_by(by)
+    }
+
+    /// A run of motion begins: its ticks count from 0.
+    pub fn run_start(&mut self) {
+        self.last = [None; 2];
+    }
+
+    /// The panel cleared the drives' faults of `bits`.
+    pub fn clear_fault(&mut self, bits: u16) {
+        self.fault &= !bits;
+        self.active &= !bits;
+    }
+
+    /// The least and most each carriage has been at, mm (X on the
+    /// radius), `[[x_min, x_max], [z_min, z_max]]`.
+    pub fn range(&self) -> [[f64; 2]; 2] {
+        self.range
+    }
+
+    /// The file it follows.
+    pub fn file(&self) -> &MachineFile {
+        &self.file
     }
 
     /// The nuts moved to `nut` (mm, X on the radius): the carriages follow
@@ -152,6 +262,8 @@ impl Lathe {
             } else {
                 nut[i]
             };
+            let r = &mut self.range[i];
+            *r = [r[0].min(*c), r[1].max(*c)];
             for s in &axis.switches {
                 let Some(input) = core_nostd::inputs::Input::from_name(&s.input) else {
                     continue;
@@ -174,7 +286,7 @@ impl Lathe {
                 }
             }
         }
-        self.active = hit;
+        self.active = hit | self.fault;
         self.started = true;
         self.active
     }
@@ -229,6 +341,41 @@ hysteresis = 0.5
         assert_eq!(l.moved([0.0, 1.0]), 0, "released below 1.5");
     }
 
+    /// The drive's pitch over its steps moves the nut, whatever the
+    /// controller's price; impulses closer than its rate stall it: the
+    /// impulse is lost and its fault stays raised until cleared.
+    #[test]
+    fn a_drive_moves_by_its_own_pitch_and_stalls_above_its_rate() {
+        let file = "[x]\n[x.drive]\npitch = 4.0\nsteps_per_rev = 800\nmax_rate = 1000.0\n";
+        let mut l = Lathe::new(MachineFile::parse(file).unwrap());
+        let fx = Input::FaultX.bit();
+        l.moved([0.0, 0.0]);
+        // 0.01 mm the controller's price; the drive's 4/800 = 0.005 mm.
+        for k in 0..10 {
+            assert_eq!(l.event([1, 0], 1000 * k, [0.01, 0.01]), 0);
+        }
+        assert!((l.carriage()[0] - 0.05).abs() < 1e-12, "{:?}", l.carriage());
+        // Z has no drive of its own: the controller's price.
+        l.event([0, -1], 20_000, [0.01, 0.01]);
+        assert!((l.carriage()[1] + 0.01).abs() < 1e-12);
+        // 999 µs after the last: faster than 1000 impulses/s.
+        assert_eq!(l.event([1, 0], 9999, [0.01, 0.01]), fx);
+        assert!(
+            (l.carriage()[0] - 0.05).abs() < 1e-12,
+            "the impulse was lost"
+        );
+        // Latched while the motor turns on at its pace.
+        assert_eq!(l.event([1, 0], 12_000, [0.01, 0.01]), fx);
+        assert!((l.carriage()[0] - 0.055).abs() < 1e-12);
+        l.clear_fault(fx);
+        assert_eq!(l.event([1, 0], 14_000, [0.01, 0.01]), 0);
+        // A new run counts its ticks from 0: no stall across runs.
+        l.run_start();
+        assert_eq!(l.event([1, 0], 0, [0.01, 0.01]), 0);
+        let [lo, hi] = l.range()[0];
+        assert!(lo == 0.0 && (hi - 0.065).abs() < 1e-12, "{lo} {hi}");
+    }
+
     #[test]
     fn a_bad_file_is_refused_by_name() {
         for (text, why) in [
@@ -248,6 +395,12 @@ hysteresis = 0.5
             ),
             ("[y]\n", "unknown field `y`"),
             ("[z]\nbacklash = \"a lot\"\n", "invalid type"),
+            (
+                "[x.drive]\npitch = 5.0\n",
+                "x.drive: `pitch` and `steps_per_rev`",
+            ),
+            ("[z.drive]\nmax_rate = 0\n", "z.drive.max_rate: above 0"),
+            ("[z.drive]\nvolts = 48\n", "unknown field `volts`"),
         ] {
             let e = MachineFile::parse(text).unwrap_err();
             assert!(e.contains(why), "{text:?}: {e}");

@@ -362,9 +362,10 @@ enum Command {
         /// `OPT DIALECT=` (grbl `$450`) from before: iso or fanuc.
         #[arg(long, default_value = "iso", value_parser = ["iso", "fanuc"])]
         dialect: String,
-        /// The lathe behind the board (TOML: each axis' travel, switches
-        /// and leadscrew play; `examples/machine.toml`): its carriages trip
-        /// the switches as the steps move them.
+        /// The lathe behind the board (TOML: each axis' travel, switches,
+        /// leadscrew play and drive; `examples/machine.toml`): its
+        /// carriages trip the switches as the steps move them, and a drive
+        /// driven faster than it follows stalls and raises its fault.
         #[arg(long, value_name = "FILE")]
         machine: Option<std::path::PathBuf>,
     },
@@ -454,6 +455,16 @@ struct RunArgs {
     /// commanded F, dwells).
     #[arg(long, value_name = "OUT.html", requires = "file")]
     report: Option<std::path::PathBuf>,
+    /// The lathe behind the board (TOML: each axis' travel, switches,
+    /// leadscrew play and drive; `examples/machine.toml`): its inputs are
+    /// wired, its carriages follow the step events and trip the switches
+    /// from their own positions. A limit, a drive's stall or a carriage
+    /// past the end of its travel stops the program there (exit status
+    /// 6), naming the line and where the carriages were; otherwise the
+    /// run says how far the carriages went and where they ended against
+    /// the registers (the leadscrews' play not taken up shows there).
+    #[arg(long, value_name = "FILE", requires = "file")]
+    machine: Option<std::path::PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -471,6 +482,7 @@ impl Default for RunArgs {
             tools: None,
             optional_stop: false,
             report: None,
+            machine: None,
         }
     }
 }
@@ -1174,6 +1186,35 @@ fn run_program(
         .tools
         .as_ref()
         .map_or(String::new(), |p| p.display().to_string());
+    let machine = match &args.machine {
+        Some(path) => {
+            let t = std::fs::read_to_string(path)
+                .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+            Some(
+                host_sim::lathe::MachineFile::parse(&t)
+                    .map_err(|e| format!("{}: {e}", path.display()))?,
+            )
+        }
+        None => None,
+    };
+    if let Some(m) = &machine {
+        if args.report.is_some() {
+            return Err("--report and --machine: one at a time".into());
+        }
+        let (r, run) = host_sim::program::run_machine(&text, options, &setup, m);
+        let name = args
+            .machine
+            .as_ref()
+            .map_or(String::new(), |p| p.display().to_string());
+        return Ok(machine_report(
+            &f.to_string(),
+            &name,
+            &setup_name,
+            &setup,
+            &r,
+            &run,
+        ));
+    }
     // With a page asked for, the run it shows is the one reported here.
     let (r, page) = match &args.report {
         Some(out) => {
@@ -1201,19 +1242,7 @@ fn run_program(
         write_page()?;
         return Ok(ExitCode::from(1));
     }
-    for refused in &r.setup_refused {
-        let request = setup
-            .iter()
-            .find(|(l, _)| *l == refused.line)
-            .map_or("", |(_, q)| q);
-        eprintln!(
-            "{setup_name}:{}: {request}: {}",
-            refused.line, refused.reply
-        );
-    }
-    for refused in &r.refused {
-        eprintln!("{f}:{}: {}", refused.line, refused.reply);
-    }
+    print_refused(&f.to_string(), &setup_name, &setup, &r);
     for (line, code) in &r.stops {
         eprintln!("{f}:{line}: {code} program stop: cycle start pressed");
     }
@@ -1261,6 +1290,117 @@ fn run_program(
     } else {
         ExitCode::from(1)
     })
+}
+
+/// The setup requests and the program's lines the device refused, on
+/// stderr, each with its file and line.
+fn print_refused(
+    f: &str,
+    setup_name: &str,
+    setup: &[(usize, &str)],
+    r: &host_sim::program::Report,
+) {
+    for refused in &r.setup_refused {
+        let request = setup
+            .iter()
+            .find(|(l, _)| *l == refused.line)
+            .map_or("", |(_, q)| q);
+        eprintln!(
+            "{setup_name}:{}: {request}: {}",
+            refused.line, refused.reply
+        );
+    }
+    for refused in &r.refused {
+        eprintln!("{f}:{}: {}", refused.line, refused.reply);
+    }
+}
+
+/// `run --machine`'s report: the refused lines, then what the lathe met.
+fn machine_report(
+    f: &str,
+    name: &str,
+    setup_name: &str,
+    setup: &[(usize, &str)],
+    r: &host_sim::program::Report,
+    run: &host_sim::program::MachineRun,
+) -> ExitCode {
+    use core_nostd::inputs::{Input, ALL};
+    if let Some(e) = &r.expand_error {
+        eprintln!("{f}:{e}");
+        return ExitCode::from(1);
+    }
+    print_refused(f, setup_name, setup, r);
+    let at = |c: [f64; 2]| format!("X{:.4} Z{:.4}", c[0], c[1]);
+    if let Some(t) = &run.trip {
+        let what: Vec<String> = ALL
+            .iter()
+            .filter(|i| t.inputs & i.bit() != 0)
+            .map(|i| match i {
+                Input::FaultX => "the X drive stalled (FAULTX)".to_string(),
+                Input::FaultZ => "the Z drive stalled (FAULTZ)".to_string(),
+                i => format!("limit {} tripped", i.name()),
+            })
+            .collect();
+        let what = if what.is_empty() {
+            "a carriage ran past the end of its travel (no switch there: it would hit the stop)"
+                .to_string()
+        } else {
+            what.join(", ")
+        };
+        let place = match t.line {
+            Some(line) => format!("{f}:{line}"),
+            None if t.event == 0 => format!("{f}: before the first line"),
+            None => format!("{f}: at the end"),
+        };
+        let alarm = if t.alarm.is_empty() {
+            String::new()
+        } else {
+            format!("; the board: {}", t.alarm)
+        };
+        eprintln!(
+            "{place}: {what}, the carriages at {} (machine mm, X on the radius){alarm}; the program stopped there, {} not sent",
+            at(t.carriage),
+            match t.lines_left {
+                1 => "1 line".to_string(),
+                n => format!("{n} lines"),
+            }
+        );
+    }
+    let [[x0, x1], [z0, z1]] = run.range;
+    println!(
+        "{f}: {} blocks run, {} refused on {name}",
+        r.blocks,
+        r.refused.len()
+    );
+    println!(
+        "carriages went X {x0:.4} to {x1:.4}, Z {z0:.4} to {z1:.4} (machine mm, X on the radius)"
+    );
+    if run.trip.is_some() {
+        // Stopped at once: the registers hold what the board had issued.
+        return ExitCode::from(6);
+    }
+    let off = [
+        run.carriage[0] - run.registers[0],
+        run.carriage[1] - run.registers[1],
+    ];
+    let play = if off.iter().any(|d| d.abs() > 1e-6) {
+        format!(
+            " (off by X{:.4} Z{:.4}: the leadscrews' play not taken up, see BACKLASH, or a drive that lost steps)",
+            off[0], off[1]
+        )
+    } else {
+        String::new()
+    };
+    println!(
+        "carriages ended at {}, the registers at {}{play}",
+        at(run.carriage),
+        at(run.registers)
+    );
+    if r.refused.is_empty() && r.setup_refused.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    }
 }
 
 fn run(args: &RunArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {

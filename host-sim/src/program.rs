@@ -136,6 +136,52 @@ struct Tally {
     stops: Vec<u16>,
     /// Kept when asked for.
     timeline: Option<Vec<Happening>>,
+    /// The lathe the events move (`run --machine`).
+    watch: Option<Watch>,
+    /// The line whose request is being sent, and where the event of
+    /// [`Tally::find`] fell.
+    line: usize,
+    /// Counting the events to this one, the line whose request issued it.
+    find: Option<(u64, Option<usize>)>,
+}
+
+/// A machine file's lathe following the events of a run.
+struct Watch {
+    lathe: crate::lathe::Lathe,
+    /// The impulse prices, mm (X on the radius).
+    price: [f64; 2],
+    /// The inputs that stop the machine when they rise (its limits and
+    /// drive faults).
+    stops: u16,
+    /// The first stop: the event's number (from 1), the inputs that rose
+    /// (none: a carriage ran past the end of its travel), the carriages.
+    trip: Option<(u64, u16, [f64; 2])>,
+}
+
+impl Watch {
+    fn step(&mut self, n: u64, bits: u8, tick: u64) {
+        if self.trip.is_some() {
+            // The machine stopped there.
+            return;
+        }
+        let dir = |step: u8, neg: u8| match (bits & step != 0, bits & neg != 0) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => -1,
+        };
+        let before = self.lathe.active();
+        let now = self.lathe.event([dir(1, 4), dir(2, 8)], tick, self.price);
+        let rose = now & !before & self.stops;
+        let c = self.lathe.carriage();
+        let file = self.lathe.file();
+        let beyond = [&file.x, &file.z].iter().zip(c).any(|(axis, c)| {
+            axis.travel
+                .is_some_and(|[lo, hi]| c < lo - 1e-9 || c > hi + 1e-9)
+        });
+        if rose != 0 || beyond {
+            self.trip = Some((n, rose, c));
+        }
+    }
 }
 
 impl Tally {
@@ -153,8 +199,21 @@ impl Io for Tally {
     fn block_start(&mut self, block: &LinearBlock) {
         self.keep(Happening::Block(*block));
     }
+    fn run_start(&mut self) {
+        if let Some(w) = self.watch.as_mut() {
+            w.lathe.run_start();
+        }
+    }
     fn step(&mut self, event: StepEvent, tick: u64, _: &DriveTiming) {
         self.events += 1;
+        if let Some(w) = self.watch.as_mut() {
+            w.step(self.events, event.bits(), tick);
+        }
+        if let Some((n, found @ None)) = self.find.as_mut() {
+            if *n == self.events {
+                *found = Some(self.line);
+            }
+        }
         self.keep(Happening::Event {
             bits: event.bits(),
             tick,
@@ -340,14 +399,121 @@ pub fn run_settings(options: Options) -> [String; 3] {
 /// Runs a program's text after setup requests, each with the line of the
 /// file it comes from ([`Report::setup_refused`]).
 pub fn run_setup(text: &str, options: Options, setup: &[(usize, &str)]) -> Report {
-    run_inner(text, options, setup, false).0
+    run_inner(text, options, setup, false, None, None).0
+}
+
+/// What [`run_inner`] comes to: the report, the timeline, the machine's
+/// run, and the line of the event `find` asked for.
+type Inner = (Report, Timeline, Option<MachineRun>, Option<usize>);
+
+/// What the lathe of a machine file met in a run (`run --machine`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MachineRun {
+    /// What stopped the machine, if anything did.
+    pub trip: Option<Trip>,
+    /// The least and most each carriage was at, mm (X on the radius):
+    /// `[[x_min, x_max], [z_min, z_max]]`.
+    pub range: [[f64; 2]; 2],
+    /// Where the carriages ended, mm (X on the radius), the leadscrews'
+    /// play in it.
+    pub carriage: [f64; 2],
+    /// Where the registers say they are, mm (X on the radius).
+    pub registers: [f64; 2],
+}
+
+/// A switch or a drive that stopped the machine, or the end of a travel
+/// a carriage ran into.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trip {
+    /// The inputs that rose ([`core_nostd::inputs::Input::bit`]); none
+    /// when a carriage ran past the end of its travel.
+    pub inputs: u16,
+    /// Where the carriages were, mm (X on the radius).
+    pub carriage: [f64; 2],
+    /// The step event it came at, from 1 (0: at the start, before any).
+    pub event: u64,
+    /// The line whose block was moving (its request, sent one at a time).
+    pub line: Option<usize>,
+    /// What the device said when the input reached it (`ERR ALARM …`),
+    /// or nothing, for the end of a travel (no switch there).
+    pub alarm: String,
+    /// The program's lines not sent after it.
+    pub lines_left: usize,
+}
+
+/// As [`run_setup`], the lathe of `machine` behind the board: the inputs
+/// its switches and drives are wired to (`INPUT USED=`), its carriages
+/// moved by the events and tripping the switches from their own
+/// positions. A limit or a drive's fault that rises stops the program
+/// there as on the machine (the device's alarm, no more lines sent), as
+/// does a carriage running past the end of its travel; the line it came
+/// in is found by running the program again one line at a time (a `SYNC`
+/// after each: the same events, so the same one).
+pub fn run_machine(
+    text: &str,
+    options: Options,
+    setup: &[(usize, &str)],
+    machine: &crate::lathe::MachineFile,
+) -> (Report, MachineRun) {
+    let (report, _, run, _) = run_inner(text, options, setup, false, Some(machine), None);
+    let mut run = run.unwrap_or(MachineRun {
+        // Nothing ran (the program could not be expanded).
+        trip: None,
+        range: [[0.0; 2]; 2],
+        carriage: [0.0; 2],
+        registers: [0.0; 2],
+    });
+    if let Some(trip) = run.trip.as_mut() {
+        if trip.event > 0 {
+            // Without the lathe: the same events, nothing stopping them
+            // (a drive's stall depends on their times, which differ).
+            trip.line = run_inner(text, options, setup, false, None, Some(trip.event)).3;
+        }
+    }
+    (report, run)
+}
+
+/// The inputs a machine file's switches and drives are wired to, as
+/// `INPUT USED=` names them, and those of them that stop the machine.
+pub fn machine_inputs(machine: &crate::lathe::MachineFile) -> (String, u16) {
+    use core_nostd::inputs::{Input, ALL, FAULTS, LIMITS};
+    let mut bits = 0u16;
+    for (axis, fault) in [(&machine.x, Input::FaultX), (&machine.z, Input::FaultZ)] {
+        for s in &axis.switches {
+            if let Some(i) = Input::from_name(&s.input) {
+                bits |= i.bit();
+            }
+        }
+        if axis.drive.max_rate.is_some() {
+            bits |= fault.bit();
+        }
+    }
+    let names: Vec<&str> = ALL
+        .iter()
+        .filter(|i| bits & i.bit() != 0)
+        .map(|i| i.name())
+        .collect();
+    let used = if names.is_empty() {
+        "-".to_string()
+    } else {
+        names.join(",")
+    };
+    (used, bits & (LIMITS | FAULTS))
+}
+
+/// A reply's integer word `key=`.
+fn word(reply: &str, key: &str) -> Option<i64> {
+    reply
+        .split(' ')
+        .find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse().ok())
 }
 
 /// As [`run_setup`], keeping what the device did in time: every block
 /// started, step event with its tick, run end and dwell, and the commanded
 /// feed of every block run. The report is the same.
 pub fn run_timed(text: &str, options: Options, setup: &[(usize, &str)]) -> (Report, Timeline) {
-    run_inner(text, options, setup, true)
+    let (r, t, _, _) = run_inner(text, options, setup, true, None, None);
+    (r, t)
 }
 
 /// The commanded feed along the path, mm/min, as the device reads it
@@ -360,12 +526,17 @@ fn commanded_feed(modal: &Modal, spindle: &SpindleState) -> Option<f64> {
     Some(feed.mm_per_min().as_angstrom() as f64 / 1e7)
 }
 
+/// The run: with `machine`, its lathe behind the board; with `find`, one
+/// line at a time (a `SYNC` after each) until the event of that number,
+/// whose line the machine run's trip then names.
 fn run_inner(
     text: &str,
     options: Options,
     setup: &[(usize, &str)],
     timed: bool,
-) -> (Report, Timeline) {
+    machine: Option<&crate::lathe::MachineFile>,
+    find: Option<u64>,
+) -> Inner {
     let mut dev = Device::new();
     // Nothing here reads a probe: a probing block is the feed move to its
     // end (`check` warns of it).
@@ -376,7 +547,12 @@ fn run_inner(
     };
     let mut report = Report::default();
     let mut timeline = Timeline::default();
-    let settings = run_settings(options);
+    let mut settings = run_settings(options).to_vec();
+    let wiring = machine.map(machine_inputs);
+    if let Some((used, _)) = &wiring {
+        settings.push(format!("INPUT USED={used}"));
+    }
+    io.find = find.map(|n| (n, None));
     for (line, setting) in settings
         .iter()
         .map(|s| (0, s.as_str()))
@@ -391,11 +567,58 @@ fn run_inner(
         Ok(lines) => lines,
         Err(e) => {
             report.expand_error = Some(e);
-            return (report, timeline);
+            return (report, timeline, None, None);
         }
     };
     let cfg = *dev.session().config();
     timeline.price = [cfg.hx.as_angstrom(), cfg.hz.as_angstrom()];
+    let price = timeline.price.map(|h| h as f64 / 1e7);
+    let registers = |dev: &mut Device, io: &mut Tally| {
+        let pos = request(dev, io, "POS");
+        let n = |k| word(&pos, k).unwrap_or(0) as f64;
+        [n("PX") * price[0], n("PZ") * price[1]]
+    };
+    let mut alarm = String::new();
+    if let (Some(m), Some((_, stops))) = (machine, &wiring) {
+        let mut lathe = crate::lathe::Lathe::new(m.clone());
+        let at = registers(&mut dev, &mut io);
+        let active = lathe.moved(at);
+        io.watch = Some(Watch {
+            lathe,
+            price,
+            stops: *stops,
+            trip: (active & stops != 0).then_some((0, active & stops, at)),
+        });
+    }
+    // A trip reaches the device (its alarm) once; nothing more is sent.
+    let mut deliver = |dev: &mut Device, io: &mut Tally| -> bool {
+        let Some(w) = io.watch.as_ref() else {
+            return false;
+        };
+        let Some((_, inputs, _)) = w.trip else {
+            return false;
+        };
+        if alarm.is_empty() {
+            let active = w.lathe.active();
+            io.out.clear();
+            if inputs != 0 {
+                dev.inputs(active, io);
+            }
+            let text = String::from_utf8_lossy(&io.out).to_string();
+            alarm = text
+                .lines()
+                .rev()
+                .find(|l| !l.is_empty())
+                .map(|l| l.rsplit_once('*').map_or(l, |(b, _)| b))
+                .unwrap_or("")
+                .to_string();
+            if alarm.is_empty() {
+                alarm.push(' ');
+            }
+        }
+        true
+    };
+    let mut stopped_at = None;
     let mut units = Units::Mm;
     let mut tool = None;
     let mut at = [0i64; 2];
@@ -408,8 +631,13 @@ fn run_inner(
     let mut feed_now = None;
     let mut element_feed = None;
     for (seq, (i, raw)) in lines.iter().enumerate() {
+        if deliver(&mut dev, &mut io) || io.find.is_some_and(|(_, f)| f.is_some()) {
+            stopped_at = Some(seq);
+            break;
+        }
         let mut element = false;
         let i = *i;
+        io.line = i + 1;
         let line = raw.trim_end_matches('\r');
         if line.trim().is_empty() {
             continue;
@@ -539,10 +767,41 @@ fn run_inner(
         if element {
             element_feed = feed_now;
         }
+        if io.find.is_some() {
+            // One line at a time: its motion runs before the next is sent.
+            request(&mut dev, &mut io, "SYNC");
+        }
     }
     // The end: everything queued runs.
-    let reply = request(&mut dev, &mut io, "SYNC");
-    debug_assert!(reply.starts_with("OK"), "SYNC: {reply}");
+    if stopped_at.is_none() {
+        let reply = request(&mut dev, &mut io, "SYNC");
+        debug_assert!(reply.starts_with("OK"), "SYNC: {reply}");
+        deliver(&mut dev, &mut io);
+    }
+    let machine_run = match io.watch.take() {
+        Some(w) => {
+            let at = registers(&mut dev, &mut io);
+            Some(MachineRun {
+                trip: w.trip.map(|(event, inputs, carriage)| Trip {
+                    inputs,
+                    carriage,
+                    event,
+                    line: None,
+                    alarm: alarm.trim().to_string(),
+                    lines_left: stopped_at.map_or(0, |seq| {
+                        lines[seq..]
+                            .iter()
+                            .filter(|(_, l)| !l.trim().is_empty())
+                            .count()
+                    }),
+                }),
+                range: w.lathe.range(),
+                carriage: w.lathe.carriage(),
+                registers: at,
+            })
+        }
+        None => None,
+    };
     report.motion_us = io.run_ticks;
     report.dwell_us = io.dwell_us;
     report.events = io.events;
@@ -550,7 +809,12 @@ fn run_inner(
     if !timed {
         timeline.feeds.clear();
     }
-    (report, timeline)
+    (
+        report,
+        timeline,
+        machine_run,
+        io.find.and_then(|(_, found)| found),
+    )
 }
 
 /// Microseconds as `m:ss.sss`.

@@ -341,6 +341,80 @@ fn run_reports_a_program_and_traces_its_path() {
     assert_eq!(out.status.code(), Some(2));
 }
 
+/// `run --machine`: the example machine (Z+ at machine Z 4) stops
+/// fanuc-cycles.nc at its last rapid (line 32, `G00 X100. Z50.`) without a
+/// work offset; with one the program stays within the switches, and with
+/// the machine's play set as `BACKLASH` the carriages end on the
+/// registers.
+#[test]
+fn run_on_a_machine_stops_at_a_switch_and_shows_the_play() {
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let program = format!("{dir}/../examples/fanuc-cycles.nc");
+    let machine = format!("{dir}/../examples/machine.toml");
+    let run = |setup: Option<&str>| {
+        let mut args = vec![
+            "run".to_string(),
+            program.clone(),
+            "--machine".into(),
+            machine.clone(),
+        ];
+        let tmp;
+        if let Some(s) = setup {
+            tmp = std::env::temp_dir().join(format!("machine-setup-{}.txt", s.len()));
+            std::fs::write(&tmp, s).unwrap();
+            args.extend(["--tools".to_string(), tmp.display().to_string()]);
+        }
+        let out = Command::new(BIN).args(&args).output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (code, out, err) = run(None);
+    assert_eq!(code, Some(6), "{out}{err}");
+    assert!(
+        err.contains("fanuc-cycles.nc:32: limit Z+ tripped, the carriages at X18.0250 Z4.0000"),
+        "{err}"
+    );
+    assert!(err.contains("!ALARM CODE=1 INPUT=Z+"), "{err}");
+    assert!(
+        err.contains("the program stopped there, 1 line not sent"),
+        "{err}"
+    );
+    let (code, out, err) = run(Some("WORK G=54 Z=-100\n"));
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(
+        out.contains("carriages went X -0.5000 to 49.9200, Z -135.0000 to 0.0000"),
+        "{out}"
+    );
+    assert!(
+        out.contains("carriages ended at X49.9200 Z-50.1500, the registers at X50.0000 Z-50.0000 (off by X-0.0800 Z-0.1500"),
+        "{out}"
+    );
+    let (code, out, err) = run(Some("WORK G=54 Z=-100\nBACKLASH X=0.08 Z=0.15\n"));
+    assert_eq!(code, Some(0), "{out}{err}");
+    assert!(
+        out.contains(
+            "carriages ended at X50.0000 Z-50.0000, the registers at X50.0000 Z-50.0000\n"
+        ),
+        "{out}"
+    );
+    // A machine file with a mistake is named, and nothing runs.
+    let bad = std::env::temp_dir().join("machine-bad.toml");
+    std::fs::write(&bad, "[z.drive]\npitch = 5.0\n").unwrap();
+    let out = Command::new(BIN)
+        .args(["run", &program, "--machine", &bad.display().to_string()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0));
+    assert!(
+        err.contains("z.drive: `pitch` and `steps_per_rev` go together"),
+        "{err}"
+    );
+}
+
 #[test]
 fn run_expands_subprograms_and_names_what_it_cannot_expand() {
     let dir = std::env::temp_dir().join(format!("host-sim-expand-{}", std::process::id()));
