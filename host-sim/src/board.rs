@@ -80,6 +80,8 @@ struct Axes {
     /// The registers the lathe's nuts last followed: the steps issued
     /// since move them (registers set at rest do not).
     lathe_seen: ImpulsePoint,
+    /// When the board started: the lathe's spindle turns on this clock.
+    born: Instant,
 }
 
 /// How far the wall clock ran from the step clock over the runs.
@@ -154,13 +156,18 @@ pub struct PanelState {
     /// Where the lathe's carriages are, mm (X on the radius), the play of
     /// the leadscrews in it, when a machine file is behind the board.
     pub carriage: Option<[f64; 2]>,
+    /// The spindle encoder's counts since power-on, when the machine file
+    /// fits one.
+    pub encoder: Option<i64>,
 }
 
 impl PanelState {
-    /// `STATE X= Z= IN= S=`: the carriage (mm, X a diameter when the
-    /// session reads one; the lathe's, play included, with a machine
-    /// file), the active inputs (grbl's letters, `-` for
-    /// none), the spindle (rpm).
+    /// `STATE X= Z= IN= S= [ENC=]`: the carriage (mm, X a diameter when
+    /// the session reads one; the lathe's, play included, with a machine
+    /// file), the active inputs (grbl's letters, `-` for none), the
+    /// spindle (rpm: the commanded speed, or with a machine file the
+    /// speed its spindle turns at, measured by its encoder when it has
+    /// one), and the encoder's counts since power-on.
     pub fn line(&self) -> String {
         let mm = |n: i32, price: i64| n as f64 * price as f64 / 1e7;
         let [x, z] = self.carriage.unwrap_or([
@@ -173,8 +180,9 @@ impl PanelState {
         if letters.is_empty() {
             letters.push('-');
         }
+        let encoder = self.encoder.map_or(String::new(), |n| format!(" ENC={n}"));
         format!(
-            "STATE X={x:.4} Z={z:.4} IN={letters} S={:.3}",
+            "STATE X={x:.4} Z={z:.4} IN={letters} S={:.3}{encoder}",
             f64::from(self.spindle) / 1000.0
         )
     }
@@ -346,7 +354,22 @@ fn abort(a: &mut Axes) -> Aborted {
     a.outputs = Outputs::OFF;
     a.user_outputs = [false; 4];
     a.stepper.set_spindle(0);
+    spindle_follows(a);
     found
+}
+
+/// The lathe's spindle turns as the outputs now command it.
+fn spindle_follows(a: &mut Axes) {
+    let on = a.outputs.spindle != core_nostd::gcode::Spindle::Off;
+    let rpm = if on {
+        f64::from(a.outputs.rpm) / 1000.0
+    } else {
+        0.0
+    };
+    let now = a.born.elapsed().as_secs_f64();
+    if let Some(lathe) = a.lathe.as_mut() {
+        lathe.set_spindle(rpm, now);
+    }
 }
 
 /// The axes' thread: issues what is due, sleeps until the next tick.
@@ -396,6 +419,7 @@ fn axes_thread(shared: Arc<Shared>) {
                 let rpm = a.stepper.spindle();
                 if a.outputs.spindle != core_nostd::gcode::Spindle::Off {
                     a.outputs.rpm = rpm;
+                    spindle_follows(&mut a);
                 }
                 // Room for the next item: the protocol may go on.
                 shared.changed.notify_all();
@@ -579,6 +603,7 @@ impl<W: Write> Io for Protocol<W> {
         let mut a = self.shared.axes();
         a.stepper.set_spindle(outputs.rpm);
         a.outputs = *outputs;
+        spindle_follows(&mut a);
     }
 
     fn inputs_now(&mut self) -> Option<u16> {
@@ -906,6 +931,7 @@ impl Board {
                 lathe: None,
                 lathe_seen: ImpulsePoint::default(),
                 prices: (50_000, 100_000),
+                born: Instant::now(),
             }),
             work: Condvar::new(),
             changed: Condvar::new(),
@@ -1005,6 +1031,7 @@ impl Board {
         let active = lathe.moved([mm(p.x.0, hx), mm(p.z.0, hz)]);
         a.lathe = Some(lathe);
         a.lathe_seen = motor_of(&a);
+        spindle_follows(&mut a);
         let panel = self.shared.panel.load(Ordering::Acquire) | active;
         self.shared.panel_locked(&mut a, panel);
     }
@@ -1016,14 +1043,20 @@ impl Board {
 
     /// What the panel reads off the machine.
     pub fn state(&self) -> PanelState {
-        let (issued, spindle, carriage) = {
+        let (issued, mut spindle, carriage, now) = {
             let a = self.shared.axes();
+            let now = a.born.elapsed().as_secs_f64();
             (
                 issued_of(&a),
                 a.outputs.rpm,
                 a.lathe.as_ref().map(crate::lathe::Lathe::carriage),
+                a.lathe.as_ref().map(|l| l.spindle_at(now)),
             )
         };
+        // The lathe's spindle as it turns (measured by its encoder).
+        if let Some(now) = now {
+            spindle = (now.rpm * 1000.0).round() as u32;
+        }
         let (hx, hz, diam) = *self.shared.prices.lock().unwrap_or_else(|e| e.into_inner());
         PanelState {
             issued,
@@ -1032,6 +1065,7 @@ impl Board {
             inputs: self.inputs(),
             spindle,
             carriage,
+            encoder: now.and_then(|n| n.counts),
         }
     }
 

@@ -87,6 +87,30 @@ pub struct Axis {
     pub drive: Drive,
 }
 
+/// The spindle's encoder.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EncoderFile {
+    /// Counts per revolution (quadrature edges), an index once per turn.
+    pub cpr: u32,
+}
+
+/// The spindle.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SpindleFile {
+    /// The motor's top speed, rev/min: a higher `S` turns it at this.
+    #[serde(default)]
+    pub max_rpm: Option<f64>,
+    /// The speed's ripple once per turn, a fraction of it (0.02: ±2 %;
+    /// 0 to 0.5), as a belt or an unbalanced chuck gives.
+    #[serde(default)]
+    pub ripple: f64,
+    /// Its encoder, when one is fitted.
+    #[serde(default)]
+    pub encoder: Option<EncoderFile>,
+}
+
 /// The whole file.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -97,6 +121,9 @@ pub struct MachineFile {
     /// The carriage.
     #[serde(default)]
     pub z: Axis,
+    /// The spindle.
+    #[serde(default)]
+    pub spindle: Option<SpindleFile>,
 }
 
 impl MachineFile {
@@ -104,6 +131,24 @@ impl MachineFile {
     /// own message, with its line, or the field that is wrong).
     pub fn parse(text: &str) -> Result<MachineFile, String> {
         let m: MachineFile = toml::from_str(text).map_err(|e| e.to_string())?;
+        if let Some(sp) = &m.spindle {
+            if let Some(top) = sp.max_rpm {
+                if !(top.is_finite() && top > 0.0) {
+                    return Err(format!("spindle.max_rpm: above 0, not {top}"));
+                }
+            }
+            if !(sp.ripple.is_finite() && (0.0..=0.5).contains(&sp.ripple)) {
+                return Err(format!("spindle.ripple: 0 to 0.5, not {}", sp.ripple));
+            }
+            if let Some(e) = &sp.encoder {
+                if !(4..=1 << 20).contains(&e.cpr) {
+                    return Err(format!(
+                        "spindle.encoder.cpr: 4 to 1048576 counts a turn, not {}",
+                        e.cpr
+                    ));
+                }
+            }
+        }
         for (name, axis, sides) in [("x", &m.x, ["X-", "X+"]), ("z", &m.z, ["Z-", "Z+"])] {
             if !(axis.backlash.is_finite() && (0.0..=5.0).contains(&axis.backlash)) {
                 return Err(format!("{name}.backlash: 0 to 5 mm, not {}", axis.backlash));
@@ -183,12 +228,31 @@ pub struct Lathe {
     last: [Option<u64>; 2],
     /// The least and most each carriage has been at, mm.
     range: [[f64; 2]; 2],
+    /// The spindle since its speed last changed: when (s), the turns
+    /// before, and its motion since.
+    turning: (f64, f64, crate::spindle::Spindle),
+}
+
+/// What the panel reads off the spindle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpindleNow {
+    /// Its speed, rev/min: measured from the encoder's counts over the
+    /// last 0.1 s when one is fitted, else the motor's own.
+    pub rpm: f64,
+    /// The encoder's counts since power-on, when one is fitted.
+    pub counts: Option<i64>,
+}
+
+/// The file's spindle, or one with no limits and no encoder.
+fn file_spindle(file: &MachineFile) -> SpindleFile {
+    file.spindle.clone().unwrap_or_default()
 }
 
 impl Lathe {
     /// The lathe of `file`, its nuts and carriages where the registers
     /// put them first.
     pub fn new(file: MachineFile) -> Lathe {
+        let turning = (0.0, 0.0, Self::turning_at(&file_spindle(&file), 0.0));
         Lathe {
             file,
             carriage: [0.0; 2],
@@ -198,6 +262,53 @@ impl Lathe {
             fault: 0,
             last: [None; 2],
             range: [[f64::INFINITY, f64::NEG_INFINITY]; 2],
+            turning,
+        }
+    }
+
+    /// The spindle's motion at `rpm` as the file's spindle turns it.
+    fn turning_at(sp: &SpindleFile, rpm: f64) -> crate::spindle::Spindle {
+        crate::spindle::Spindle {
+            rpm: sp.max_rpm.map_or(rpm, |top| rpm.min(top)),
+            ripple: sp.ripple,
+            dips: Vec::new(),
+            cpr: sp.encoder.as_ref().map_or(4096, |e| e.cpr),
+        }
+    }
+
+    /// The spindle commanded to `rpm` (0: stopped) at `now` (s, the
+    /// board's clock): it turns on from where it was.
+    pub fn set_spindle(&mut self, rpm: f64, now: f64) {
+        let next = Self::turning_at(&file_spindle(&self.file), rpm);
+        let (start, before, model) = &self.turning;
+        if model.rpm == next.rpm {
+            return;
+        }
+        let turns = before + model.turns((now - start).max(0.0));
+        self.turning = (now, turns, next);
+    }
+
+    /// The spindle at `now` (s, the board's clock).
+    pub fn spindle_at(&self, now: f64) -> SpindleNow {
+        let (start, before, model) = &self.turning;
+        let t = (now - start).max(0.0);
+        let encoder = self.file.spindle.as_ref().and_then(|s| s.encoder.as_ref());
+        match encoder {
+            Some(e) => {
+                let turns = before + model.turns(t);
+                SpindleNow {
+                    rpm: if t > 0.0 && model.rpm > 0.0 {
+                        model.measured_rpm(t, 0.1)
+                    } else {
+                        0.0
+                    },
+                    counts: Some((turns * f64::from(e.cpr)).floor() as i64),
+                }
+            }
+            None => SpindleNow {
+                rpm: model.rpm,
+                counts: None,
+            },
         }
     }
 
@@ -376,6 +487,38 @@ hysteresis = 0.5
         assert!(lo == 0.0 && (hi - 0.065).abs() < 1e-12, "{lo} {hi}");
     }
 
+    /// The spindle turns at the commanded speed up to its top; its encoder
+    /// counts the turns on from where they were at each change.
+    #[test]
+    fn the_spindle_turns_up_to_its_top_and_its_encoder_counts() {
+        let file = "[spindle]\nmax_rpm = 2000.0\n[spindle.encoder]\ncpr = 1000\n";
+        let mut l = Lathe::new(MachineFile::parse(file).unwrap());
+        assert_eq!(l.spindle_at(5.0).counts, Some(0), "stopped at power-on");
+        l.set_spindle(600.0, 1.0);
+        // 600 rpm = 10 rev/s: 1.5 s later, 15 turns.
+        let now = l.spindle_at(2.5);
+        assert_eq!(now.counts, Some(15_000));
+        assert!((now.rpm - 600.0).abs() < 1.0, "{now:?}");
+        // 3000 asked, 2000 the top: 33.33 rev/s from 15 turns on.
+        l.set_spindle(3000.0, 2.5);
+        let now = l.spindle_at(3.1);
+        assert_eq!(now.counts, Some(15_000 + 20_000));
+        assert!((now.rpm - 2000.0).abs() < 1.0, "{now:?}");
+        l.set_spindle(0.0, 3.1);
+        let now = l.spindle_at(9.0);
+        assert_eq!((now.counts, now.rpm), (Some(35_000), 0.0));
+        // Without an encoder the panel shows the motor's speed.
+        let mut l = Lathe::new(MachineFile::parse("[spindle]\nmax_rpm = 1500.0\n").unwrap());
+        l.set_spindle(1800.0, 0.0);
+        assert_eq!(
+            l.spindle_at(1.0),
+            SpindleNow {
+                rpm: 1500.0,
+                counts: None
+            }
+        );
+    }
+
     #[test]
     fn a_bad_file_is_refused_by_name() {
         for (text, why) in [
@@ -401,6 +544,12 @@ hysteresis = 0.5
             ),
             ("[z.drive]\nmax_rate = 0\n", "z.drive.max_rate: above 0"),
             ("[z.drive]\nvolts = 48\n", "unknown field `volts`"),
+            ("[spindle]\nripple = 0.9\n", "spindle.ripple: 0 to 0.5"),
+            (
+                "[spindle.encoder]\ncpr = 1\n",
+                "spindle.encoder.cpr: 4 to 1048576",
+            ),
+            ("[spindle]\nmax_rpm = -5.0\n", "spindle.max_rpm: above 0"),
         ] {
             let e = MachineFile::parse(text).unwrap_err();
             assert!(e.contains(why), "{text:?}: {e}");

@@ -363,7 +363,8 @@ enum Command {
         #[arg(long, default_value = "iso", value_parser = ["iso", "fanuc"])]
         dialect: String,
         /// The lathe behind the board (TOML: each axis' travel, switches,
-        /// leadscrew play and drive; `examples/machine.toml`): its
+        /// leadscrew play and drive, the spindle and its encoder;
+        /// `examples/machine.toml`): its
         /// carriages trip the switches as the steps move them, and a drive
         /// driven faster than it follows stalls and raises its fault.
         #[arg(long, value_name = "FILE")]
@@ -1331,6 +1332,11 @@ fn machine_report(
     }
     print_refused(f, setup_name, setup, r);
     let at = |c: [f64; 2]| format!("X{:.4} Z{:.4}", c[0], c[1]);
+    if let Some((line, rpm, top)) = run.over_top {
+        eprintln!(
+            "{f}:{line}: warning: S{rpm} is above the spindle's top speed: it turns at {top} rpm"
+        );
+    }
     if let Some(t) = &run.trip {
         let what: Vec<String> = ALL
             .iter()

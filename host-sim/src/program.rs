@@ -156,6 +156,9 @@ struct Watch {
     /// The first stop: the event's number (from 1), the inputs that rose
     /// (none: a carriage ran past the end of its travel), the carriages.
     trip: Option<(u64, u16, [f64; 2])>,
+    /// The first speed asked above the spindle's top: the line, rpm, the
+    /// top.
+    over_top: Option<(usize, f64, f64)>,
 }
 
 impl Watch {
@@ -202,6 +205,17 @@ impl Io for Tally {
     fn run_start(&mut self) {
         if let Some(w) = self.watch.as_mut() {
             w.lathe.run_start();
+        }
+    }
+    fn outputs(&mut self, outputs: &core_nostd::outputs::Outputs) {
+        let Some(w) = self.watch.as_mut() else {
+            return;
+        };
+        let top = w.lathe.file().spindle.as_ref().and_then(|s| s.max_rpm);
+        let rpm = f64::from(outputs.rpm) / 1000.0;
+        let on = outputs.spindle != core_nostd::gcode::Spindle::Off;
+        if let Some(top) = top.filter(|&top| on && rpm > top) {
+            w.over_top = w.over_top.or(Some((self.line, rpm, top)));
         }
     }
     fn step(&mut self, event: StepEvent, tick: u64, _: &DriveTiming) {
@@ -419,6 +433,10 @@ pub struct MachineRun {
     pub carriage: [f64; 2],
     /// Where the registers say they are, mm (X on the radius).
     pub registers: [f64; 2],
+    /// The first spindle speed commanded above the spindle's top
+    /// (`max_rpm`): the line, the speed and the top, rpm. (Under `G96` the speed
+    /// changes at block starts, which are not seen here.)
+    pub over_top: Option<(usize, f64, f64)>,
 }
 
 /// A switch or a drive that stopped the machine, or the end of a travel
@@ -462,6 +480,7 @@ pub fn run_machine(
         range: [[0.0; 2]; 2],
         carriage: [0.0; 2],
         registers: [0.0; 2],
+        over_top: None,
     });
     if let Some(trip) = run.trip.as_mut() {
         if trip.event > 0 {
@@ -588,6 +607,7 @@ fn run_inner(
             price,
             stops: *stops,
             trip: (active & stops != 0).then_some((0, active & stops, at)),
+            over_top: None,
         });
     }
     // A trip reaches the device (its alarm) once; nothing more is sent.
@@ -798,6 +818,7 @@ fn run_inner(
                 range: w.lathe.range(),
                 carriage: w.lathe.carriage(),
                 registers: at,
+                over_top: w.over_top,
             })
         }
         None => None,

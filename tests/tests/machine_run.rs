@@ -136,3 +136,41 @@ fn the_play_shows_where_the_carriages_end_unless_taken_up() {
         );
     }
 }
+
+/// `serve --machine` with a spindle and its encoder: the panel's `STATE?`
+/// gives the speed the encoder measures (the top, not the `S` above it)
+/// and counts that advance at that speed, and stand still once stopped.
+#[test]
+fn the_panel_reads_the_spindle_by_its_encoder() {
+    use host_sim::board::Pace;
+    let file = "[spindle]\nmax_rpm = 2000.0\nripple = 0.02\n[spindle.encoder]\ncpr = 4096\n";
+    let (board, mut c) = tests::lathe_board_paced(file, "", false, Pace::Unpaced);
+    let read = |board: &host_sim::board::Board| {
+        let state = board.panel_line("STATE?").expect("state").expect("a line");
+        let v = |k: &str| -> f64 {
+            host_sim::link::words_value(&state, k)
+                .and_then(|v| v.parse().ok())
+                .expect(&state)
+        };
+        (v("S"), v("ENC"), std::time::Instant::now())
+    };
+    assert_eq!(read(&board).0, 0.0);
+    let r = tests::ask(&mut c, "M3 S3000");
+    assert!(r.is_ok(), "{r:?}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (s, n0, t0) = read(&board);
+    // The ripple (±2 %) within the encoder's 0.1 s window.
+    assert!((s - 2000.0).abs() <= 2000.0 * 0.03, "S={s}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (_, n1, t1) = read(&board);
+    let expected = 2000.0 / 60.0 * 4096.0 * (t1 - t0).as_secs_f64();
+    assert!(
+        ((n1 - n0) - expected).abs() <= expected * 0.1,
+        "{n0} → {n1}, {expected} expected"
+    );
+    assert!(tests::ask(&mut c, "M5").is_ok());
+    let (s, n2, _) = read(&board);
+    std::thread::sleep(std::time::Duration::from_millis(100));
+    let (_, n3, _) = read(&board);
+    assert_eq!((s, n2), (0.0, n3), "stopped");
+}
