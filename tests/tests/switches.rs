@@ -344,9 +344,12 @@ fn the_paced_firmware_homes_on_its_switch() {
     assert!(ask(&mut client, "INPUT USED=Z- FILTER=0").starts_with("OK"));
     let set = ask(
         &mut client,
-        "HOMING AXES=Z DIRZ=- HOMEZ=-1.5 TRAVELZ=30 SEEK=900 LOCATE=120 PULLOFF=0.5",
+        "HOMING AXES=Z DIRZ=- HOMEZ=-1.5 TRAVELZ=30 SEEK=900 LOCATE=120 PULLOFF=0.5 SOFT=1",
     );
     assert!(set.starts_with("OK AXES=Z DIRX=+ DIRZ=-"), "{set}");
+    // Not homed yet: soft limits refuse nothing.
+    assert!(ask(&mut client, "MOVE Z=1").starts_with("OK"));
+    assert!(ask(&mut client, "MOVE Z=0").starts_with("OK"));
     panel.sample(QUIET, 3).unwrap();
     // The switch reads active from −20 mm down, released from −19.8 mm
     // up (a switch's hysteresis).
@@ -370,6 +373,70 @@ fn the_paced_firmware_homes_on_its_switch() {
         status.starts_with("OK STATE=IDLE") && !status.contains("LOST"),
         "{status}"
     );
+    // Homed with soft limits: the travel is Z −1.5 to 28.5. A request past
+    // it is refused naming the axis; a program's block too, and the
+    // program stops there (alarm 2) until unlocked.
+    for request in ["MOVE Z=-1.6", "MOVE Z=28.6 F=900", "G01 Z-2 F500"] {
+        let mut r = ask(&mut client, request);
+        if request.starts_with('G') {
+            // A program's block: the alarm first, as the board reports it.
+            assert!(r.starts_with("!ALARM CODE=2 INPUT=- PX=0 PZ=-150"), "{r}");
+            r = board_line(&client.read_line().unwrap());
+        }
+        assert!(
+            r.starts_with("ERR RANGE Z would leave its travel"),
+            "{request}: {r}"
+        );
+    }
+    let locked = ask(&mut client, "G00 Z0");
+    assert!(
+        locked.starts_with("ERR ALARM 2: a block would have left the travel"),
+        "{locked}"
+    );
+    assert!(ask(&mut client, "UNLOCK").starts_with("OK LOST=0"));
+    assert!(ask(&mut client, "G01 Z28.5 F900").starts_with("OK"));
+    // A jog clipped (JOGCLIP=1): it runs up to the travel's end.
+    assert!(ask(&mut client, "HOMING JOGCLIP=1").contains(" SOFT=1 JOGCLIP=1"));
+    let r = ask(&mut client, "MOVE Z=-5 F=900");
+    assert_eq!(value(&r, "PZ"), -150, "clipped at Z −1.5: {r}");
+    assert!(ask(&mut client, "SYNC").starts_with("OK"));
+    let pos = ask(&mut client, "POS");
+    assert!(pos.starts_with("OK PX=0 PZ=-150 "), "{pos}");
+}
+
+/// A homing seek that runs its whole length without its switch: alarm 9,
+/// the position lost, everything refused until unlocked.
+#[test]
+fn the_firmware_raises_alarm_9_when_homing_finds_no_switch() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client, mut panel, _one) = booted("homing-alarm-9", "qemu");
+    assert!(ask(&mut client, "INPUT USED=Z- FILTER=0").starts_with("OK"));
+    assert!(ask(&mut client, "HOMING AXES=Z DIRZ=- TRAVELZ=2 SEEK=900").starts_with("OK"));
+    panel.sample(QUIET, 3).unwrap();
+    client.write_raw(b"HOME\n").unwrap();
+    let mut got = Vec::new();
+    let reply = loop {
+        let l = board_line(&client.read_line().unwrap());
+        if l.starts_with("ERR") || l.starts_with("OK") {
+            break l;
+        }
+        got.push(l);
+    };
+    assert!(
+        reply.starts_with("ERR ALARM 9: homing did not find"),
+        "{got:?} {reply}"
+    );
+    assert!(
+        got.iter()
+            .any(|l| l.starts_with("!ALARM CODE=9 INPUT=Z- AXIS=Z PX=0 PZ=-300")),
+        "the whole seek (1.5 × 2 mm) ran: {got:?}"
+    );
+    let refused = ask(&mut client, "MOVE Z=0");
+    assert!(refused.starts_with("ERR ALARM 9"), "{refused}");
+    assert!(ask(&mut client, "UNLOCK").starts_with("OK LOST=1"));
+    assert!(ask(&mut client, "MOVE Z=0").starts_with("OK"));
 }
 
 /// Probing on the paced firmware: `G38.2` toward a probe the harness
