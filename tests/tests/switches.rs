@@ -404,6 +404,98 @@ fn the_paced_firmware_homes_on_its_switch() {
     assert!(pos.starts_with("OK PX=0 PZ=-150 "), "{pos}");
 }
 
+/// Homing's other failures on the paced firmware: a pull-off shorter than
+/// the switch's hysteresis leaves it pressed (alarm 8, after the seek
+/// found it), and a reset during the seek stops it part of the way (alarm
+/// 6, then the reset's own `!RESET`); each locks the machine until it
+/// homes again, which then succeeds.
+#[test]
+fn the_paced_firmware_raises_homings_alarms_8_and_6() {
+    if !qemu_or_skip() {
+        return;
+    }
+    let (_qemu, mut client, mut panel, _one) = booted("homing-alarms", "qemu-paced");
+    assert!(ask(&mut client, "INPUT USED=Z- FILTER=0").starts_with("OK"));
+    let set = ask(
+        &mut client,
+        "HOMING AXES=Z DIRZ=- TRAVELZ=30 SEEK=900 LOCATE=120 PULLOFF=0.1",
+    );
+    assert!(set.starts_with("OK AXES=Z"), "{set}");
+    panel.sample(QUIET, 3).unwrap();
+    // The switch at −20 mm, releasing 0.2 mm above: more than the pull-off.
+    let switch = |pz: i64, was: bool| if was { pz <= -1_980 } else { pz <= -2_000 };
+    let home = follow(
+        &mut client,
+        &mut panel,
+        "HOME",
+        Input::LimitZMinus.bit(),
+        false,
+        switch,
+    );
+    assert!(
+        home.last
+            .starts_with("ERR ALARM 8: the pull-off left the switch pressed"),
+        "{home:?}",
+        home = (&home.reports, &home.last)
+    );
+    assert!(home.active, "still on the switch");
+    assert!(
+        home.reports
+            .iter()
+            .any(|l| l.starts_with("!ALARM CODE=8 INPUT=Z- AXIS=Z")),
+        "{:?}",
+        home.reports
+    );
+    assert!(ask(&mut client, "MOVE Z=0").starts_with("ERR ALARM 8"));
+    // A longer pull-off homes.
+    assert!(ask(&mut client, "HOMING PULLOFF=0.5").starts_with("OK"));
+    let home = follow(
+        &mut client,
+        &mut panel,
+        "HOME",
+        Input::LimitZMinus.bit(),
+        true,
+        switch,
+    );
+    assert!(
+        home.last.starts_with("OK MX=0 MZ=0"),
+        "{:?}",
+        (&home.reports, &home.last)
+    );
+    // A reset 300 ms into a seek of up to 45 mm at 900 mm/min (3 s).
+    assert!(ask(&mut client, "MOVE Z=10 F=3000").starts_with("OK"));
+    assert!(ask(&mut client, "SYNC").starts_with("OK"));
+    client.write_raw(b"HOME\n").unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    client.write_raw(&[0x18]).unwrap();
+    let mut got = Vec::new();
+    let reply = loop {
+        let l = board_line(&client.read_line().unwrap());
+        if l.starts_with("ERR") || l.starts_with("OK") {
+            break l;
+        }
+        got.push(l);
+    };
+    assert!(
+        reply.starts_with("ERR ALARM 6: a reset stopped the homing"),
+        "{got:?} {reply}"
+    );
+    assert!(
+        got.iter()
+            .any(|l| l.starts_with("!ALARM CODE=6 INPUT=Z- AXIS=Z")),
+        "{got:?}"
+    );
+    let reset = board_line(&client.read_line().unwrap());
+    assert!(reset.starts_with("!RESET "), "{reset}");
+    let status = ask(&mut client, "STATUS");
+    assert!(status.contains(" ALARM=6"), "{status}");
+    let pz = value(&status, "PZ");
+    assert!(
+        (-1_900..900).contains(&pz),
+        "stopped part of the way: {status}"
+    );
+}
+
 /// A homing seek that runs its whole length without its switch: alarm 9,
 /// the position lost, everything refused until unlocked.
 #[test]
