@@ -400,27 +400,29 @@ fn run_on_a_machine_stops_at_a_switch_and_shows_the_play() {
         ),
         "{out}"
     );
+    // The program on a machine of `text` (a file named `name`): the exit
+    // status and stderr.
+    let on = |name: &str, text: &str| {
+        let file = std::env::temp_dir().join(name);
+        std::fs::write(&file, text).unwrap();
+        let out = Command::new(BIN)
+            .args(["run", &program, "--machine", &file.display().to_string()])
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
     // A spindle slower than the program asks: warned of, by its line.
-    let slow = std::env::temp_dir().join("machine-slow-spindle.toml");
-    std::fs::write(&slow, "[spindle]\nmax_rpm = 500.0\n").unwrap();
-    let out = Command::new(BIN)
-        .args(["run", &program, "--machine", &slow.display().to_string()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (_, err) = on("machine-slow-spindle.toml", "[spindle]\nmax_rpm = 500.0\n");
     assert!(
         err.contains("fanuc-cycles.nc:5: warning: S800 is above the spindle's top speed: it turns at 500 rpm"),
         "{err}"
     );
     // A machine file with a mistake is named, and nothing runs.
-    let bad = std::env::temp_dir().join("machine-bad.toml");
-    std::fs::write(&bad, "[z.drive]\npitch = 5.0\n").unwrap();
-    let out = Command::new(BIN)
-        .args(["run", &program, "--machine", &bad.display().to_string()])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_ne!(out.status.code(), Some(0));
+    let (code, err) = on("machine-bad.toml", "[z.drive]\npitch = 5.0\n");
+    assert_ne!(code, Some(0));
     assert!(
         err.contains("z.drive: `pitch` and `steps_per_rev` go together"),
         "{err}"

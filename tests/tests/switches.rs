@@ -404,6 +404,29 @@ fn the_paced_firmware_homes_on_its_switch() {
     assert!(pos.starts_with("OK PX=0 PZ=-150 "), "{pos}");
 }
 
+/// Reads a failed `HOME` of Z on its minus switch: the `!ALARM` line of
+/// `code` (its words after `AXIS=Z` starting with `then`), then the
+/// request's `ERR ALARM` saying `why`.
+fn homing_failed(client: &mut Client, code: u8, why: &str, then: &str) {
+    let mut got = Vec::new();
+    let reply = loop {
+        let l = board_line(&client.read_line().unwrap());
+        if l.starts_with("ERR") || l.starts_with("OK") {
+            break l;
+        }
+        got.push(l);
+    };
+    assert!(
+        reply.starts_with(&format!("ERR ALARM {code}: {why}")),
+        "{got:?} {reply}"
+    );
+    let alarm = format!("!ALARM CODE={code} INPUT=Z- AXIS=Z{then}");
+    assert!(
+        got.iter().any(|l| l.starts_with(&alarm)),
+        "{alarm}: {got:?}"
+    );
+}
+
 /// Homing's other failures on the paced firmware: a pull-off shorter than
 /// the switch's hysteresis leaves it pressed (alarm 8, after the seek
 /// found it), and a reset during the seek stops it part of the way (alarm
@@ -468,23 +491,7 @@ fn the_paced_firmware_raises_homings_alarms_8_and_6() {
     client.write_raw(b"HOME\n").unwrap();
     std::thread::sleep(Duration::from_millis(300));
     client.write_raw(&[0x18]).unwrap();
-    let mut got = Vec::new();
-    let reply = loop {
-        let l = board_line(&client.read_line().unwrap());
-        if l.starts_with("ERR") || l.starts_with("OK") {
-            break l;
-        }
-        got.push(l);
-    };
-    assert!(
-        reply.starts_with("ERR ALARM 6: a reset stopped the homing"),
-        "{got:?} {reply}"
-    );
-    assert!(
-        got.iter()
-            .any(|l| l.starts_with("!ALARM CODE=6 INPUT=Z- AXIS=Z")),
-        "{got:?}"
-    );
+    homing_failed(&mut client, 6, "a reset stopped the homing", "");
     let reset = board_line(&client.read_line().unwrap());
     assert!(reset.starts_with("!RESET "), "{reset}");
     let status = ask(&mut client, "STATUS");
@@ -508,23 +515,8 @@ fn the_firmware_raises_alarm_9_when_homing_finds_no_switch() {
     assert!(ask(&mut client, "HOMING AXES=Z DIRZ=- TRAVELZ=2 SEEK=900").starts_with("OK"));
     panel.sample(QUIET, 3).unwrap();
     client.write_raw(b"HOME\n").unwrap();
-    let mut got = Vec::new();
-    let reply = loop {
-        let l = board_line(&client.read_line().unwrap());
-        if l.starts_with("ERR") || l.starts_with("OK") {
-            break l;
-        }
-        got.push(l);
-    };
-    assert!(
-        reply.starts_with("ERR ALARM 9: homing did not find"),
-        "{got:?} {reply}"
-    );
-    assert!(
-        got.iter()
-            .any(|l| l.starts_with("!ALARM CODE=9 INPUT=Z- AXIS=Z PX=0 PZ=-300")),
-        "the whole seek (1.5 × 2 mm) ran: {got:?}"
-    );
+    // The whole seek, 1.5 × 2 mm, ran.
+    homing_failed(&mut client, 9, "homing did not find", " PX=0 PZ=-300");
     let refused = ask(&mut client, "MOVE Z=0");
     assert!(refused.starts_with("ERR ALARM 9"), "{refused}");
     assert!(ask(&mut client, "UNLOCK").starts_with("OK LOST=1"));
