@@ -1331,7 +1331,9 @@ fn machine_report(
         return ExitCode::from(1);
     }
     print_refused(f, setup_name, setup, r);
-    let at = |c: [f64; 2]| format!("X{:.4} Z{:.4}", c[0], c[1]);
+    // mm to 4 decimals, without a minus on a zero.
+    let mm = |v: f64| format!("{:.4}", (v * 1e4).round() / 1e4 + 0.0);
+    let at = |c: [f64; 2]| format!("X{} Z{}", mm(c[0]), mm(c[1]));
     if let Some((line, rpm, top)) = run.over_top {
         eprintln!(
             "{f}:{line}: warning: S{rpm} is above the spindle's top speed: it turns at {top} rpm"
@@ -1358,13 +1360,15 @@ fn machine_report(
             None if t.event == 0 => format!("{f}: before the first line"),
             None => format!("{f}: at the end"),
         };
-        let alarm = if t.alarm.is_empty() {
-            String::new()
-        } else {
-            format!("; the board: {}", t.alarm)
-        };
+        // The alarm's number (its line's registers are what the board
+        // had issued ahead on the virtual clock, not where it stopped).
+        let code = t
+            .alarm
+            .split(' ')
+            .find_map(|w| w.strip_prefix("CODE="))
+            .map_or(String::new(), |c| format!("; the board's alarm {c}"));
         eprintln!(
-            "{place}: {what}, the carriages at {} (machine mm, X on the radius){alarm}; the program stopped there, {} not sent",
+            "{place}: {what}, the carriages at {} (machine mm, X on the radius){code}; the program stopped there, {} not sent",
             at(t.carriage),
             match t.lines_left {
                 1 => "1 line".to_string(),
@@ -1373,13 +1377,22 @@ fn machine_report(
         );
     }
     let [[x0, x1], [z0, z1]] = run.range;
+    let ran = if run.trip.is_some() {
+        "lines sent before it stopped"
+    } else {
+        "blocks run"
+    };
     println!(
-        "{f}: {} blocks run, {} refused on {name}",
+        "{f}: {} {ran}, {} refused on {name}",
         r.blocks,
         r.refused.len()
     );
     println!(
-        "carriages went X {x0:.4} to {x1:.4}, Z {z0:.4} to {z1:.4} (machine mm, X on the radius)"
+        "carriages went X {} to {}, Z {} to {} (machine mm, X on the radius)",
+        mm(x0),
+        mm(x1),
+        mm(z0),
+        mm(z1)
     );
     if run.trip.is_some() {
         // Stopped at once: the registers hold what the board had issued.
@@ -1391,8 +1404,9 @@ fn machine_report(
     ];
     let play = if off.iter().any(|d| d.abs() > 1e-6) {
         format!(
-            " (off by X{:.4} Z{:.4}: the leadscrews' play not taken up, see BACKLASH, or a drive that lost steps)",
-            off[0], off[1]
+            " (off by X{} Z{}: the leadscrews' play not taken up, see BACKLASH, or a drive that lost steps)",
+            mm(off[0]),
+            mm(off[1])
         )
     } else {
         String::new()

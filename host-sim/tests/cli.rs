@@ -377,7 +377,11 @@ fn run_on_a_machine_stops_at_a_switch_and_shows_the_play() {
         err.contains("fanuc-cycles.nc:32: limit Z+ tripped, the carriages at X18.0250 Z4.0000"),
         "{err}"
     );
-    assert!(err.contains("!ALARM CODE=1 INPUT=Z+"), "{err}");
+    assert!(err.contains("; the board's alarm 1; "), "{err}");
+    assert!(
+        out.contains("fanuc-cycles.nc: 33 lines sent before it stopped, 0 refused"),
+        "{out}"
+    );
     assert!(
         err.contains("the program stopped there, 1 line not sent"),
         "{err}"
