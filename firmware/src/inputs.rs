@@ -10,9 +10,11 @@
 //! ([`take_stop`]), thread mode its changes ([`take_changed`]).
 //!
 //! The sampler runs at the supervisor's priority, above the step
-//! interrupt. On the board the supervisor pends it every 1 ms; under QEMU,
-//! which has no GPIO, every sample comes from the test harness over
-//! USART2 ([`crate::board::Panel`]).
+//! interrupt. On the board the supervisor pends it every 1 ms, and an edge
+//! on a stopping switch (the E-stop, a limit) pends it at once when no
+//! filter is set ([`edge`]); under QEMU, which has no GPIO, every sample
+//! comes from the test harness over USART2 ([`crate::board::Panel`]),
+//! which raises a stopping switch's edge interrupt as the pin would.
 
 use crate::board;
 use core::sync::atomic::{AtomicBool, AtomicI32, AtomicU16, AtomicU8, Ordering};
@@ -126,6 +128,24 @@ pub fn take_stop() -> bool {
     STOPPED.swap(false, Ordering::AcqRel)
 }
 
+/// Whether the inputs are filtered (a filter of 1 ms or more is set).
+pub fn filtered() -> bool {
+    FILTER.load(Ordering::Relaxed) != 0
+}
+
+/// An edge on a stopping switch (its EXTI interrupt, at the sampler's
+/// priority): with no filter the pins are sampled at once (the sampler
+/// pended, tail-chained after this); with one, the millisecond's samples
+/// wait it out as before. The lines stay masked until the next
+/// millisecond.
+#[inline(always)]
+pub fn edge() {
+    board::edges_take();
+    if !filtered() {
+        NVIC::pend(board::SAMPLER_IRQ);
+    }
+}
+
 /// The sampler's state: the filter, the wheel's counter as last read.
 pub struct Sampler {
     filter: Filter,
@@ -196,10 +216,10 @@ impl Sampler {
         // real-time task.
         if rose & (Input::Door.bit() | Input::Hold.bit()) != 0 {
             HOLD.store(true, Ordering::Release);
-            NVIC::pend(Interrupt::EXTI1);
+            NVIC::pend(board::REALTIME_IRQ);
         } else if rose & Input::Start.bit() != 0 && active & Input::Door.bit() == 0 {
             RESUME.store(true, Ordering::Release);
-            NVIC::pend(Interrupt::EXTI1);
+            NVIC::pend(board::REALTIME_IRQ);
         }
         changed
     }
@@ -220,7 +240,7 @@ fn stop_steps() {
     board::step_outputs_low();
     NVIC::mask(Interrupt::TIM5);
     STOPPED.store(true, Ordering::Release);
-    NVIC::pend(Interrupt::EXTI1);
+    NVIC::pend(board::REALTIME_IRQ);
 }
 
 /// After the real-time task has stopped the step interrupt and dropped its

@@ -7,12 +7,13 @@
 //! | priority | task | bound to | timing contract |
 //! |---|---|---|---|
 //! | 5 | supervisor | TIM3, every 1 ms | judges and kicks the watchdog, pends the sampler; shares atomics only |
-//! | 5 | inputs | EXTI2, pended every 1 ms (under QEMU by the panel on USART2) | samples and filters the switches; a stop drives the outputs low and masks the step interrupt at once |
+//! | 5 | inputs | EXTI2 (no switch on line 2), pended every 1 ms (under QEMU by the panel on USART2), and at once by a stopping switch's edge without a filter | samples and filters the switches; a stop drives the outputs low and masks the step interrupt at once |
+//! | 5 | edges | EXTI0, EXTI1, EXTI4, EXTI9_5: the E-stop's and the limits' pins | masks the lines until the next millisecond, pends the sample when no filter is set |
 //! | 4 | step | TIM5 (alarm), pended | pops a ready entry, writes the pins, arms the next alarm: about 105 instructions a step |
 //! | 4 | pulse end | SysTick | STEP lines low: a few instructions (under paced QEMU SysTick is the step alarm) |
-//! | 3 | prep | EXTI0, pended | fills the ready queue (255 entries) from the stepper |
+//! | 3 | prep | SPI1's vector, pended | fills the ready queue (255 entries) from the stepper |
 //! | 2 | receive | USART1 | buffers a byte or queues a real-time byte: under 100 instructions |
-//! | 1 | real-time | EXTI1, pended | hold, resume, reset, status request, in order |
+//! | 1 | real-time | SPI2's vector, pended | hold, resume, reset, status request, in order |
 //! | 0 | protocol | idle | parses, plans, answers; may run for 0.4 s (the longest arc's check) |
 #![no_std]
 #![no_main]
@@ -181,18 +182,49 @@ mod app {
         cx.local.supervisor.check();
     }
 
-    /// The switches' sample: every 1 ms from the supervisor.
+    /// The switches' sample: every 1 ms from the supervisor, at once on a
+    /// stopping switch's edge (`board::SAMPLER_IRQ`).
     #[task(binds = EXTI2, priority = 5, local = [sampler])]
     fn sample_inputs(cx: sample_inputs::Context) {
         cx.local.sampler.sample();
+    }
+
+    /// The E-stop's edge (PA0).
+    #[task(binds = EXTI0, priority = 5)]
+    fn edge_estop(_: edge_estop::Context) {
+        firmware::inputs::edge();
+    }
+
+    /// X−'s edge (PA1).
+    #[task(binds = EXTI1, priority = 5)]
+    fn edge_x_minus(_: edge_x_minus::Context) {
+        firmware::inputs::edge();
+    }
+
+    /// X+'s edge (PA4).
+    #[task(binds = EXTI4, priority = 5)]
+    fn edge_x_plus(_: edge_x_plus::Context) {
+        firmware::inputs::edge();
+    }
+
+    /// Z−'s and Z+'s edges (PA5, PA6).
+    #[task(binds = EXTI9_5, priority = 5)]
+    fn edge_z(_: edge_z::Context) {
+        firmware::inputs::edge();
     }
 
     /// The test harness's panel under QEMU: each sample it completes is
     /// sampled at once (the board has no such port).
     #[task(binds = USART2, priority = 5, local = [panel])]
     fn panel(cx: panel::Context) {
-        if cx.local.panel.receive() {
-            rtic::pend(stm32f4::stm32f405::Interrupt::EXTI2);
+        match cx.local.panel.receive() {
+            board::PanelSample::None => {}
+            // Without a filter the edge's own interrupt samples, as on
+            // the board; with one, the sample is the millisecond's.
+            board::PanelSample::Edge if !firmware::inputs::filtered() => {}
+            board::PanelSample::Edge | board::PanelSample::Sample => {
+                rtic::pend(board::SAMPLER_IRQ);
+            }
         }
     }
 
@@ -208,8 +240,9 @@ mod app {
         step::systick();
     }
 
-    /// The prep stage: fills the ready queue.
-    #[task(binds = EXTI0, priority = 3, shared = [prep])]
+    /// The prep stage: fills the ready queue (SPI1's vector,
+    /// `board::PREP_IRQ`).
+    #[task(binds = SPI1, priority = 3, shared = [prep])]
     fn prep_stage(mut cx: prep_stage::Context) {
         cx.shared.prep.lock(|p| p.fill());
     }
@@ -220,8 +253,8 @@ mod app {
         cx.local.receiver.receive();
     }
 
-    /// Real-time bytes, in order.
-    #[task(binds = EXTI1, priority = 1, shared = [prep, step], local = [realtime])]
+    /// Real-time bytes, in order (SPI2's vector, `board::REALTIME_IRQ`).
+    #[task(binds = SPI2, priority = 1, shared = [prep, step], local = [realtime])]
     fn realtime(cx: realtime::Context) {
         let rx = cx.local.realtime;
         let (mut prep, mut step) = (cx.shared.prep, cx.shared.step);

@@ -13,7 +13,6 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use core_nostd::protocol::grbl::GrblRealtime;
 use core_nostd::protocol::Realtime;
 use heapless::spsc::{Consumer, Producer};
-use stm32f4::stm32f405::Interrupt;
 
 /// Bytes received and not yet handled by the protocol. When it is full
 /// the receive interrupt leaves the next byte in the UART and masks
@@ -114,7 +113,7 @@ impl Receiver {
             if self.realtime.enqueue(event).is_err() && rt == Realtime::Reset {
                 RESET_LOST.store(true, Ordering::Release);
             }
-            rtic::pend(Interrupt::EXTI1);
+            rtic::pend(crate::board::REALTIME_IRQ);
         }
         if forward {
             // Room was checked.

@@ -74,10 +74,10 @@ pub fn is_idle() -> bool {
     IDLE.load(Ordering::Acquire)
 }
 
-/// Has the prep task fill the queue (EXTI0 is its interrupt).
+/// Has the prep task fill the queue (its interrupt: [`crate::board::PREP_IRQ`]).
 #[inline(always)]
 pub fn pend_prep() {
-    rtic::pend(stm32f4::stm32f405::Interrupt::EXTI0);
+    rtic::pend(crate::board::PREP_IRQ);
 }
 
 /// Has the step interrupt look at the queue now.

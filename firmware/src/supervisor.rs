@@ -151,8 +151,10 @@ impl Supervisor {
     pub fn check(&mut self) {
         // SAFETY: writing 0 clears TIM3's update flag.
         self.tim3.sr().write(|w| unsafe { w.bits(0) });
-        // The switches' sample, every 1 ms, at this priority.
-        pac::NVIC::pend(Interrupt::EXTI2);
+        // The switches' sample, every 1 ms, at this priority; their edges
+        // interrupt again.
+        crate::board::edges_unmask();
+        pac::NVIC::pend(crate::board::SAMPLER_IRQ);
         let now = crate::board::ticks();
         let beat = BEAT.load(Ordering::Relaxed);
         if FLASHING.load(Ordering::Acquire) {

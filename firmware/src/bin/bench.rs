@@ -1126,9 +1126,26 @@ fn switches(tim: &StepTimer) {
         centi_us / 100,
         centi_us % 100
     ));
-    // The step interrupt was masked by the stop: free again.
+    // The step interrupt was masked by the stop: free again; released.
     firmware::inputs::unmask_step();
     let _ = firmware::inputs::take_stop();
+    sampler.sample_pins(quiet);
+    // From the pin's edge: its EXTI interrupt (the lines masked, the
+    // sample pended), then the sample that stops, tail-chained.
+    let edge = measure(tim, || {
+        firmware::inputs::edge();
+        core::hint::black_box(sampler.sample_pins(core::hint::black_box(0)));
+    });
+    cortex_m::peripheral::NVIC::unpend(firmware::board::SAMPLER_IRQ);
+    let centi_us = u64::from(edge) * 100 / 168;
+    Line::print(format_args!(
+        "stopping switch's edge to the outputs low (no filter): at most {edge} instructions ({}.{:02} us at 168 MHz), plus the core's 12 cycles of interrupt entry and 6 of tail-chaining",
+        centi_us / 100,
+        centi_us % 100
+    ));
+    firmware::inputs::unmask_step();
+    let _ = firmware::inputs::take_stop();
+    firmware::board::edges_unmask();
 }
 
 /// Ends the run: QEMU exits.

@@ -7,7 +7,7 @@
 //! | X STEP / X DIR | PC0 / PC1 | push-pull |
 //! | Z STEP / Z DIR | PC2 / PC3 | push-pull |
 //! | spindle and coolant | PB6 … PB10 | [`spindle`] |
-//! | E-stop, X−, X+, Z−, Z+ | PA0, PA1, PA4, PA5, PA6 | inputs, pull-up ([`input_pins`]) |
+//! | E-stop, X−, X+, Z−, Z+ | PA0, PA1, PA4, PA5, PA6 | inputs, pull-up ([`input_pins`]); either edge interrupts (EXTI0, EXTI1, EXTI4, EXTI9_5: [`STOP_LINES`]) |
 //! | door, feed hold | PA7, PA8 | inputs, pull-up |
 //! | cycle start, probe | PC4, PC5 | inputs, pull-up |
 //! | X fault, Z fault | PB0, PB1 | inputs, pull-up |
@@ -175,6 +175,19 @@ pub fn init(dp: pac::Peripherals, syst: cortex_m::peripheral::SYST) -> Board {
     dp.GPIOB
         .pupdr()
         .modify(|_, w| unsafe { w.pupdr0().bits(0b01).pupdr1().bits(0b01) });
+    // The stopping switches' edges (E-stop, limits) as interrupts: EXTI
+    // lines 0, 1, 4, 5, 6 on port A (SYSCFG's reset mapping), both edges,
+    // since the active level is a setting.
+    let exti = &dp.EXTI;
+    // SAFETY: bits of the lines this board uses, RM0090 §12.3.
+    exti.rtsr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | STOP_LINES) });
+    // SAFETY: as above.
+    exti.ftsr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | STOP_LINES) });
+    // SAFETY: writing 1 clears a pending line; as above.
+    exti.pr().write(|w| unsafe { w.bits(STOP_LINES) });
+    edges_unmask();
     #[cfg(not(feature = "qemu"))]
     wheel_counter(&dp.RCC, gpioc, dp.TIM8);
     #[cfg(feature = "qemu")]
@@ -369,6 +382,51 @@ pub fn input_pins() -> u16 {
     }
 }
 
+/// The EXTI lines of the stopping switches: PA0 E-stop, PA1 X−, PA4 X+,
+/// PA5 Z−, PA6 Z+. (The drive faults on PB0/PB1 would need lines 0 and 1,
+/// the E-stop's and X−'s: they are sampled every millisecond.)
+pub const STOP_LINES: u32 = 1 << 0 | 1 << 1 | 1 << 4 | 1 << 5 | 1 << 6;
+
+/// The vectors of the tasks pended by software: interrupts of peripherals
+/// this board leaves off (SPI1, SPI2), so that EXTI lines 0 and 1 are the
+/// switches'.
+pub const PREP_IRQ: Interrupt = Interrupt::SPI1;
+/// See [`PREP_IRQ`]: the real-time task.
+pub const REALTIME_IRQ: Interrupt = Interrupt::SPI2;
+/// The switches' sampler: EXTI line 2's vector (no switch is on line 2, its
+/// line stays masked). Its number is below USART2's, so that under QEMU a
+/// sample the panel completes is taken before the panel's next byte, as
+/// every millisecond's is on the board.
+pub const SAMPLER_IRQ: Interrupt = Interrupt::EXTI2;
+
+/// An edge on a stopping switch (its EXTI interrupt): the lines' pending
+/// bits cleared and the lines masked until the next millisecond's sample
+/// ([`edges_unmask`]), so that a chattering contact costs at most one
+/// extra sample a millisecond.
+#[inline(always)]
+pub fn edges_take() {
+    // SAFETY: the EXTI's mask and pending registers, written only here, in
+    // `edges_unmask` and at init, all at the sampler's priority or before
+    // the tasks start.
+    let exti = unsafe { &*pac::EXTI::ptr() };
+    // SAFETY: bits of the lines this board uses.
+    exti.imr()
+        .modify(|r, w| unsafe { w.bits(r.bits() & !STOP_LINES) });
+    // SAFETY: writing 1 clears a pending line.
+    exti.pr().write(|w| unsafe { w.bits(STOP_LINES) });
+}
+
+/// The stopping switches' edges interrupt again (every millisecond, before
+/// the sample).
+#[inline(always)]
+pub fn edges_unmask() {
+    // SAFETY: as in `edges_take`.
+    let exti = unsafe { &*pac::EXTI::ptr() };
+    // SAFETY: bits of the lines this board uses.
+    exti.imr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | STOP_LINES) });
+}
+
 /// The last sample the panel gave (`qemu` builds).
 #[cfg(feature = "qemu")]
 static PANEL_PINS: core::sync::atomic::AtomicU16 = core::sync::atomic::AtomicU16::new(0);
@@ -399,22 +457,23 @@ impl Panel {
     }
 
     /// USART2's interrupt: takes a received byte; whether it completed a
-    /// sample (then [`input_pins`] gives it).
+    /// sample (then [`input_pins`] gives it), and whether that raised a
+    /// stopping switch's edge interrupt.
     #[inline(always)]
-    pub fn receive(&mut self) -> bool {
+    pub fn receive(&mut self) -> PanelSample {
         #[cfg(feature = "qemu")]
         {
             let sr = self.usart.sr().read();
             if sr.rxne().bit_is_clear() && sr.ore().bit_is_clear() {
-                return false;
+                return PanelSample::None;
             }
             let b = self.usart.dr().read().bits() as u8;
             if b & 0x80 != 0 {
                 self.low = Some(b & 0x7F);
-                return false;
+                return PanelSample::None;
             }
             let Some(low) = self.low.take() else {
-                return false;
+                return PanelSample::None;
             };
             let pins = u16::from(low) | u16::from(b) << 7;
             if pins & 1 << 13 != 0 {
@@ -427,13 +486,44 @@ impl Panel {
                     core::sync::atomic::Ordering::Release,
                 );
             } else {
-                PANEL_PINS.store(pins, core::sync::atomic::Ordering::Release);
+                let was = PANEL_PINS.swap(pins, core::sync::atomic::Ordering::AcqRel);
+                // QEMU models no GPIO, and its EXTI raises nothing on a
+                // software trigger: a stopping switch's change is its
+                // line's interrupt pended, as the pin's edge would.
+                let changed = was ^ pins;
+                let mut edge = false;
+                for (bits, irq) in [
+                    (1 << 0, Interrupt::EXTI0),
+                    (1 << 1, Interrupt::EXTI1),
+                    (1 << 2, Interrupt::EXTI4),
+                    (1 << 3 | 1 << 4, Interrupt::EXTI9_5),
+                ] {
+                    if changed & bits != 0 {
+                        pac::NVIC::pend(irq);
+                        edge = true;
+                    }
+                }
+                if edge {
+                    return PanelSample::Edge;
+                }
             }
-            true
+            PanelSample::Sample
         }
         #[cfg(not(feature = "qemu"))]
-        false
+        PanelSample::None
     }
+}
+
+/// What a byte from the test harness's panel came to ([`Panel::receive`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PanelSample {
+    /// Nothing yet (the first byte of a sample, or none).
+    None,
+    /// A sample: the millisecond's sample is due.
+    Sample,
+    /// A sample in which a stopping switch changed: its edge interrupt is
+    /// pended, which samples at once when no filter is set.
+    Edge,
 }
 
 /// What [`crate::supervisor::start`] takes.
