@@ -470,8 +470,9 @@ fn the_paced_firmware_raises_homings_alarms_8_and_6() {
         home.reports
     );
     assert!(ask(&mut client, "MOVE Z=0").starts_with("ERR ALARM 8"));
-    // A longer pull-off homes.
-    assert!(ask(&mut client, "HOMING PULLOFF=0.5").starts_with("OK"));
+    // A longer pull-off homes (1 mm: well past the 0.2 mm hysteresis
+    // however late the harness presses the pin on a loaded host).
+    assert!(ask(&mut client, "HOMING PULLOFF=1").starts_with("OK"));
     let home = follow(
         &mut client,
         &mut panel,
@@ -527,7 +528,7 @@ fn the_firmware_raises_alarm_9_when_homing_finds_no_switch() {
 /// presses once the carriage has gone 10 mm; the firmware stops the steps
 /// on its edge (no alarm, the spindle left alone), reports where
 /// (`!PROBE`) and the registers are there. `G38.4` back off stops where
-/// the harness releases it.
+/// the harness releases it. A touch-off then writes tool 1's offset.
 #[test]
 fn the_paced_firmware_stops_a_probing_move_on_the_probe() {
     if !qemu_or_skip() {
@@ -565,6 +566,22 @@ fn the_paced_firmware_stops_a_probing_move_on_the_probe() {
     let back = value(&left, "PZ");
     assert!((-999..=-900).contains(&back), "{left}");
     assert_eq!(value(&ok, "PZ"), back);
+    // A tool setter's touch-off, as LinuxCNC writes it: tool 1 probes the
+    // setter, then `G10 L10` makes that point Z0 with the tool's offset,
+    // written to its register.
+    assert!(ask(&mut client, "T1 M06 G43").starts_with("OK"));
+    let (touched, ok) = probe(&mut client, &mut panel, "G38.2 Z-30 F300", -1_000, false);
+    assert!(
+        touched.contains(" OK=1") && ok.starts_with("OK "),
+        "{touched} {ok}"
+    );
+    let pz = value(&touched, "PZ");
+    assert!(ask(&mut client, "G10 L10 P1 Z0").starts_with("OK"));
+    let pos = ask(&mut client, "POS");
+    assert!(pos.contains(" Z=0.0000"), "{pos}");
+    let tool = ask(&mut client, "TOOL N=1");
+    let z = format!(" Z={}.{:04}", pz / 100, (pz % 100).abs() * 100);
+    assert!(tool.contains(&z), "the setter's machine Z{z}: {tool}");
 }
 
 /// The handwheel on the firmware: the panel turns it in bursts (detents,
