@@ -243,16 +243,23 @@ pub struct SpindleNow {
     pub counts: Option<i64>,
 }
 
+/// A spindle with no limits and no encoder (a file that gives none).
+static NO_SPINDLE: SpindleFile = SpindleFile {
+    max_rpm: None,
+    ripple: 0.0,
+    encoder: None,
+};
+
 /// The file's spindle, or one with no limits and no encoder.
-fn file_spindle(file: &MachineFile) -> SpindleFile {
-    file.spindle.clone().unwrap_or_default()
+fn file_spindle(file: &MachineFile) -> &SpindleFile {
+    file.spindle.as_ref().unwrap_or(&NO_SPINDLE)
 }
 
 impl Lathe {
     /// The lathe of `file`, its nuts and carriages where the registers
     /// put them first.
     pub fn new(file: MachineFile) -> Lathe {
-        let turning = (0.0, 0.0, Self::turning_at(&file_spindle(&file), 0.0));
+        let turning = (0.0, 0.0, Self::turning_at(file_spindle(&file), 0.0));
         Lathe {
             file,
             carriage: [0.0; 2],
@@ -279,7 +286,7 @@ impl Lathe {
     /// The spindle commanded to `rpm` (0: stopped) at `now` (s, the
     /// board's clock): it turns on from where it was.
     pub fn set_spindle(&mut self, rpm: f64, now: f64) {
-        let next = Self::turning_at(&file_spindle(&self.file), rpm);
+        let next = Self::turning_at(file_spindle(&self.file), rpm);
         let (start, before, model) = &self.turning;
         if model.rpm == next.rpm {
             return;

@@ -1362,10 +1362,7 @@ fn machine_report(
         };
         // The alarm's number (its line's registers are what the board
         // had issued ahead on the virtual clock, not where it stopped).
-        let code = t
-            .alarm
-            .split(' ')
-            .find_map(|w| w.strip_prefix("CODE="))
+        let code = host_sim::link::words_value(&t.alarm, "CODE")
             .map_or(String::new(), |c| format!("; the board's alarm {c}"));
         eprintln!(
             "{place}: {what}, the carriages at {} (machine mm, X on the radius){code}; the program stopped there, {} not sent",

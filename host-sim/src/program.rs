@@ -162,18 +162,15 @@ struct Watch {
 }
 
 impl Watch {
-    fn step(&mut self, n: u64, bits: u8, tick: u64) {
+    fn step(&mut self, n: u64, event: StepEvent, tick: u64) {
         if self.trip.is_some() {
             // The machine stopped there.
             return;
         }
-        let dir = |step: u8, neg: u8| match (bits & step != 0, bits & neg != 0) {
-            (false, _) => 0,
-            (true, false) => 1,
-            (true, true) => -1,
-        };
+        let (x, z) = event.moves();
+        let steps = [i32::from(x), i32::from(z)];
         let before = self.lathe.active();
-        let now = self.lathe.event([dir(1, 4), dir(2, 8)], tick, self.price);
+        let now = self.lathe.event(steps, tick, self.price);
         let rose = now & !before & self.stops;
         let c = self.lathe.carriage();
         let file = self.lathe.file();
@@ -221,7 +218,7 @@ impl Io for Tally {
     fn step(&mut self, event: StepEvent, tick: u64, _: &DriveTiming) {
         self.events += 1;
         if let Some(w) = self.watch.as_mut() {
-            w.step(self.events, event.bits(), tick);
+            w.step(self.events, event, tick);
         }
         if let Some((n, found @ None)) = self.find.as_mut() {
             if *n == self.events {
@@ -520,13 +517,6 @@ pub fn machine_inputs(machine: &crate::lathe::MachineFile) -> (String, u16) {
     (used, bits & (LIMITS | FAULTS))
 }
 
-/// A reply's integer word `key=`.
-fn word(reply: &str, key: &str) -> Option<i64> {
-    reply
-        .split(' ')
-        .find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse().ok())
-}
-
 /// As [`run_setup`], keeping what the device did in time: every block
 /// started, step event with its tick, run end and dwell, and the commanded
 /// feed of every block run. The report is the same.
@@ -594,7 +584,11 @@ fn run_inner(
     let price = timeline.price.map(|h| h as f64 / 1e7);
     let registers = |dev: &mut Device, io: &mut Tally| {
         let pos = request(dev, io, "POS");
-        let n = |k| word(&pos, k).unwrap_or(0) as f64;
+        let n = |k| {
+            crate::link::words_value(&pos, k)
+                .and_then(|v| v.parse::<f64>().ok())
+                .unwrap_or(0.0)
+        };
         [n("PX") * price[0], n("PZ") * price[1]]
     };
     let mut alarm = String::new();

@@ -1097,6 +1097,16 @@ fn requests(tim: &StepTimer, block: &LinearBlock, n: u32) {
     Line::print(format_args!("CFG request: {t} instructions"));
 }
 
+/// Instructions as µs at 168 MHz (one a cycle), two decimals, cut off.
+struct At168MHz(u32);
+
+impl core::fmt::Display for At168MHz {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let centi_us = u64::from(self.0) * 100 / 168;
+        write!(f, "{}.{:02}", centi_us / 100, centi_us % 100)
+    }
+}
+
 /// The switches' sampler (the 1 ms interrupt's work): a sample that
 /// changes nothing, and the one that stops everything, from the sample's
 /// pin levels to the STEP outputs and the spindle low and the step
@@ -1119,12 +1129,9 @@ fn switches(tim: &StepTimer) {
     let stop = measure(tim, || {
         core::hint::black_box(sampler.sample_pins(core::hint::black_box(0)));
     });
-    // µs at 168 MHz, two decimals.
-    let centi_us = u64::from(stop) * 100 / 168;
     Line::print(format_args!(
-        "switches' sample: {idle} instructions with nothing changed; an E-stop from its sample to the outputs low: at most {stop} instructions ({}.{:02} us at 168 MHz)",
-        centi_us / 100,
-        centi_us % 100
+        "switches' sample: {idle} instructions with nothing changed; an E-stop from its sample to the outputs low: at most {stop} instructions ({} us at 168 MHz)",
+        At168MHz(stop)
     ));
     // The step interrupt was masked by the stop: free again; released.
     firmware::inputs::unmask_step();
@@ -1137,11 +1144,9 @@ fn switches(tim: &StepTimer) {
         core::hint::black_box(sampler.sample_pins(core::hint::black_box(0)));
     });
     cortex_m::peripheral::NVIC::unpend(firmware::board::SAMPLER_IRQ);
-    let centi_us = u64::from(edge) * 100 / 168;
     Line::print(format_args!(
-        "stopping switch's edge to the outputs low (no filter): at most {edge} instructions ({}.{:02} us at 168 MHz), plus the core's 12 cycles of interrupt entry and 6 of tail-chaining",
-        centi_us / 100,
-        centi_us % 100
+        "stopping switch's edge to the outputs low (no filter): at most {edge} instructions ({} us at 168 MHz), plus the core's 12 cycles of interrupt entry and 6 of tail-chaining",
+        At168MHz(edge)
     ));
     firmware::inputs::unmask_step();
     let _ = firmware::inputs::take_stop();
