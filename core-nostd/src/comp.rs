@@ -40,7 +40,7 @@
 //! ```
 
 use crate::arc::ArcDir;
-use crate::gcode::{Compensation, Corner};
+use crate::gcode::{Compensation, Corner, CornerRound};
 use crate::length::{Length, LENGTH_LIMIT};
 use crate::trig::{atan2, isqrt, PI_Q61};
 use crate::wide::checked_divrem_i128;
@@ -486,6 +486,10 @@ pub type MoveKind = Shape;
 pub enum Origin {
     /// The motion block before this one (sent one block late).
     Previous,
+    /// The block before this one that asked for a chamfer or round (`,C`,
+    /// `,R`) at its end: its move cut short and the chamfer or round, sent
+    /// with this block.
+    Waiting,
     /// A corner between the previous block and this one.
     Corner,
     /// This block.
@@ -505,8 +509,14 @@ pub struct Move {
     pub origin: Origin,
 }
 
-/// The most blocks one request can send: an element and three corner moves.
-pub const MAX_MOVES: usize = 4;
+/// The most blocks one element sends through compensation: the element
+/// before it and three corner moves.
+const STEP_MOVES: usize = 4;
+
+/// The most blocks one request can send: with a corner's chamfer or round
+/// (`,C`, `,R`), three elements (the move before cut short, the chamfer or
+/// round, this block's move), each with its corner moves.
+pub const MAX_MOVES: usize = 3 * STEP_MOVES;
 
 /// The blocks a programmed block sends.
 pub type Moves = heapless::Vec<Move, MAX_MOVES>;
@@ -531,6 +541,22 @@ pub enum CompError {
     SideChange(Option<u32>),
     /// A compensated point beyond the coordinate range.
     Range(Option<u32>),
+    /// A chamfer or round (`,C`, `,R`) waits for the next move, which this
+    /// block (`.1`) is not: after block `.0` comes a G01, G02 or G03
+    /// move, without G40, G41 or G42.
+    RoundNext(Option<u32>, Option<u32>),
+    /// A chamfer or round asked for in a block that is not a G01, G02 or
+    /// G03 move, or that switches compensation.
+    RoundHere(Option<u32>),
+    /// The chamfer or round between blocks `.0` and `.1` does not fit on
+    /// them (or leaves one of them no length).
+    RoundTooBig(Option<u32>, Option<u32>),
+    /// Blocks `.0` and `.1` meet without a corner (they go on, or back,
+    /// along the same direction): nothing to chamfer or round.
+    RoundNoCorner(Option<u32>, Option<u32>),
+    /// A chamfer (`,C`) where block `.0` or `.1` is an arc: a chamfer joins
+    /// two lines (`,R` rounds arcs too).
+    ChamferArc(Option<u32>, Option<u32>),
 }
 
 /// The compensation state between blocks.
@@ -546,13 +572,25 @@ enum State {
     Pending { e: Element, start: [i64; 2] },
 }
 
-/// The contour engine: modal compensation and corner mode, and at most one
-/// waiting element.
+/// A programmed element that waits for the next one, its end corner to be
+/// chamfered or rounded by `size` (ångström).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+struct Rounding {
+    e: Element,
+    chamfer: bool,
+    size: i64,
+}
+
+/// The contour engine: modal compensation and corner mode, at most one
+/// element waiting for its corner to be chamfered or rounded, and at most
+/// one waiting for its compensated end.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Contour {
     mode: Compensation,
     corner: Corner,
+    round: Option<Rounding>,
     state: State,
 }
 
@@ -568,6 +606,7 @@ impl Contour {
         Contour {
             mode: Compensation::Off,
             corner: Corner::Intersection,
+            round: None,
             state: State::Idle,
         }
     }
@@ -585,7 +624,107 @@ impl Contour {
     /// Whether compensation is on or armed: the tool is not at the programmed
     /// point, or will leave it at the next motion.
     pub const fn active(&self) -> bool {
-        !matches!(self.mode, Compensation::Off) || !matches!(self.state, State::Idle)
+        !matches!(self.mode, Compensation::Off)
+            || !matches!(self.state, State::Idle)
+            || self.round.is_some()
+    }
+
+    /// The `N` of the block whose move waits for the next one to chamfer
+    /// or round their corner, if one waits.
+    pub const fn waiting(&self) -> Option<Option<u32>> {
+        match self.round {
+            Some(w) => Some(w.e.n),
+            None => None,
+        }
+    }
+
+    /// Whether a move waits for the next one to chamfer or round their
+    /// corner (`,C`, `,R`): the next block must be a G01, G02 or G03 move.
+    pub const fn rounding(&self) -> bool {
+        self.round.is_some()
+    }
+
+    /// [`Contour::block`] with the block's corner chamfer or round (`,C`,
+    /// `,R`; `round`); `n` is the block's `N`, for refusals. A move that asks for one waits for the next move;
+    /// that one's block sends the first cut short, the chamfer or round,
+    /// and itself from where they end, each through compensation as any
+    /// element. Moves of the waiting block's share (the first two) are
+    /// [`Origin::Waiting`]. `self` is not changed.
+    #[inline(never)]
+    pub fn rounded(
+        &self,
+        tool: &Tool,
+        comp: Option<Compensation>,
+        corner: Option<Corner>,
+        motion: Option<Element>,
+        round: Option<CornerRound>,
+        n: Option<u32>,
+    ) -> Result<(Contour, Moves), CompError> {
+        let feeds = |e: &Element| !e.rapid();
+        // The elements to compensate, and whether each is the waiting
+        // block's (true) or this one's.
+        let mut elements = heapless::Vec::<(Element, bool), 3>::new();
+        let mut motion = motion;
+        if let Some(w) = self.round {
+            let e2 = match motion {
+                Some(e2) if feeds(&e2) && comp.is_none() => e2,
+                _ => return Err(CompError::RoundNext(w.e.n, n)),
+            };
+            let (first, joint, rest) = round_corner(&w, &e2)?;
+            for e in first.into_iter().chain([joint]) {
+                let _ = elements.push((e, true));
+            }
+            motion = Some(rest);
+        }
+        let mut next_round = None;
+        match (round, motion) {
+            (None, Some(e)) => {
+                let _ = elements.push((e, false));
+            }
+            (None, None) => {}
+            (Some(r), Some(e)) if feeds(&e) && comp.is_none() => {
+                let (chamfer, size) = match r {
+                    CornerRound::Chamfer(c) => (true, c.as_angstrom()),
+                    CornerRound::Round(r) => (false, r.as_angstrom()),
+                };
+                next_round = Some(Rounding { e, chamfer, size });
+            }
+            (Some(_), _) => return Err(CompError::RoundHere(n)),
+        }
+        let mut c = Contour {
+            round: None,
+            ..*self
+        };
+        let mut moves = Moves::new();
+        if elements.is_empty() {
+            let (after, m) = c.block(tool, comp, corner, None)?;
+            c = after;
+            moves = m;
+        }
+        // Whose the element before the one compensated is: the block before
+        // this request's, then the waiting block's.
+        let mut before = Origin::Previous;
+        for (i, &(e, waiting)) in elements.iter().enumerate() {
+            let (words, corner_word) = if i == 0 { (comp, corner) } else { (None, None) };
+            let (after, m) = c.block(tool, words, corner_word, Some(e))?;
+            let own = if waiting {
+                Origin::Waiting
+            } else {
+                Origin::Current
+            };
+            for mv in &m {
+                let origin = match mv.origin {
+                    Origin::Previous | Origin::Waiting => before,
+                    Origin::Corner if !waiting => Origin::Corner,
+                    Origin::Current | Origin::Corner => own,
+                };
+                push(&mut moves, mv.to, mv.kind, origin)?;
+            }
+            before = own;
+            c = after;
+        }
+        c.round = next_round;
+        Ok((c, moves))
     }
 
     /// Runs one block: its compensation and corner words and its motion
@@ -616,6 +755,7 @@ impl Contour {
         let mut next = Contour {
             mode,
             corner: corner.unwrap_or(self.corner),
+            round: self.round,
             state: self.state,
         };
         let mut moves = Moves::new();
@@ -721,6 +861,160 @@ impl Contour {
     }
 }
 
+/// The element `e` offset by `r` (ångström · 2¹⁶) to `side`, relative to
+/// its point `p` where its unit direction is `t`: a line through its
+/// perpendicular offset point, a circle about the arc's centre.
+#[inline(never)]
+fn offset(e: &Element, p: [i64; 2], t: V, side: Side, r: i64) -> Offset {
+    let n = side.normal(t);
+    match (e.shape, e.radius(p, side)) {
+        (Shape::Arc { centre, .. }, Some((radius, inside))) => Offset::Circle {
+            c: shl(V::of(centre).sub(V::of(p))),
+            rho: if inside { radius - r } else { radius + r },
+            s: if inside { -radius } else { radius },
+            n,
+        },
+        _ => Offset::Line { a: off(n, r), t, n },
+    }
+}
+
+/// The waiting element `w.e` and the next one `e2` with their corner
+/// chamfered or rounded (`docs/compensation.md` §8): the waiting element
+/// cut short (`None` when nothing of it is left), the chamfer or round,
+/// and `e2` from where that ends.
+#[inline(never)]
+fn round_corner(
+    w: &Rounding,
+    e2: &Element,
+) -> Result<(Option<Element>, Element, Element), CompError> {
+    let e1 = &w.e;
+    let (n1, n2) = (e1.n, e2.n);
+    let p = e1.to;
+    let too_big = CompError::RoundTooBig(n1, n2);
+    let at = |v: V| absolute(p, v, n2).map_err(|_| too_big);
+    let (t1, t2) = (e1.tangent(p), e2.tangent(p));
+    let s = cross(t1, t2);
+    if s.abs() < SMOOTH_SIN {
+        return Err(CompError::RoundNoCorner(n1, n2));
+    }
+    // The size in ångström · 2¹⁶ (at most 10¹² Å: below 2⁵⁶).
+    let size = w.size << FRAC;
+    let (end1, joint, start2) = if w.chamfer {
+        if !matches!(e1.shape, Shape::Line { .. }) || !matches!(e2.shape, Shape::Line { .. }) {
+            return Err(CompError::ChamferArc(n1, n2));
+        }
+        let a = at(off(t1, -size))?;
+        let b = at(off(t2, size))?;
+        (a, Element::line(a, b, false, n1), b)
+    } else {
+        // The round's centre: on the inside of the turn, the intersection
+        // of the two elements offset by the radius (an inside corner of a
+        // nose of that radius).
+        let side = if s > 0 { Side::Left } else { Side::Right };
+        let (o1, o2) = (offset(e1, p, t1, side, size), offset(e2, p, t2, side, size));
+        for o in [o1, o2] {
+            if let Offset::Circle { rho, .. } = o {
+                if rho <= 0 {
+                    return Err(too_big);
+                }
+            }
+        }
+        let x = intersect(o1, o2, size).ok_or(too_big)?;
+        // Where the round touches an element: from the centre back along
+        // the element's normal, or towards the arc's centre.
+        let foot = |o: Offset| match o {
+            Offset::Line { n, .. } => x.sub(off(n, size)),
+            Offset::Circle { c, rho, s, .. } => {
+                let radius = s.abs();
+                let d = x.sub(c);
+                c.add(V {
+                    x: div(mul(d.x, radius), i128::from(rho)) as i64,
+                    z: div(mul(d.z, radius), i128::from(rho)) as i64,
+                })
+            }
+        };
+        let (a, b) = (at(foot(o1))?, at(foot(o2))?);
+        let centre = at(x)?;
+        let dir = match side {
+            Side::Left => ArcDir::Ccw,
+            Side::Right => ArcDir::Cw,
+        };
+        (
+            a,
+            Element {
+                from: a,
+                to: b,
+                shape: Shape::Arc { centre, dir },
+                n: n1,
+            },
+            b,
+        )
+    };
+    // Both points on their elements, the waiting one's after its start
+    // (its start may be where a round before it ended), the next one's
+    // before its end.
+    if !on_element(e1, e1.from, end1) || !on_element(e2, start2, e2.to) || start2 == e2.to {
+        return Err(too_big);
+    }
+    let first = (end1 != e1.from).then_some(Element { to: end1, ..*e1 });
+    Ok((
+        first,
+        joint,
+        Element {
+            from: start2,
+            ..*e2
+        },
+    ))
+}
+
+/// The turn from `a` to `b` about `centre` in the direction `dir`, in
+/// turns (2⁶⁴ = 360°).
+#[inline(never)]
+fn sweep(centre: [i64; 2], dir: ArcDir, a: [i64; 2], b: [i64; 2]) -> u64 {
+    let angle = |p: [i64; 2]| {
+        let v = V::of(p).sub(V::of(centre));
+        atan2(i128::from(v.x), i128::from(v.z)).0
+    };
+    match dir {
+        ArcDir::Ccw => angle(b).wrapping_sub(angle(a)),
+        ArcDir::Cw => angle(a).wrapping_sub(angle(b)),
+    }
+}
+
+/// Whether the points `a` and `b` of `e` lie within its programmed extent
+/// in this order (`a` at or before `b`).
+fn on_element(e: &Element, a: [i64; 2], b: [i64; 2]) -> bool {
+    match e.shape {
+        Shape::Line { .. } => {
+            let d = V::of(e.to).sub(V::of(e.from));
+            let along = |q: [i64; 2]| {
+                let v = V::of(q).sub(V::of(e.from));
+                mul(v.x, d.x) + mul(v.z, d.z)
+            };
+            let (la, lb) = (along(a), along(b));
+            0 <= la && la <= lb && lb <= norm2(d)
+        }
+        Shape::Arc { centre, dir } => {
+            let whole = if e.from == e.to {
+                u64::MAX
+            } else {
+                sweep(centre, dir, e.from, e.to)
+            };
+            let fa = if a == e.from {
+                0
+            } else {
+                sweep(centre, dir, e.from, a)
+            };
+            let fb = if b == e.to {
+                whole
+            } else {
+                sweep(centre, dir, e.from, b)
+            };
+            fa <= fb && fb <= whole
+        }
+    }
+}
+
 fn push(moves: &mut Moves, to: [i64; 2], kind: MoveKind, origin: Origin) -> Result<(), CompError> {
     moves
         .push(Move { to, kind, origin })
@@ -803,16 +1097,7 @@ fn check_direction(
             }
         }
         Shape::Arc { centre, dir } => {
-            let sweep = |a: [i64; 2], b: [i64; 2]| {
-                let angle = |p: [i64; 2]| {
-                    let v = V::of(p).sub(V::of(centre));
-                    atan2(i128::from(v.x), i128::from(v.z)).0
-                };
-                match dir {
-                    ArcDir::Ccw => angle(b).wrapping_sub(angle(a)),
-                    ArcDir::Cw => angle(a).wrapping_sub(angle(b)),
-                }
-            };
+            let sweep = |a: [i64; 2], b: [i64; 2]| sweep(centre, dir, a, b);
             let full = e.from == e.to;
             let programmed = if full { u64::MAX } else { sweep(e.from, e.to) };
             let done = sweep(start, end);
@@ -888,21 +1173,7 @@ fn corner_of(
     let reversal = s.abs() < SMOOTH_SIN;
     if !reversal && s * side.sign() > 0 {
         // Inside: intersect the offset elements.
-        // The offset elements relative to the corner: a line through its
-        // perpendicular offset point, a circle about the arc's centre.
-        let offset = |e: &Element, t: V, a: V| {
-            let n = side.normal(t);
-            match (e.shape, e.radius(p, side)) {
-                (Shape::Arc { centre, .. }, Some((radius, inside))) => Offset::Circle {
-                    c: shl(V::of(centre).sub(V::of(p))),
-                    rho: if inside { radius - r } else { radius + r },
-                    s: if inside { -radius } else { radius },
-                    n,
-                },
-                _ => Offset::Line { a, t, n },
-            }
-        };
-        let x = intersect(offset(e1, t1, a1), offset(e2, t2, a2), r)
+        let x = intersect(offset(e1, p, t1, side, r), offset(e2, p, t2, side, r), r)
             .ok_or(CompError::NoCorner(n1, n2))?;
         let x = at(x)?;
         return Ok(CornerPlan {
@@ -969,6 +1240,184 @@ fn corner_of(
 mod tests {
     extern crate std;
     use super::*;
+
+    const MM: i64 = 10_000_000;
+
+    fn line(from: [i64; 2], to: [i64; 2]) -> Element {
+        Element::line(from, to, false, None)
+    }
+
+    /// Runs blocks (element, corner) with compensation off; every move.
+    fn corners(
+        blocks: &[(Element, Option<CornerRound>)],
+    ) -> Result<std::vec::Vec<Move>, CompError> {
+        let tool = Tool::new(
+            Length::ZERO,
+            TipCode::new(0).unwrap_or(TipCode::EXTERNAL_RIGHT),
+        );
+        let mut c = Contour::new();
+        let mut out = std::vec::Vec::new();
+        for &(e, r) in blocks {
+            let (next, moves) = c.rounded(&tool, None, None, Some(e), r, e.n)?;
+            out.extend(moves.iter().copied());
+            c = next;
+        }
+        Ok(out)
+    }
+
+    #[test]
+    fn a_chamfer_cuts_both_lines_short_by_its_size() {
+        let c = |mm: i64| Some(CornerRound::Chamfer(Length::from_angstrom(mm).unwrap()));
+        // Up the face to X20 (radius), then along -Z: ,C2.
+        let moves = corners(&[
+            (line([0, 0], [20 * MM, 0]), c(2 * MM)),
+            (line([20 * MM, 0], [20 * MM, -30 * MM]), None),
+        ])
+        .unwrap();
+        let ends: std::vec::Vec<_> = moves.iter().map(|m| (m.to, m.origin)).collect();
+        assert_eq!(
+            ends,
+            [
+                ([18 * MM, 0], Origin::Waiting),
+                ([20 * MM, -2 * MM], Origin::Waiting),
+                ([20 * MM, -30 * MM], Origin::Current),
+            ]
+        );
+    }
+
+    #[test]
+    fn a_round_between_lines_is_tangent_at_r_tan_half_the_turn() {
+        let r = |mm: i64| Some(CornerRound::Round(Length::from_angstrom(mm).unwrap()));
+        // A right angle: the tangent points R from the corner, the centre
+        // R in from both lines.
+        let moves = corners(&[
+            (line([20 * MM, 0], [20 * MM, -30 * MM]), r(5 * MM)),
+            (line([20 * MM, -30 * MM], [40 * MM, -30 * MM]), None),
+        ])
+        .unwrap();
+        assert_eq!(moves.len(), 3);
+        assert_eq!(moves[0].to, [20 * MM, -25 * MM]);
+        assert_eq!(
+            moves[1].kind,
+            MoveKind::Arc {
+                centre: [25 * MM, -25 * MM],
+                dir: ArcDir::Cw
+            }
+        );
+        assert_eq!(moves[1].to, [25 * MM, -30 * MM]);
+        // A 45° taper after a turn along -Z: tan(22.5°)·R from the corner.
+        let moves = corners(&[
+            (line([20 * MM, 0], [20 * MM, -30 * MM]), r(4 * MM)),
+            (line([20 * MM, -30 * MM], [30 * MM, -40 * MM]), None),
+        ])
+        .unwrap();
+        let d = 4.0 * (std::f64::consts::PI / 8.0).tan() * 1e7;
+        let expect = -30.0 * 1e7 + d;
+        assert!(
+            (moves[0].to[1] as f64 - expect).abs() <= 1.0,
+            "{:?}",
+            moves[0]
+        );
+        assert_eq!(moves[0].to[0], 20 * MM);
+    }
+
+    #[test]
+    fn a_round_onto_an_arc_touches_it() {
+        let r = Some(CornerRound::Round(Length::from_angstrom(2 * MM).unwrap()));
+        // Along -Z at radius 20, then a convex arc of radius 10 about
+        // (10, -30) up to (10, -40)... the arc turning right from the line.
+        let arc = Element {
+            from: [20 * MM, -30 * MM],
+            to: [10 * MM, -40 * MM],
+            shape: Shape::Arc {
+                centre: [10 * MM, -30 * MM],
+                dir: ArcDir::Cw,
+            },
+            n: None,
+        };
+        let moves = corners(&[(line([20 * MM, 0], [20 * MM, -30 * MM]), r), (arc, None)]);
+        // That arc goes on smoothly from the line: no corner.
+        assert_eq!(moves, Err(CompError::RoundNoCorner(None, None)));
+        // An arc leaving the line at a corner: about (30, -30), from
+        // (20, -30) down to (30, -40), turning left.
+        let arc = Element {
+            from: [20 * MM, -30 * MM],
+            to: [30 * MM, -40 * MM],
+            shape: Shape::Arc {
+                centre: [20 * MM, -40 * MM],
+                dir: ArcDir::Cw,
+            },
+            n: None,
+        };
+        let moves = corners(&[(line([20 * MM, 0], [20 * MM, -30 * MM]), r), (arc, None)]).unwrap();
+        let MoveKind::Arc { centre, .. } = moves[1].kind else {
+            panic!("{moves:?}")
+        };
+        let dist = |a: [i64; 2], b: [i64; 2]| ((a[0] - b[0]) as f64).hypot((a[1] - b[1]) as f64);
+        let foot = moves[1].to;
+        // On the arc, on the round, and the three centres in a line.
+        assert!((dist(foot, [20 * MM, -40 * MM]) - 10.0 * 1e7).abs() <= 2.0);
+        assert!((dist(foot, centre) - 2.0 * 1e7).abs() <= 2.0);
+        assert!(
+            (dist(centre, [20 * MM, -40 * MM])
+                - dist(foot, [20 * MM, -40 * MM])
+                - dist(foot, centre))
+            .abs()
+                <= 2.0
+        );
+        assert!((dist(moves[0].to, centre) - 2.0 * 1e7).abs() <= 2.0);
+        assert_eq!(moves[2].to, [30 * MM, -40 * MM]);
+    }
+
+    #[test]
+    fn corners_that_do_not_fit_or_follow_are_refused() {
+        let c = |mm: i64| Some(CornerRound::Chamfer(Length::from_angstrom(mm).unwrap()));
+        let first = line([20 * MM, 0], [20 * MM, -3 * MM]);
+        let second = line([20 * MM, -3 * MM], [30 * MM, -3 * MM]);
+        // Longer than the first line.
+        assert_eq!(
+            corners(&[(first, c(4 * MM)), (second, None)]),
+            Err(CompError::RoundTooBig(None, None))
+        );
+        // As long as the second: nothing of it left.
+        assert_eq!(
+            corners(&[
+                (first, c(MM)),
+                (line([20 * MM, -3 * MM], [21 * MM, -3 * MM]), None)
+            ]),
+            Err(CompError::RoundTooBig(None, None))
+        );
+        // A rapid next, or a rapid asking.
+        let rapid = Element::line(second.from, second.to, true, Some(7));
+        assert_eq!(
+            corners(&[(first, c(MM)), (rapid, None)]),
+            Err(CompError::RoundNext(None, Some(7)))
+        );
+        assert_eq!(
+            corners(&[(rapid, c(MM))]),
+            Err(CompError::RoundHere(Some(7)))
+        );
+        // Compensation switched in the next block.
+        let tool = Tool::new(Length::ZERO, TipCode::EXTERNAL_RIGHT);
+        let (waiting, none) = Contour::new()
+            .rounded(&tool, None, None, Some(first), c(MM), None)
+            .unwrap();
+        assert!(none.is_empty() && waiting.active() && waiting.rounding());
+        assert_eq!(
+            waiting.rounded(
+                &tool,
+                Some(Compensation::Right),
+                None,
+                Some(second),
+                None,
+                None
+            ),
+            Err(CompError::RoundNext(None, None))
+        );
+        // The chamfer fits exactly: the first line has nothing left.
+        let moves = corners(&[(first, c(3 * MM)), (second, None)]).unwrap();
+        assert_eq!(moves.len(), 2);
+    }
 
     #[test]
     fn turns_per_radian_is_two_to_the_63_over_pi() {

@@ -460,6 +460,22 @@ pub struct Block {
     /// `G94` facing), modal; its end point in `X`/`U` and `Z`/`W`, its
     /// taper in `R`.
     pub single: Option<SingleCycle>,
+    /// Fanuc and Haas `,C` or `,R`: a chamfer or a round at the corner
+    /// where this block's move meets the next block's.
+    pub round: Option<CornerRound>,
+}
+
+/// A corner chamfer or round asked for by a move's block (`,C`, `,R`;
+/// Fanuc and Haas), inserted where the move meets the next one: the move
+/// is cut short, the chamfer or the arc joins it to the next move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CornerRound {
+    /// `,C`: a straight chamfer from this distance before the corner, along
+    /// the move, to this distance after it, along the next.
+    Chamfer(Length),
+    /// `,R`: an arc of this radius tangent to both moves.
+    Round(Length),
 }
 
 /// The single cycles of G-code system A: one pass in, along, out and back.
@@ -980,6 +996,19 @@ fn parse_with(line: &str, dialect: Dialect, units: Units) -> Result<Block, Locat
                 };
                 return Err(at(error, pos));
             }
+            b',' if r.block.kind == LineKind::Words => {
+                // `,C` and `,R`: a corner's chamfer or round (Fanuc, Haas).
+                let at_letter = after_blanks(bytes, pos + 1);
+                let letter = bytes.get(at_letter).map(u8::to_ascii_uppercase);
+                let from = after_blanks(bytes, at_letter + 1);
+                let end = from + number_len(bytes, from);
+                let number = line.get(from..end).unwrap_or("");
+                let (Some(letter @ (b'C' | b'R')), false) = (letter, number.is_empty()) else {
+                    return Err(at(BlockError::NotAWord, pos));
+                };
+                r.corner_word(letter, number).map_err(|e| at(e, pos))?;
+                pos = end;
+            }
             _ if c.is_ascii_alphabetic() => {
                 let letter = c.to_ascii_uppercase();
                 let from = after_blanks(bytes, pos + 1);
@@ -1066,6 +1095,39 @@ fn unitless(letter: u8, number: &str) -> Result<Length, BlockError> {
 }
 
 impl Reading {
+    /// `,C` or `,R` and its number.
+    fn corner_word(&mut self, letter: u8, number: &str) -> Result<(), BlockError> {
+        if self.dialect != Dialect::Fanuc {
+            return Err(BlockError::Form(
+                ",C and ,R are Fanuc's and Haas' corners: OPT DIALECT=FANUC",
+            ));
+        }
+        if self.block.round.is_some() {
+            return Err(BlockError::Form("one corner a block: ,C or ,R"));
+        }
+        let size = match self.units {
+            Units::Mm => Length::from_gcode_mm(number),
+            Units::Inch => Length::from_gcode_inch(number),
+        }
+        .map_err(|e| BlockError::Value(letter, e))?;
+        if size.as_angstrom() <= 0 {
+            return Err(BlockError::Range(
+                letter,
+                if letter == b'C' {
+                    "after a comma: a chamfer above 0"
+                } else {
+                    "after a comma: a radius above 0"
+                },
+            ));
+        }
+        self.block.round = Some(if letter == b'C' {
+            CornerRound::Chamfer(size)
+        } else {
+            CornerRound::Round(size)
+        });
+        Ok(())
+    }
+
     fn word(&mut self, letter: u8, number: &str, pos: usize) -> Result<(), BlockError> {
         let fanuc = self.dialect == Dialect::Fanuc;
         match letter {

@@ -14,6 +14,7 @@ mod block_grammar;
 
 use block_grammar::{
     as_reference, as_reference_error, beyond_the_reference, canonical, names_a_code_beyond,
+    names_a_corner,
 };
 use core_nostd::gcode::{is_block, parse, parse_block, Dialect, Units};
 use fuzz_oracle::{reference_block, reference_block_in, reference_is_block};
@@ -22,7 +23,10 @@ use libfuzzer_sys::fuzz_target;
 fuzz_target!(|text: &str| {
     let parsed = parse_block(text);
     let reference = reference_block(text);
-    if beyond_the_reference(&parsed, &reference) || names_a_code_beyond(text, false, false) {
+    if beyond_the_reference(&parsed, &reference)
+        || names_a_code_beyond(text, false, false)
+        || names_a_corner(text)
+    {
         return;
     }
     for units in [Units::Mm, Units::Inch] {

@@ -268,6 +268,22 @@ pub fn beyond_the_reference(
     newer && core.as_ref().err().map(|e| as_reference_error(*e)) != Some(*r)
 }
 
+/// Whether a line holds a comma before a `C` or `R` (blanks between),
+/// anywhere (comments too: it only leaves more lines out): Fanuc's and
+/// Haas' corner words `,C` and `,R`, which the reference's grammar does
+/// not read (it refuses a comma as no word), and which the core reads in
+/// the Fanuc dialect and refuses by name in the ISO one.
+pub fn names_a_corner(text: &str) -> bool {
+    let b = text.as_bytes();
+    (0..b.len()).any(|i| {
+        b[i] == b','
+            && b[i + 1..]
+                .iter()
+                .find(|c| !matches!(c, b' ' | b'\t'))
+                .is_some_and(|c| matches!(c.to_ascii_uppercase(), b'C' | b'R'))
+    })
+}
+
 /// Whether a line names, anywhere (comments too: it only leaves more lines
 /// out), a G code the reference does not read (it refuses it as newer than
 /// itself: a turning cycle, `G64`'s tolerances, LinuxCNC's `G41.1`): such a

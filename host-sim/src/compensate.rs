@@ -289,6 +289,12 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
                 }
             }
         }
+        if parse(line, settings.dialect, Units::Mm).is_ok_and(|b| b.round.is_some()) {
+            return Err(CompensateError {
+                line: i + 1,
+                reason: "a ,C or ,R corner: compensate writes the compensated path of lines and arcs as programmed; run the program on the device, which rounds and compensates it".into(),
+            });
+        }
         let (src, geometry) = match classify(line) {
             Line::Foreign => {
                 match &mut waiting {
@@ -320,6 +326,8 @@ pub fn compensate(program: &str, settings: &Settings) -> Result<Compensated, Com
         for m in &moves {
             // The source line whose words go on this block; none for corners.
             let own: Option<&Source> = match m.origin {
+                // A corner's: refused before the device reads it.
+                Origin::Waiting => None,
                 Origin::Previous => waiting.as_ref().map(|(s, _)| s),
                 Origin::Corner => None,
                 Origin::Current => Some(&src),

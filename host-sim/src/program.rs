@@ -644,6 +644,9 @@ fn run_inner(
     let (mut modal, mut spindle) = (Modal::POWER_ON, SpindleState::POWER_ON);
     let mut feed_now = None;
     let mut element_feed = None;
+    // The feed of a move waiting for its ,C/,R corner, and whether one
+    // waits.
+    let (mut round_feed, mut rounding) = (None, false);
     for (seq, (i, raw)) in lines.iter().enumerate() {
         if deliver(&mut dev, &mut io) || io.find.is_some_and(|(_, f)| f.is_some()) {
             stopped_at = Some(seq);
@@ -715,13 +718,14 @@ fn run_inner(
         }
         for m in &moves {
             let (line, seq) = match m.origin {
-                Origin::Previous => motion_block,
+                Origin::Previous | Origin::Waiting => motion_block,
                 Origin::Corner | Origin::Current => this_block,
             };
             // As the device: the element held back by compensation at its
             // own feed, this block's and the corners between at this one's.
             let feed = match m.origin {
                 Origin::Previous => element_feed,
+                Origin::Waiting => round_feed,
                 Origin::Current => feed_now,
                 Origin::Corner => feed_now.or(element_feed),
             };
@@ -779,7 +783,18 @@ fn run_inner(
         }
         motion_block = this_block;
         if element {
-            element_feed = feed_now;
+            // As the device keeps them (a move that waits for its corner
+            // keeps its own feed).
+            let waits = dev.session().contour().rounding();
+            if waits {
+                if rounding {
+                    element_feed = round_feed;
+                }
+                round_feed = feed_now;
+            } else {
+                element_feed = feed_now;
+            }
+            rounding = waits;
         }
         if io.find.is_some() {
             // One line at a time: its motion runs before the next is sent.

@@ -15,6 +15,8 @@
 //!   (`docs/compensation.md` §1–§6);
 //! - [`cone`]: f64 taper corrections and the Nomura table
 //!   (`docs/compensation.md` §7);
+//! - [`corner`]: f64 corner chamfers and rounds `,C`/`,R`
+//!   (`docs/compensation.md` §9);
 //! - [`cycle`]: f64 roughing of the turning cycles `G71`, `G72` and `G73`,
 //!   move for move, with the geometric checks of its passes
 //!   (`docs/cycles.md` §1–§3);
@@ -35,6 +37,7 @@
 pub mod arc;
 pub mod comp;
 pub mod cone;
+pub mod corner;
 pub mod cycle;
 mod dd;
 pub mod exact;

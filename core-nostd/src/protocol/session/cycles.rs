@@ -181,7 +181,7 @@ impl Session {
         io: &mut I,
     ) -> Result<Block, Refusal<'a>> {
         if self.contour.active() {
-            return Err(Refusal::Busy("a turning cycle"));
+            return Err(self.busy("a turning cycle"));
         }
         if c.kind.pecks() {
             return self.peck_cycle(b, c, crc, io);
@@ -488,6 +488,11 @@ impl Session {
             || b.dynamic_nose.is_some()
             || b.nose_tool.is_some()
             || b.kind != crate::gcode::LineKind::Words;
+        if b.round.is_some() {
+            return Err(refuse_profile(
+                "a profile block takes no ,C or ,R: write the chamfer or round as a block of its own",
+            ));
+        }
         if other {
             return Err(refuse_profile(
                 "a profile block takes G00-G03, G40-G42, X Z U W I K R, F and S only",
@@ -793,7 +798,7 @@ impl Session {
             ));
         }
         if self.contour.active() {
-            return Err(Refusal::Busy("a single cycle"));
+            return Err(self.busy("a single cycle"));
         }
         let mut single = match (kind, self.cycles.single) {
             // The same cycle again: its words stay in force.

@@ -45,6 +45,9 @@ impl Session {
         if b.deleted && self.offsets.reading.block_delete {
             return Ok(Block::Skipped);
         }
+        if b.cycle.is_some() || b.single.is_some() {
+            self.no_round(&b)?;
+        }
         if let Some(cycle) = b.cycle {
             self.cycles.single = None;
             return self.cycle_block(&b, cycle, crc, io);
@@ -69,10 +72,33 @@ impl Session {
                 // A motion code, G80 or the program's end ends the cycle.
                 self.cycles.single = None;
             } else if b.x.is_some() || b.z.is_some() {
+                self.no_round(&b)?;
                 return self.single_cycle(&b, None, crc, io);
             }
         }
         self.gcode_words(b, crc, io)
+    }
+
+    /// Refuses a cycle's block while a move waits for its `,C`/`,R`
+    /// corner, or that asks for one itself.
+    fn no_round(&self, b: &crate::gcode::Block) -> Result<(), Refusal<'static>> {
+        if let Some(n) = self.contour.waiting() {
+            return Err(Refusal::Contour(crate::comp::CompError::RoundNext(n, b.n)));
+        }
+        if b.round.is_some() {
+            return Err(Refusal::Contour(crate::comp::CompError::RoundHere(b.n)));
+        }
+        Ok(())
+    }
+
+    /// What refuses a request that needs the programmed point to be the
+    /// tool's: nose compensation on, or a move waiting for its `,C`/`,R`
+    /// corner.
+    pub(super) fn busy(&self, what: &'static str) -> Refusal<'static> {
+        match self.contour.waiting() {
+            Some(n) => Refusal::Contour(crate::comp::CompError::RoundNext(n, None)),
+            None => Refusal::Busy(what),
+        }
     }
 
     /// A block's words, run (no cycle in it), in numbered steps in the order
@@ -111,9 +137,7 @@ impl Session {
         let (sel, mut offsets) = self.offsets_after(&b, &aux, diam)?;
         let special = b.special;
         if special.is_some() && (self.contour.active() || b.compensation.is_some()) {
-            return Err(Refusal::Busy(
-                "G28, G30, G38, G53 and G92 (G50) with nose compensation",
-            ));
+            return Err(self.busy("G28, G30, G38, G53 and G92 (G50) with nose compensation"));
         }
         // G92 (G50): the point here takes the block's coordinates.
         let mut prog = self.prog;
@@ -153,7 +177,7 @@ impl Session {
             "the offsets in effect add beyond 99999.999999 mm",
         ))?;
         if (sel != self.sel || b.set_work.is_some()) && self.contour.active() {
-            return Err(Refusal::Busy("a work or tool offset change"));
+            return Err(self.busy("a work or tool offset change"));
         }
         // The machine stays where it is when offsets change (a work system
         // selected or set, G92 and its kin, a tool's offset): the point
@@ -374,9 +398,16 @@ impl Session {
             (None, _) => self.dynamic_tool,
         };
         let tool = dynamic_tool.unwrap_or_else(|| self.nose(&offsets, &sel));
+        if b.round.is_some()
+            && (b.stop.is_some() || b.gear.is_some() || b.machine_m.is_some() || b.dwell.is_some())
+        {
+            return Err(Refusal::Missing(
+                ",C and ,R wait for the next move: M00-M02, M30, M41-M44, machine M codes and G04 on a line of their own",
+            ));
+        }
         let (contour, moves) = self
             .contour
-            .block(&tool, b.compensation, b.corner, element)
+            .rounded(&tool, b.compensation, b.corner, element, b.round, b.n)
             .map_err(Refusal::Contour)?;
         // The blocks in machine coordinates: the tip's path plus the offsets.
         let mut moves = moves;
@@ -424,6 +455,7 @@ impl Session {
             // block's feed, or the previous one's into a rapid.
             let feed = match m.origin {
                 Origin::Previous => self.element_feed,
+                Origin::Waiting => self.round_feed,
                 Origin::Current => now,
                 Origin::Corner => now.or(self.element_feed),
             };
@@ -553,7 +585,18 @@ impl Session {
         self.contour = contour;
         self.last_moves = moves;
         if element.is_some() {
-            self.element_feed = now;
+            // The feed of the element compensation holds, and of the one
+            // waiting for its corner: a move that waits keeps its own, and
+            // the one it sent on (its waiting predecessor's round) goes
+            // to compensation with that one's.
+            if contour.rounding() {
+                if self.contour.rounding() {
+                    self.element_feed = self.round_feed;
+                }
+                self.round_feed = now;
+            } else {
+                self.element_feed = now;
+            }
         }
         if let Some(mode) = probe {
             self.probe_end(mode, io)?;

@@ -125,6 +125,8 @@ pub struct Session {
     /// The feed of the last element given to the contour engine (the one
     /// it holds while compensation is on); `None` for a rapid.
     pub(super) element_feed: Option<Feed>,
+    /// The feed of the move waiting for its `,C`/`,R` corner.
+    pub(super) round_feed: Option<Feed>,
     /// The spindle's top speed, rpm (`AUX SMAX`): the speed at full PWM
     /// duty and a limit of every commanded speed; none when the speed is
     /// set on the machine by hand.
@@ -205,6 +207,7 @@ impl Session {
             probe: None,
             probe_as_feed: false,
             element_feed: None,
+            round_feed: None,
             top: None,
             spinup_us: 0,
             outputs: Outputs::OFF,

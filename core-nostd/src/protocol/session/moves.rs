@@ -393,7 +393,7 @@ impl Session {
     /// contour engine's back.
     pub(super) fn not_compensating(&self, what: &'static str) -> Result<(), Refusal<'static>> {
         if self.contour.active() {
-            return Err(Refusal::Busy(what));
+            return Err(self.busy(what));
         }
         Ok(())
     }

@@ -58,7 +58,7 @@ impl Session {
             return Err(Refusal::Missing("G45 to G48 move in a line: G00 or G01"));
         }
         if self.contour.active() || b.compensation.is_some() {
-            return Err(Refusal::Busy("G45 to G48 with nose compensation"));
+            return Err(self.busy("G45 to G48 with nose compensation"));
         }
         let beyond = "G45 to G48: the move with its offset beyond 99999.999999 mm";
         let k = offsets
@@ -352,7 +352,7 @@ impl Session {
             }
             let in_effect = n == self.sel.register || n == self.sel.loaded;
             if self.contour.active() && in_effect {
-                return Err(Refusal::Busy("TOOL of the register in effect"));
+                return Err(self.busy("TOOL of the register in effect"));
             }
         }
         self.take_offsets(offsets);
@@ -400,7 +400,7 @@ impl Session {
                 return Err(Refusal::Range(RANGE_OFFSET));
             }
             if self.contour.active() && g - 54 == self.sel.wcs {
-                return Err(Refusal::Busy("WORK of the system in effect"));
+                return Err(self.busy("WORK of the system in effect"));
             }
         }
         self.take_offsets(offsets);

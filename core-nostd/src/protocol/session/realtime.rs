@@ -181,6 +181,7 @@ impl Session {
         self.contour = Contour::new();
         self.last_moves = Moves::new();
         self.element_feed = None;
+        self.round_feed = None;
         (found, issued)
     }
 

@@ -557,6 +557,47 @@ pub(super) fn send_contour_refusal<I: Io>(io: &mut I, e: CompError) {
             E::Range,
             format_args!("{}: compensated point beyond 99999.999999 mm", this(n)),
         ),
+        CompError::RoundNext(a, b) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "{}: the ,C/,R of {} needs a G01-G03 move next, no G40-G42",
+                this(b),
+                last(a)
+            ),
+        ),
+        CompError::RoundHere(n) => send_error(
+            io,
+            E::Geometry,
+            format_args!("{}: ,C and ,R go on a G01-G03 move, no G40-G42", this(n)),
+        ),
+        CompError::RoundTooBig(a, b) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "the ,C/,R of {} does not fit between it and {}",
+                last(a),
+                this(b)
+            ),
+        ),
+        CompError::RoundNoCorner(a, b) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "{} and {} meet without a corner to chamfer or round",
+                last(a),
+                this(b)
+            ),
+        ),
+        CompError::ChamferArc(a, b) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "a ,C joins two lines: {} or {} is an arc (,R rounds it)",
+                last(a),
+                this(b)
+            ),
+        ),
     }
 }
 

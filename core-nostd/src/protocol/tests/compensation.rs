@@ -288,3 +288,60 @@ fn dynamic_compensation_takes_the_nose_from_the_block() {
     assert!(ask1(&mut dev, "G42.1 L2 G01 Z0 F100")
         .starts_with("ERR SYNTAX G41.1 and G42.1 need D: the nose diameter"));
 }
+
+/// Fanuc's and Haas' `,C` and `,R`: the move waits for the next one; what
+/// cannot follow it is refused with nothing moved, and the next move sends
+/// the first cut short, the chamfer, and itself.
+#[test]
+fn a_corner_waits_for_its_next_move_and_refusals_change_nothing() {
+    let next = "ERR GEOMETRY N20: the ,C/,R of N10 needs a G01-G03 move next, no G40-G42";
+    let mut dev = super::cycles::refusals_change_nothing(
+        "N10 G01 X20. Z0 F100. ,C2.",
+        &[
+            ("N20 M05", next),
+            ("N20 G00 Z-10.", next),
+            ("N20 G90 X30. Z-20.", next),
+            ("N20 G42 G01 Z-10.", next),
+            ("N20 G04 P100", next),
+            ("N20 M30", next),
+            (
+                "N20 G01 X10.",
+                "ERR GEOMETRY N10 and N20 meet without a corner to chamfer or round",
+            ),
+            (
+                "N20 G01 Z-1.",
+                "ERR GEOMETRY the ,C/,R of N10 does not fit between it and N20",
+            ),
+            (
+                "N20 G02 X30. Z-5. I5. K0",
+                "ERR GEOMETRY a ,C joins two lines: N10 or N20 is an arc (,R rounds it)",
+            ),
+        ],
+    );
+    // The first line cut 2 mm short (X16 on the diameter), the chamfer,
+    // the next line from its end; the waiting block's two at its feed.
+    let r = ask(&mut dev, b"N20 G01 Z-10.\n");
+    assert_eq!(
+        r[..3],
+        [
+            "DATA G01 X16.0000 Z0.0000",
+            "DATA G01 X20.0000 Z-2.0000",
+            "DATA G01 X20.0000 Z-10.0000"
+        ]
+    );
+    assert!(r[3].starts_with("OK NX=2000 NZ=-1000 "), "{r:?}");
+    let origins: std::vec::Vec<_> = dev
+        .session()
+        .last_moves()
+        .iter()
+        .map(|m| m.origin)
+        .collect();
+    assert_eq!(
+        origins,
+        [
+            crate::comp::Origin::Waiting,
+            crate::comp::Origin::Waiting,
+            crate::comp::Origin::Current
+        ]
+    );
+}

@@ -81,7 +81,7 @@ fn single_cycles_move_as_their_blocks_written_out() {
 
 /// A Fanuc-dialect device at `start`: each `(line, reply)` refused as
 /// written, with no step event since and the position as before it.
-fn refusals_change_nothing(start: &str, cases: &[(&str, &str)]) -> Device {
+pub(super) fn refusals_change_nothing(start: &str, cases: &[(&str, &str)]) -> Device {
     let mut dev = Device::new();
     ask1(&mut dev, "OPT DIALECT=fanuc");
     for line in ["G21 G18 G98", start] {
