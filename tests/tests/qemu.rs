@@ -418,6 +418,7 @@ fn the_example_programs_run_on_the_firmware_as_in_process() {
         ("krylenko-fig22.nc", "CFG RN=0.4 TIP=3"),
         ("fanuc-grooves.nc", "CFG RN=0.4 TIP=3"),
         ("fanuc-cycles.nc", "CFG RN=0.4 TIP=3"),
+        ("fanuc-corners.nc", "CFG RN=0.4 TIP=3"),
     ] {
         let text = std::fs::read_to_string(format!("{dir}/{name}")).unwrap();
         let lines: Vec<String> = if host_sim::expand::needs_expansion(&text) {
