@@ -2,6 +2,23 @@
 
 use super::*;
 
+/// Whether a line the reader took holds nothing but a sequence number and
+/// comments.
+fn number_only(text: &str) -> bool {
+    let mut comment = false;
+    for c in text.bytes() {
+        match c {
+            b';' if !comment => return true,
+            b'(' => comment = true,
+            b')' => comment = false,
+            _ if comment => {}
+            b'N' | b'n' | b'0'..=b'9' | b' ' | b'\t' => {}
+            _ => return false,
+        }
+    }
+    true
+}
+
 impl Session {
     /// Runs one G-code block in the session's modal state, through the
     /// contour engine (compensation off: the block itself).
@@ -44,6 +61,12 @@ impl Session {
             .map_err(|l| Refusal::Block(l.error))?;
         if b.deleted && self.offsets.reading.block_delete {
             return Ok(Block::Skipped);
+        }
+        if self.contour.rounding() && number_only(text) {
+            // Nothing but a sequence number or a comment (a sender that
+            // splits `N80 G01 …` in two): it asks nothing of the corner
+            // waiting, which waits on.
+            return Ok(Block::Run);
         }
         if b.cycle.is_some() || b.single.is_some() {
             self.no_round(&b)?;

@@ -318,6 +318,10 @@ fn a_corner_waits_for_its_next_move_and_refusals_change_nothing() {
             ),
         ],
     );
+    // A line of only a sequence number or a comment passes, the corner
+    // still waiting (grbl senders send `N20` apart from its words).
+    assert!(ask1(&mut dev, "N15").starts_with("OK NX=0 NZ=0 "));
+    assert!(ask1(&mut dev, "(FINISH)").starts_with("OK NX=0 NZ=0 "));
     // The first line cut 2 mm short (X16 on the diameter), the chamfer,
     // the next line from its end; the waiting block's two at its feed.
     let r = ask(&mut dev, b"N20 G01 Z-10.\n");
