@@ -549,8 +549,6 @@ fn sort_small(v: &mut [i64]) {
 fn pseudo_angle(v: [i64; 2], ccw: bool) -> i128 {
     let (x, y) = (i128::from(v[0]), i128::from(if ccw { v[1] } else { -v[1] }));
     let one = 1i128 << 62;
-    // |num| ≤ |den| < 2^41, so the product fits and the quotient is ≤ one.
-    let ratio = |num: i128, den: i128| num.wrapping_mul(one).checked_div(den).unwrap_or(0);
     if y >= 0 && x > 0 {
         ratio(y, x + y)
     } else if x <= 0 && y > 0 {
@@ -560,6 +558,14 @@ fn pseudo_angle(v: [i64; 2], ccw: bool) -> i128 {
     } else {
         3 * one + ratio(x, x - y)
     }
+}
+
+/// `num·2⁶²/den`, for `|num| ≤ |den| < 2⁴¹` (the product fits and the
+/// quotient is at most 2⁶²); 0 for `den = 0`. One copy of the 128-bit
+/// division for the four quadrants.
+#[inline(never)]
+fn ratio(num: i128, den: i128) -> i128 {
+    num.wrapping_mul(1i128 << 62).checked_div(den).unwrap_or(0)
 }
 
 #[cfg(test)]
