@@ -110,7 +110,9 @@ fn leading(line: &str) -> usize {
     line.len() - line.trim_start().len() + 1
 }
 
-/// The lines where the program stops for the operator: a gear range
+/// What the file holds outside its program (a tape's leader and trailer,
+/// [`crate::program::framing`]), and the lines where the program stops for
+/// the operator: a gear range
 /// (`M41`–`M44`) and the machine's own M codes (each does what the
 /// machine's table says, `MCODE`; one not in it stops with a message);
 /// and the probing blocks, which only the machine can run as they are.
@@ -118,7 +120,15 @@ pub fn warnings_in(text: &str, dialect: Dialect) -> Vec<Item> {
     let Ok(lines) = program_lines(text, dialect) else {
         return Vec::new();
     };
-    let mut out = Vec::new();
+    let mut out: Vec<Item> = crate::program::framing(text)
+        .notes()
+        .into_iter()
+        .map(|(line, what)| Item {
+            line,
+            column: 1,
+            what,
+        })
+        .collect();
     let mut units = Units::Mm;
     for (i, line) in &lines {
         if line.trim().is_empty() || !is_block(line) {

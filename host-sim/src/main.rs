@@ -585,6 +585,9 @@ fn read_program(
     if let Some(note) = note {
         eprintln!("{f}: {note}");
     }
+    for (line, note) in host_sim::program::framing(&text).notes() {
+        eprintln!("{f}:{line}: note: {note}");
+    }
     Ok((text, dialect))
 }
 
@@ -604,6 +607,7 @@ fn compensate(
         diam,
         dialect,
     };
+    let program = host_sim::program::framing(&program).apply(&program);
     match host_sim::compensate::compensate(&program, &settings) {
         Ok(out) => {
             for w in &out.warnings {

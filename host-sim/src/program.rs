@@ -330,8 +330,8 @@ pub fn setup_lines(text: &str) -> Vec<(usize, &str)> {
 
 /// The lines the device is sent, each with its line index in the file
 /// (from 0): the file's own lines, or its macros, subprograms and
-/// parameters expanded when it has any; each as [`device_text`] makes it.
-/// `run`, `check`, `plot`, `send` and `tape` all read a program through
+/// parameters expanded when it has any; each as [`device_text`] makes it;
+/// the tape's leader and trailer left out ([`framing`]). `run`, `check`, `plot`, `send` and `tape` all read a program through
 /// here, so they read every line one way.
 ///
 /// # Errors
@@ -340,6 +340,8 @@ pub fn program_lines(
     text: &str,
     dialect: Dialect,
 ) -> Result<Vec<(usize, String)>, crate::expand::ExpandError> {
+    let framed = framing(text).apply(text);
+    let text = framed.as_str();
     let lines: Vec<(usize, String)> = if crate::expand::needs_expansion(text) {
         crate::expand::expand(text, dialect)?
             .into_iter()
@@ -352,6 +354,156 @@ pub fn program_lines(
         .into_iter()
         .map(|(i, l)| (i, device_text(&l)))
         .collect())
+}
+
+/// What a file holds around its program as a punched tape or a DNC link
+/// carries it, outside what is read (`docs/protocol.md` §5): the
+/// leader before the first `%`, the trailer after the closing one.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Framing {
+    /// The line (index from 0) whose text before its `%` is the tape's
+    /// leader, and that text as [`control_names`] shows it.
+    pub leader: Option<(usize, String)>,
+    /// The closing `%`'s line when control characters follow it there,
+    /// and those as [`control_names`] shows them.
+    pub tail: Option<(usize, String)>,
+    /// The first and last line (indices from 0) after the closing `%`
+    /// that are not blank.
+    pub trailer: Option<(usize, usize)>,
+}
+
+impl Framing {
+    /// The text with the leader and the trailer left out, line for line
+    /// (the leader's and the tail's line are `%`, the trailer's lines are
+    /// empty), so every line keeps its number.
+    pub fn apply(&self, text: &str) -> String {
+        if *self == Framing::default() {
+            return text.to_string();
+        }
+        let at = |m: &Option<(usize, String)>, i: usize| m.as_ref().is_some_and(|(l, _)| *l == i);
+        let mut out = String::with_capacity(text.len());
+        for (i, line) in text.lines().enumerate() {
+            if at(&self.leader, i) || at(&self.tail, i) {
+                out.push('%');
+            } else if !self.trailer.is_some_and(|(a, b)| (a..=b).contains(&i)) {
+                out.push_str(line);
+            }
+            out.push('\n');
+        }
+        out
+    }
+
+    /// What `check` and `run` say of it, each with its line (from 1).
+    pub fn notes(&self) -> Vec<(usize, String)> {
+        let mut out = Vec::new();
+        if let Some((l, what)) = &self.leader {
+            out.push((
+                l + 1,
+                format!("the tape's leader before % is not read: {what}"),
+            ));
+        }
+        if let Some((l, what)) = &self.tail {
+            out.push((
+                l + 1,
+                format!("the tape's trailer after % is not read: {what}"),
+            ));
+        }
+        if let Some((a, b)) = self.trailer {
+            let lines = if a == b {
+                format!("line {} after it is", a + 1)
+            } else {
+                format!("lines {} to {} after it are", a + 1, b + 1)
+            };
+            out.push((
+                a + 1,
+                format!("the program ends at its closing %: {lines} not read"),
+            ));
+        }
+        out
+    }
+}
+
+/// A file's [`Framing`]. A line is a tape mark when it holds a `%` with
+/// only blanks before it and only blanks and control characters after it.
+/// The leader: on the file's first line that is not blank, text before a
+/// `%` that holds a control character (a reader's DC1–DC4, a printer's ESC
+/// sequence, NUL or DEL feed holes); printable text alone is not taken for
+/// one (it is refused as the line it is). The trailer: when the file has an
+/// opening and a closing mark, the control characters after the closing
+/// `%` and every line after it that is not blank, as LinuxCNC and a Fanuc
+/// reading a tape both stop at the closing `%`.
+pub fn framing(text: &str) -> Framing {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut f = Framing::default();
+    let blank = |l: &str| l.trim_matches([' ', '\t', '\r']).is_empty();
+    let control_only = |t: &str| t.chars().all(|c| c == ' ' || c.is_control());
+    let first = lines.iter().position(|l| !blank(l));
+    if let Some(first) = first {
+        if let Some((before, after)) = lines[first].split_once('%') {
+            if before.chars().any(|c| c.is_control() && c != '\t') && control_only(after) {
+                f.leader = Some((first, control_names(before)));
+            }
+        }
+    }
+    let mark = |i: usize| {
+        f.leader.as_ref().is_some_and(|(l, _)| *l == i)
+            || lines[i]
+                .trim_start_matches([' ', '\t'])
+                .strip_prefix('%')
+                .is_some_and(control_only)
+    };
+    let marks: Vec<usize> = (0..lines.len()).filter(|&i| mark(i)).collect();
+    if let [_, .., last] = marks[..] {
+        let after = lines[last]
+            .trim_start_matches([' ', '\t'])
+            .strip_prefix('%')
+            .unwrap_or("");
+        if after
+            .chars()
+            .any(|c| c.is_control() && c != '\t' && c != '\r')
+        {
+            f.tail = Some((
+                last,
+                control_names(after.trim_end_matches(['\r', ' ', '\t'])),
+            ));
+        }
+        let rest: Vec<usize> = (last + 1..lines.len())
+            .filter(|&i| !blank(lines[i]))
+            .collect();
+        if let (Some(&a), Some(&b)) = (rest.first(), rest.last()) {
+            f.trailer = Some((a, b));
+        }
+    }
+    f
+}
+
+/// Text with its control characters named (`DC2`, `ESC`, `0x1c`), the
+/// rest as it is.
+pub fn control_names(text: &str) -> String {
+    const NAMES: [&str; 32] = [
+        "NUL", "SOH", "STX", "ETX", "EOT", "ENQ", "ACK", "BEL", "BS", "HT", "LF", "VT", "FF", "CR",
+        "SO", "SI", "DLE", "DC1", "DC2", "DC3", "DC4", "NAK", "SYN", "ETB", "CAN", "EM", "SUB",
+        "ESC", "FS", "GS", "RS", "US",
+    ];
+    let mut out = String::new();
+    for c in text.chars() {
+        let name = match c {
+            '\u{7f}' => Some("DEL"),
+            c if (c as u32) < 32 => NAMES.get(c as usize).copied(),
+            _ => None,
+        };
+        match name {
+            Some(n) => {
+                if !out.is_empty() && !out.ends_with(' ') {
+                    out.push(' ');
+                }
+                out.push_str(n);
+                out.push(' ');
+            }
+            None => out.push(c),
+        }
+    }
+    out.trim_end().to_string()
 }
 
 /// A program line as it goes over the link: the CR of a CRLF file gone;
@@ -862,6 +1014,61 @@ mod tests {
         radius: false,
         optional_stop: false,
     };
+
+    /// A DNC file's DC2 before the first `%` and DC4 after the last are
+    /// the tape's leader and trailer: not sent, named, and every other line
+    /// keeps its number (a refusal after them is placed where it is).
+    #[test]
+    fn a_tapes_leader_and_trailer_are_named_and_not_read() {
+        let text = "\u{12}%\nG21 G18 G98\nG00 X20. Z2.\nG01 Z-30. F300. Q5\nM30\n%\u{14}\n";
+        let f = framing(text);
+        assert_eq!(f.leader, Some((0, "DC2".to_string())));
+        assert_eq!(f.tail, Some((5, "DC4".to_string())));
+        assert_eq!(f.trailer, None);
+        let lines = program_lines(text, Dialect::Fanuc).unwrap();
+        assert_eq!(lines[0], (0, "%".to_string()));
+        assert_eq!(lines[5], (5, "%".to_string()));
+        let report = run(text, FANUC);
+        assert_eq!(report.refused.len(), 1, "{:?}", report.refused);
+        assert_eq!(report.refused[0].line, 4);
+        assert_eq!(
+            f.notes(),
+            vec![
+                (1, "the tape's leader before % is not read: DC2".to_string()),
+                (6, "the tape's trailer after % is not read: DC4".to_string()),
+            ]
+        );
+        // A printer's escape sequence before DC2 is leader too.
+        let esc = framing("\u{1b}&HE:\u{12}%\n:0100\nG00 X1.\n%\n");
+        assert_eq!(esc.leader, Some((0, "ESC &HE: DC2".to_string())));
+    }
+
+    /// Lines after the closing `%` are not run, and are named; a file
+    /// without an opening `%` has no closing one; printable text before a
+    /// `%` is not a leader.
+    #[test]
+    fn lines_after_the_closing_mark_are_not_run_and_are_named() {
+        let text = "%\nG00 X20. Z2.\n%\n\nG00 X999.\nM30\n";
+        let f = framing(text);
+        assert_eq!(f.trailer, Some((4, 5)));
+        assert_eq!(
+            f.notes(),
+            vec![(
+                5,
+                "the program ends at its closing %: lines 5 to 6 after it are not read".to_string()
+            )]
+        );
+        let report = run(text, FANUC);
+        assert!(report.refused.is_empty(), "{:?}", report.refused);
+        assert_eq!(report.blocks, 3);
+        // One mark only: nothing is a trailer.
+        assert_eq!(framing("G00 X1.\n%\nG00 X2.\n"), Framing::default());
+        // Readable text before the first `%`: sent as it is, and refused.
+        let label = "PART 7 %\nG00 X1.\n%\n";
+        assert_eq!(framing(label).leader, None);
+        assert_eq!(run(label, FANUC).refused.len(), 1);
+        assert_eq!(framing(label).apply(label), label);
+    }
 
     #[test]
     fn a_program_reports_its_time_travel_and_tools() {

@@ -249,6 +249,34 @@ fn check_lists_what_the_device_refuses_in_the_programs_dialect() {
     );
     let (code, text) = run(&["check", "--dialect", "haas", p]);
     assert_eq!((code, text.as_str()), (Some(2), ""));
+    // A DNC file: DC2 before the first % and DC4 after the last are the
+    // tape's, named as warnings; a line after the closing % is not run.
+    std::fs::write(
+        &part,
+        "\u{12}%\nO1000\nG21 G18 G99\nG00 X30. Z2.\nM30\n%\u{14}\nG00 X999.\n",
+    )
+    .unwrap();
+    let (code, text) = run(&["check", p]);
+    assert_eq!(code, Some(0));
+    assert_eq!(
+        text,
+        format!(
+            "{p}: dialect: FANUC (line 3 is one of its words)\n\
+             {p}:1:1: warning: the tape's leader before % is not read: DC2\n\
+             {p}:6:1: warning: the tape's trailer after % is not read: DC4\n\
+             {p}:7:1: warning: the program ends at its closing %: line 7 after it is not read\n\
+             {p}: every line is one the device reads\n"
+        )
+    );
+    let out = Command::new(BIN).args(["run", p]).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "{p}:1: note: the tape's leader before % is not read: DC2"
+        )),
+        "{err}"
+    );
     std::fs::write(&part, "G21 G99\nT0101\nG95\n").unwrap();
     let out = Command::new(BIN).args(["check", p]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
