@@ -683,10 +683,8 @@ impl Session {
             }
         }
         // Known before the first block moves (a refusal comes before
-        // motion), from one reading of the held blocks: the profile must end
-        // with nose compensation off (the return to the start point is not a
-        // compensated move), and every feed move of it needs a feed.
-        let mut compensating = self.contour.active();
+        // motion), from one reading of the held blocks: every feed move of
+        // the profile has a feed.
         let mut feed =
             b.f.or(self.modal.feed)
                 .is_some_and(|f| f.as_angstrom() != 0);
@@ -694,11 +692,6 @@ impl Session {
         let mut unfed = false;
         for line in self.cycles.lines() {
             if let Ok(pb) = parse(line, self.offsets.reading.dialect, self.modal.units) {
-                match pb.compensation {
-                    Some(crate::gcode::Compensation::Off) => compensating = false,
-                    Some(_) => compensating = true,
-                    None => {}
-                }
                 if let Some(f) = pb.f {
                     feed = f.as_angstrom() != 0;
                 }
@@ -707,11 +700,6 @@ impl Session {
                 }
                 unfed |= !feed && motion != Motion::Rapid && (pb.x.is_some() || pb.z.is_some());
             }
-        }
-        if compensating {
-            return Err(Refusal::Missing(
-                "the profile leaves nose compensation on: end it with G40 before Q",
-            ));
         }
         if unfed {
             return Err(Refusal::Value(
@@ -734,6 +722,9 @@ impl Session {
             self.gcode_block(&line, crc, io)?;
         }
         // Back to the start point: X first, then Z, at the rapid rate.
+        if self.contour.active() {
+            return self.compensated_return(back, crc, io);
+        }
         let here = |p: [Length; 2]| [p[0].as_angstrom(), p[1].as_angstrom()];
         let (from, back) = (here(self.prog), here(back));
         let mut at = from;
@@ -760,6 +751,51 @@ impl Session {
             Length::from_angstrom(back[0]).unwrap_or(self.prog[0]),
             Length::from_angstrom(back[1]).unwrap_or(self.prog[1]),
         ];
+        Ok(())
+    }
+
+    /// `G70`'s return when its profile leaves `G41`/`G42` on (as Fanuc's
+    /// programs do that cancel it after the cycle): the two rapids, X then
+    /// Z, go through nose compensation as the blocks `G00 U…` and `G00 W…`
+    /// would, the second waiting for the next block's corner; the motion
+    /// mode stays the profile's.
+    fn compensated_return<I: Io>(
+        &mut self,
+        back: [Length; 2],
+        crc: &mut Crc32,
+        io: &mut I,
+    ) -> Result<(), Refusal<'static>> {
+        let motion = self.modal.motion;
+        for (axis, end) in back.iter().enumerate() {
+            let at = if axis == 0 {
+                self.prog[0]
+            } else {
+                self.prog[1]
+            };
+            let Some(d) = end.checked_sub(at) else {
+                return Err(Refusal::Range("G70's start point beyond 99999.999999 mm"));
+            };
+            if d == Length::ZERO {
+                continue;
+            }
+            let mut b = crate::gcode::Block {
+                motion: Some(Motion::Rapid),
+                ..crate::gcode::Block::default()
+            };
+            if axis == 0 {
+                let twice = d
+                    .checked_add(d)
+                    .ok_or(Refusal::Range("G70's start point beyond 99999.999999 mm"))?;
+                (b.x, b.x_half, b.incremental_x) = (Some(twice), Some(d), true);
+                if !self.cfg.diam {
+                    b.x = Some(d);
+                }
+            } else {
+                (b.z, b.incremental_z) = (Some(d), true);
+            }
+            self.gcode_words(b, crc, io)?;
+        }
+        self.modal.motion = motion;
         Ok(())
     }
 }

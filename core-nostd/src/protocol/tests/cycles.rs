@@ -179,6 +179,76 @@ fn g71_roughs_in_passes_and_g70_finishes_on_the_profile() {
     );
 }
 
+/// A profile that turns `G42` on and leaves it on, as Fanuc's sample
+/// programs write it (`G40` after the cycle): `G71` roughs on the tip's
+/// path as always, and `G70` finishes on the compensated profile and
+/// returns, X then Z, through compensation as the blocks written out by
+/// hand would; compensation stays on until the `G40` block.
+#[test]
+fn g70_returns_through_compensation_when_its_profile_leaves_it_on() {
+    let run = |program: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        let r = run_program(&mut dev, program);
+        for (line, reply) in program.iter().zip(&r) {
+            assert!(reply.last().unwrap().starts_with("OK"), "{line}: {reply:?}");
+        }
+        (data(&r), ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"))
+    };
+    let head = [
+        "CFG RN=0.8",
+        "G21 G18 G98",
+        "G00 X50. Z2.",
+        "G71 U2. R.5",
+        "G71 P10 Q30 U.4 W.2 F300.",
+        "N10 G00 G42 X20.",
+        "N20 G01 Z-30. F100.",
+        "N30 X44.",
+    ];
+    let mut cycle = head.to_vec();
+    cycle.extend(["G70 P10 Q30", "G00 G40 X60. Z10."]);
+    let mut by_hand = head.to_vec();
+    by_hand.extend([
+        "G00 G42 X20.",
+        "G01 Z-30. F100.",
+        "X44.",
+        "G00 U6.",
+        "W32.",
+        "G00 G40 X60. Z10.",
+    ]);
+    let (moves, sync, pos) = run(&cycle);
+    let (moves_by_hand, sync_by_hand, pos_by_hand) = run(&by_hand);
+    assert_eq!(moves, moves_by_hand);
+    assert_eq!(sync, sync_by_hand);
+    assert_eq!(pos, pos_by_hand);
+    // The finish is compensated: the approach stops the nose (0.8 mm)
+    // short of the face, and the shoulder ends short of the programmed
+    // outside corner (X44 Z-30), where the nose turns around it.
+    assert!(
+        moves.contains(&"G00 X20.0000 Z1.2000".to_string()),
+        "{moves:?}"
+    );
+    assert!(
+        !moves.contains(&"G01 X44.0000 Z-30.0000".to_string()),
+        "{moves:?}"
+    );
+    // Without G40 after the cycle, the end of the program is refused as
+    // with any contour left on, and nothing moves.
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let mut open = head.to_vec();
+    open.push("G70 P10 Q30");
+    for (line, reply) in open.iter().zip(run_program(&mut dev, &open)) {
+        assert!(reply.last().unwrap().starts_with("OK"), "{line}: {reply:?}");
+    }
+    let pos = ask1(&mut dev, "POS");
+    assert_eq!(
+        ask1(&mut dev, "M30"),
+        "ERR GEOMETRY M02/M30 not allowed while G41/G42 is on; cancel with G40 first"
+    );
+    assert_eq!(ask1(&mut dev, "POS"), pos);
+}
+
 /// A profile block the device refuses refuses the cycle: the blocks up to
 /// Q are refused with it, nothing moves, and the program goes on after Q.
 #[test]
