@@ -442,7 +442,8 @@ fn line_at(p: [i64; 2], q: [i64; 2], d: i64) -> i64 {
     if den == 0 {
         return p[0];
     }
-    let q2 = (2 * num + if num >= 0 { den } else { -den }) / (2 * den);
+    let q2 = crate::wide::checked_divrem_i128(2 * num + if num >= 0 { den } else { -den }, 2 * den)
+        .map_or(0, |(q, _)| q);
     p[0] + q2 as i64
 }
 
@@ -561,11 +562,11 @@ fn pseudo_angle(v: [i64; 2], ccw: bool) -> i128 {
 }
 
 /// `num·2⁶²/den`, for `|num| ≤ |den| < 2⁴¹` (the product fits and the
-/// quotient is at most 2⁶²); 0 for `den = 0`. One copy of the 128-bit
-/// division for the four quadrants.
+/// quotient is at most 2⁶²); 0 for `den = 0`. One call of the shared
+/// 128-bit division for the four quadrants.
 #[inline(never)]
 fn ratio(num: i128, den: i128) -> i128 {
-    num.wrapping_mul(1i128 << 62).checked_div(den).unwrap_or(0)
+    crate::wide::checked_divrem_i128(num.wrapping_mul(1i128 << 62), den).map_or(0, |(q, _)| q)
 }
 
 #[cfg(test)]

@@ -416,8 +416,8 @@ fn from_gcode(text: &str, m: u64, e: u32) -> Result<Length, LengthError> {
         // 10 … 10³⁰: never zero.
         let unit = core::num::NonZeroU128::new(10u128.pow(decimals - e))
             .unwrap_or(core::num::NonZeroU128::MIN);
-        let scaled = digits * m;
-        scaled / unit + u128::from(2 * (scaled % unit) >= unit.get())
+        let (q, r) = crate::wide::divrem_u128(digits * m, unit);
+        q + u128::from(2 * r >= unit.get())
     };
     let angstrom = u128::from(whole) * m * 10u128.pow(e) + frac;
     if angstrom > LENGTH_LIMIT.angstrom as u128 {

@@ -28,7 +28,7 @@ use crate::impulse::ImpulsePrice;
 use crate::interleave::StepEvent;
 use crate::length::{div_round_half_away, Length};
 use crate::plan::Limits;
-use crate::wide::{isqrt, U256};
+use crate::wide::{checked_divrem_i128, isqrt, udiv, U256};
 
 /// The longest lead: 2³⁰ × 10⁻⁷ mm (107.37 mm per revolution).
 pub const MAX_LEAD: i64 = 1 << 30;
@@ -278,7 +278,7 @@ impl SyncPass {
             // leaves less than a count).
             lock: (
                 self.lead_in / 2,
-                (2 * d * n - k * cc).checked_div(2 * k).unwrap_or(0) as i64,
+                checked_divrem_i128(2 * d * n - k * cc, 2 * k).map_or(0, |(q, _)| q) as i64,
             ),
         };
         for i in 0..2 {
@@ -291,12 +291,7 @@ impl SyncPass {
                 let step = 2 * i128::from(self.price[i & 1]) * d * n;
                 e.line_den[i & 1] = den;
                 // R ≥ 0 and den > 0: plain division floors.
-                let divrem = |v: i128| {
-                    (
-                        v.checked_div(den).unwrap_or(0),
-                        v.checked_rem(den).unwrap_or(0),
-                    )
-                };
+                let divrem = |v: i128| checked_divrem_i128(v, den).unwrap_or((0, 0));
                 e.line[i & 1] = divrem(r0);
                 e.line_step[i & 1] = divrem(step);
             }
@@ -358,7 +353,7 @@ impl SyncEvents {
         if after < self.lock.0 {
             let x = (r * d * n * cc) as u128;
             let y = (da * kk) as u128;
-            let (fl, rem) = (x.checked_div(y).unwrap_or(0), x.checked_rem(y).unwrap_or(0));
+            let (fl, rem) = udiv(x, y).unwrap_or((0, 0));
             // m² ≥ X: m² ≥ ⌈X⌉; m² > X: m² ≥ ⌊X⌋ + 1.
             let t = fl + u128::from(rem > 0 || strict);
             let m = ceil_sqrt(t);
@@ -495,16 +490,20 @@ pub fn highest_rpm(
         }
         let kd = u128::from(k) * u128::from(delta[a & 1]);
         let rate = u128::from(limits.rate(a).as_angstrom().unsigned_abs());
-        let by_rate = (rate * u128::from(d)).checked_div(kd).unwrap_or(0);
-        let steps = (60 * u128::from(rate_hz) * u128::from(price[a & 1]) * u128::from(d))
-            .checked_div(kd)
-            .unwrap_or(0);
+        let by_rate = udiv(rate * u128::from(d), kd).map_or(0, |(q, _)| q);
+        let steps = udiv(
+            60 * u128::from(rate_hz) * u128::from(price[a & 1]) * u128::from(d),
+            kd,
+        )
+        .map_or(0, |(q, _)| q);
         best = best.min(by_rate).min(steps);
         let amax = u128::from(limits.accel(a).as_angstrom().unsigned_abs());
         accel = accel.min(
-            (amax * u128::from(d))
-                .checked_div(u128::from(delta[a & 1]) * crate::length::ANGSTROM_PER_MM as u128)
-                .unwrap_or(0),
+            udiv(
+                amax * u128::from(d),
+                u128::from(delta[a & 1]) * crate::length::ANGSTROM_PER_MM as u128,
+            )
+            .map_or(0, |(q, _)| q),
         );
     }
     let accel = u32::try_from(accel).unwrap_or(u32::MAX);
@@ -516,8 +515,8 @@ pub fn highest_rpm(
 /// `⌈n/d⌉` for `n ≥ 0` and `d > 0` (0 for `d = 0`, which no caller
 /// passes: a division that cannot panic).
 const fn ceil_div(n: i128, d: i128) -> i128 {
-    match (n + d - 1).checked_div(d) {
-        Some(q) => q,
+    match checked_divrem_i128(n + d - 1, d) {
+        Some((q, _)) => q,
         None => 0,
     }
 }
@@ -540,7 +539,8 @@ pub fn lead_in_counts(lead: Length, rpm: u32, cpr: u32, accel: u32) -> Option<u3
     // K in 10⁻⁷ mm: C ≥ K·n²·N / (3600·a·10⁷).
     let num = lead.as_angstrom() as u128 * u128::from(rpm) * u128::from(rpm) * u128::from(cpr);
     let den = 3600 * u128::from(accel) * crate::length::ANGSTROM_PER_MM as u128;
-    let c = num.checked_div(den)? + u128::from(num.checked_rem(den)? != 0);
+    let (q, r) = udiv(num, den)?;
+    let c = q + u128::from(r != 0);
     let c = c.max(2);
     let c = c + c % 2;
     u32::try_from(c).ok().filter(|&c| c <= MAX_LEAD_IN)

@@ -104,7 +104,7 @@ pub enum ThreadMove {
 /// `n / d` rounded half away from zero (`d > 0`; 0 for `d` 0, which
 /// the callers never pass).
 fn round_div(n: i128, d: i128) -> i128 {
-    let q = (2 * n.abs() + d).checked_div(2 * d).unwrap_or(0);
+    let q = crate::wide::checked_divrem_i128(2 * n.abs() + d, 2 * d).map_or(0, |(q, _)| q);
     if n < 0 {
         -q
     } else {
@@ -333,9 +333,7 @@ impl G76 {
         );
         // ⌊(2√v + E)/2E⌋ with v = P²(K² + E²): ⌊2√v⌋ = isqrt(4v).
         let v = p * p * (k * k + e * e);
-        ((u128::from(isqrt(4 * v)) + e)
-            .checked_div(2 * e)
-            .unwrap_or(0)) as i64
+        crate::wide::udiv(u128::from(isqrt(4 * v)) + e, 2 * e).map_or(0, |(q, _)| q) as i64
     }
 
     /// The last move of the cycle: to the drive line at `Z`.

@@ -313,6 +313,15 @@ pub(crate) const fn checked_divrem_i128(n: i128, d: i128) -> Option<(i128, i128)
     }
 }
 
+/// `(n / d, n % d)`, `None` for `d = 0`: [`divrem_u128`] for a divisor
+/// not known to be non-zero.
+pub(crate) const fn udiv(n: u128, d: u128) -> Option<(u128, u128)> {
+    match NonZeroU128::new(d) {
+        Some(d) => Some(divrem_u128(n, d)),
+        None => None,
+    }
+}
+
 /// `⌊a · b / d⌋`, saturating at `u128::MAX`.
 pub(crate) const fn mul_div(a: u128, b: u128, d: u128) -> u128 {
     U256::mul(a, b).div(d)
