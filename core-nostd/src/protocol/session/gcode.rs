@@ -199,9 +199,24 @@ impl Session {
         let off = offsets.vector(&sel).ok_or(Refusal::Range(
             "the offsets in effect add beyond 99999.999999 mm",
         ))?;
-        if (sel != self.sel || b.set_work.is_some()) && self.contour.active() {
+        // A block that ends nose compensation may take up a new tool
+        // offset, as Fanuc's retract `G00 G40 X250. Z250. T0` does: the
+        // element it finishes and the corner after it are the old offset's
+        // and the old nose's, its own move (the lead-out) the new offset's.
+        let leaving = self.contour.active()
+            && b.compensation == Some(Compensation::Off)
+            && sel.wcs == self.sel.wcs
+            && b.set_work.is_none();
+        if (sel != self.sel || b.set_work.is_some()) && self.contour.active() && !leaving {
             return Err(self.busy("a work or tool offset change"));
         }
+        let off_before = if leaving {
+            self.offsets
+                .vector(&self.sel)
+                .ok_or(Refusal::Range(RANGE_OFFSET))?
+        } else {
+            off
+        };
         // The machine stays where it is when offsets change (a work system
         // selected or set, G92 and its kin, a tool's offset): the point
         // here is the same machine point in the new work coordinates, so an
@@ -420,7 +435,13 @@ impl Session {
             // G40 too: the lead-out is the nose's that compensated.
             (None, _) => self.dynamic_tool,
         };
-        let tool = dynamic_tool.unwrap_or_else(|| self.nose(&offsets, &sel));
+        let tool = dynamic_tool.unwrap_or_else(|| {
+            if leaving {
+                self.nose(&self.offsets, &self.sel)
+            } else {
+                self.nose(&offsets, &sel)
+            }
+        });
         if b.round.is_some()
             && (b.stop.is_some() || b.gear.is_some() || b.machine_m.is_some() || b.dwell.is_some())
         {
@@ -435,6 +456,25 @@ impl Session {
         // The blocks in machine coordinates: the tip's path plus the offsets.
         let mut moves = moves;
         for m in moves.iter_mut() {
+            // The lead-out of a block that ends compensation takes a new
+            // offset up on the axes it names; an axis it leaves out keeps
+            // the old one (it never moves by an offset change).
+            let off = if m.origin == Origin::Current {
+                [
+                    if words.0.is_some() {
+                        off[0]
+                    } else {
+                        off_before[0]
+                    },
+                    if words.1.is_some() {
+                        off[1]
+                    } else {
+                        off_before[1]
+                    },
+                ]
+            } else {
+                off_before
+            };
             m.to = shifted(m.to, off)?;
             if let MoveKind::Arc { centre, .. } = &mut m.kind {
                 *centre = shifted(*centre, off)?;

@@ -349,3 +349,76 @@ fn a_corner_waits_for_its_next_move_and_refusals_change_nothing() {
         ]
     );
 }
+
+/// Fanuc's retract `G00 G40 X… Z… T0`: the block that ends compensation
+/// takes up the new tool offset on its own move, the lead-out; the element
+/// it finishes and its corner keep the offset and the nose they were
+/// compensated with. Any other offset change under compensation, and a
+/// work system change even in the `G40` block, is still refused.
+#[test]
+fn the_block_that_ends_compensation_takes_up_a_new_tool_offset() {
+    let run = |last: &[&str]| {
+        let mut dev = Device::new();
+        ask1(&mut dev, "OPT DIALECT=fanuc");
+        let mut program = std::vec![
+            "TOOL N=1 X=-20 Z=5 R=0.8 T=3",
+            "TOOL N=2 X=-10 Z=2",
+            "G21 G18 G98 T0101",
+            "G00 X50. Z5.",
+            "G42 G01 X20. Z0 F100.",
+            "Z-30.",
+            "X44.",
+        ];
+        program.extend_from_slice(last);
+        let r = run_program(&mut dev, &program);
+        for (line, reply) in program.iter().zip(&r) {
+            assert!(reply.last().unwrap().starts_with("OK"), "{line}: {reply:?}");
+        }
+        (data(&r), ask1(&mut dev, "POS"))
+    };
+    let (kept, kept_pos) = run(&["G00 G40 X60. Z10."]);
+    let (changed, changed_pos) = run(&["G00 G40 X60. Z10. T0202"]);
+    let (cancelled, _) = run(&["G00 G40 X60. Z10. T0"]);
+    // Up to the lead-out, the same moves: the old offset and nose.
+    let n = kept.len();
+    assert_eq!(changed.len(), n);
+    assert_eq!(changed[..n - 1], kept[..n - 1]);
+    assert_eq!(cancelled[..n - 1], kept[..n - 1]);
+    // The lead-out ends at X60 Z10 plus each offset in effect: tool 1's
+    // (-20, 5) as before, tool 2's (-10, 2), none after T0 (X on the
+    // diameter, in TOOL and in the DATA lines).
+    assert_eq!(kept[n - 1], "G00 X40.0000 Z15.0000");
+    assert_eq!(changed[n - 1], "G00 X50.0000 Z12.0000");
+    assert_eq!(cancelled[n - 1], "G00 X60.0000 Z10.0000");
+    assert_ne!(kept_pos, changed_pos);
+    // An axis the block leaves out keeps the old offset (Z: the programmed
+    // Z-30 plus tool 1's 5) until a block names it.
+    let (x_only, pos) = run(&["G00 G40 X60. T0202", "G00 Z10."]);
+    assert_eq!(x_only[..n - 1], kept[..n - 1]);
+    assert_eq!(x_only[n - 1], "G00 X50.0000 Z-25.0000");
+    assert_eq!(x_only[n], "G00 X50.0000 Z12.0000");
+    assert!(pos.contains(" X=60.0000 Z=10.0000"), "{pos}");
+    // Still refused, and nothing moves: an offset change while the contour
+    // goes on, and a work system change in the G40 block.
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    for line in [
+        "TOOL N=1 X=-20 Z=5 R=0.8 T=3",
+        "G21 G18 G98 T0101",
+        "G00 X50. Z5.",
+        "G42 G01 X20. Z0 F100.",
+        "Z-30.",
+    ] {
+        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
+        assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
+    }
+    let pos = ask1(&mut dev, "POS");
+    for line in ["X44. T0202", "G00 G40 G55 X60. Z10."] {
+        let r = ask1(&mut dev, line);
+        assert!(
+            r.starts_with("ERR") && r.contains("offset change"),
+            "{line}: {r}"
+        );
+        assert_eq!(ask1(&mut dev, "POS"), pos);
+    }
+}
