@@ -766,12 +766,9 @@ impl Session {
         io: &mut I,
     ) -> Result<(), Refusal<'static>> {
         let motion = self.modal.motion;
-        for (axis, end) in back.iter().enumerate() {
-            let at = if axis == 0 {
-                self.prog[0]
-            } else {
-                self.prog[1]
-            };
+        // The X move leaves the programmed Z as it was: one reading of the
+        // point before both.
+        for (axis, (end, at)) in back.into_iter().zip(self.prog).enumerate() {
             let Some(d) = end.checked_sub(at) else {
                 return Err(Refusal::Range("G70's start point beyond 99999.999999 mm"));
             };
@@ -783,13 +780,15 @@ impl Session {
                 ..crate::gcode::Block::default()
             };
             if axis == 0 {
-                let twice = d
-                    .checked_add(d)
-                    .ok_or(Refusal::Range("G70's start point beyond 99999.999999 mm"))?;
-                (b.x, b.x_half, b.incremental_x) = (Some(twice), Some(d), true);
-                if !self.cfg.diam {
-                    b.x = Some(d);
-                }
+                // `U`: the word as written (a diameter in G07) and its half.
+                let word = if self.cfg.diam {
+                    d.checked_add(d)
+                } else {
+                    Some(d)
+                };
+                let word =
+                    word.ok_or(Refusal::Range("G70's start point beyond 99999.999999 mm"))?;
+                (b.x, b.x_half, b.incremental_x) = (Some(word), Some(d), true);
             } else {
                 (b.z, b.incremental_z) = (Some(d), true);
             }
