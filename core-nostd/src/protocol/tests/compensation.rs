@@ -358,8 +358,6 @@ fn a_corner_waits_for_its_next_move_and_refusals_change_nothing() {
 #[test]
 fn the_block_that_ends_compensation_takes_up_a_new_tool_offset() {
     let run = |last: &[&str]| {
-        let mut dev = Device::new();
-        ask1(&mut dev, "OPT DIALECT=fanuc");
         let mut program = std::vec![
             "TOOL N=1 X=-20 Z=5 R=0.8 T=3",
             "TOOL N=2 X=-10 Z=2",
@@ -370,10 +368,7 @@ fn the_block_that_ends_compensation_takes_up_a_new_tool_offset() {
             "X44.",
         ];
         program.extend_from_slice(last);
-        let r = run_program(&mut dev, &program);
-        for (line, reply) in program.iter().zip(&r) {
-            assert!(reply.last().unwrap().starts_with("OK"), "{line}: {reply:?}");
-        }
+        let (mut dev, r) = fanuc_program(&program);
         (data(&r), ask1(&mut dev, "POS"))
     };
     let (kept, kept_pos) = run(&["G00 G40 X60. Z10."]);

@@ -187,12 +187,7 @@ fn g71_roughs_in_passes_and_g70_finishes_on_the_profile() {
 #[test]
 fn g70_returns_through_compensation_when_its_profile_leaves_it_on() {
     let run = |program: &[&str]| {
-        let mut dev = Device::new();
-        ask1(&mut dev, "OPT DIALECT=fanuc");
-        let r = run_program(&mut dev, program);
-        for (line, reply) in program.iter().zip(&r) {
-            assert!(reply.last().unwrap().starts_with("OK"), "{line}: {reply:?}");
-        }
+        let (mut dev, r) = fanuc_program(program);
         (data(&r), ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"))
     };
     let head = [
@@ -234,13 +229,9 @@ fn g70_returns_through_compensation_when_its_profile_leaves_it_on() {
     );
     // Without G40 after the cycle, the end of the program is refused as
     // with any contour left on, and nothing moves.
-    let mut dev = Device::new();
-    ask1(&mut dev, "OPT DIALECT=fanuc");
     let mut open = head.to_vec();
     open.push("G70 P10 Q30");
-    for (line, reply) in open.iter().zip(run_program(&mut dev, &open)) {
-        assert!(reply.last().unwrap().starts_with("OK"), "{line}: {reply:?}");
-    }
+    let (mut dev, _) = fanuc_program(&open);
     let pos = ask1(&mut dev, "POS");
     assert_eq!(
         ask1(&mut dev, "M30"),
@@ -328,17 +319,6 @@ fn cycle_refusals_come_before_motion() {
     assert!(r.last().unwrap().starts_with("OK NX=200"), "{r:?}");
 }
 
-/// A device in the Fanuc dialect that has taken every line of `program`.
-fn fanuc_run(program: &[&str]) -> Device {
-    let mut dev = Device::new();
-    ask1(&mut dev, "OPT DIALECT=fanuc");
-    for line in program {
-        let r = ask(&mut dev, std::format!("{line}\n").as_bytes());
-        assert!(r.last().unwrap().starts_with("OK"), "{line}: {r:?}");
-    }
-    dev
-}
-
 /// `G75` grooves and `G74` pecks as the blocks written out by hand: each
 /// peck in at the feed, back by the return at the rapid rate, out of the
 /// groove at the rapid rate, over by the step to the next groove, back to
@@ -347,7 +327,7 @@ fn fanuc_run(program: &[&str]) -> Device {
 #[test]
 fn g74_and_g75_peck_as_their_blocks_written_out() {
     let run = |program: &[&str]| {
-        let mut dev = fanuc_run(program);
+        let (mut dev, _) = fanuc_program(program);
         (ask1(&mut dev, "SYNC"), ask1(&mut dev, "POS"))
     };
     let fanuc = run(&[
@@ -404,7 +384,7 @@ fn g74_and_g75_peck_as_their_blocks_written_out() {
 #[test]
 fn a_grooving_block_starts_the_spindle_and_the_coolant_before_it_cuts() {
     let run = |program: &[&str]| {
-        let mut dev = fanuc_run(program);
+        let (mut dev, _) = fanuc_program(program);
         (
             ask1(&mut dev, "SYNC"),
             ask1(&mut dev, "POS"),

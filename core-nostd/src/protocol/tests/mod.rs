@@ -99,6 +99,18 @@ fn run_program(dev: &mut Device, program: &[&str]) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// A device in the Fanuc dialect that has taken every line of `program`
+/// (each answered `OK`), and the replies.
+fn fanuc_program(program: &[&str]) -> (Device, Vec<Vec<String>>) {
+    let mut dev = Device::new();
+    ask1(&mut dev, "OPT DIALECT=fanuc");
+    let replies = run_program(&mut dev, program);
+    for (line, reply) in program.iter().zip(&replies) {
+        assert!(reply.last().unwrap().starts_with("OK"), "{line}: {reply:?}");
+    }
+    (dev, replies)
+}
+
 fn data(replies: &[Vec<String>]) -> Vec<String> {
     replies
         .iter()
