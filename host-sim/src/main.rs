@@ -1273,6 +1273,9 @@ fn run_program(
         "travel: {:.3} mm at feed, {:.3} mm rapid; {} step events",
         r.feed_mm, r.rapid_mm, r.events
     ));
+    if let Some(line) = cycles_line(&r.cycles) {
+        report(line);
+    }
     let tools: Vec<String> = r
         .tools
         .iter()
@@ -1295,6 +1298,44 @@ fn run_program(
     } else {
         ExitCode::from(1)
     })
+}
+
+/// `run`'s line on the canned cycles: the time of each kind, how many ran
+/// and on which lines (`cycles: roughing 0:41.250 (1, line 23), finishing
+/// 0:12.004 (1, line 54)`); none when no cycle ran.
+fn cycles_line(cycles: &[host_sim::program::CycleRun]) -> Option<String> {
+    let mut kinds: Vec<(&str, Option<u64>, Vec<usize>)> = Vec::new();
+    for c in cycles {
+        let i = match kinds.iter().position(|k| k.0 == c.kind) {
+            Some(i) => i,
+            None => {
+                kinds.push((c.kind, Some(0), Vec::new()));
+                kinds.len() - 1
+            }
+        };
+        let k = &mut kinds[i];
+        k.1 = k.1.zip(c.us).map(|(a, b)| a + b);
+        if k.2.last() != Some(&c.line) {
+            k.2.push(c.line);
+        }
+    }
+    if kinds.is_empty() {
+        return None;
+    }
+    let parts: Vec<String> = kinds
+        .iter()
+        .map(|(kind, us, lines)| {
+            let n = cycles.iter().filter(|c| c.kind == *kind).count();
+            let mut at: Vec<String> = lines.iter().take(6).map(usize::to_string).collect();
+            if lines.len() > 6 {
+                at.push("…".into());
+            }
+            let word = if lines.len() == 1 { "line" } else { "lines" };
+            let time = us.map_or("time not known".to_string(), host_sim::program::minutes);
+            format!("{kind} {time} ({n}, {word} {})", at.join(", "))
+        })
+        .collect();
+    Some(format!("cycles: {}", parts.join(", ")))
 }
 
 /// The setup requests and the program's lines the device refused, on

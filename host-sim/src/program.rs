@@ -58,6 +58,8 @@ pub struct Report {
     pub rapid_mm: f64,
     /// Each tool change: the line and the `T` word as written.
     pub tools: Vec<(usize, String)>,
+    /// Each canned cycle run, in order.
+    pub cycles: Vec<CycleRun>,
     /// Each program stop, where cycle start was pressed: the line and
     /// `M00` or `M01`.
     pub stops: Vec<(usize, String)>,
@@ -67,6 +69,41 @@ pub struct Report {
     /// The same blocks exactly: the end point and, for an arc, the centre
     /// (X on the radius, ångström), with the G code.
     pub path: Vec<Traced>,
+}
+
+/// A canned cycle the device ran: its block, its moves in
+/// [`Report::path`], and how long they took.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CycleRun {
+    /// The line of its cycle block (`G71 P… Q…`, `G70`, `G90 X… Z…`, or
+    /// the block repeating a single cycle), from 1.
+    pub line: usize,
+    /// What it does: `roughing` (`G71`, `G72`, `G73`), `finishing`
+    /// (`G70`), `grooving` (`G74`, `G75`), `single` (`G90`, `G94`).
+    pub kind: &'static str,
+    /// Its moves: a range of [`Report::path`].
+    pub moves: std::ops::Range<usize>,
+    /// From the start of its first move to the end of its last (its last
+    /// step event, or the axes at rest when its run ends with it), dwells
+    /// between included, µs; `None` when the step events could not be
+    /// matched to the moves.
+    pub us: Option<u64>,
+}
+
+impl CycleRun {
+    /// What a cycle block starts, by its words: the kind of
+    /// [`CycleRun::kind`].
+    fn kind_of(b: &core_nostd::gcode::Block) -> Option<&'static str> {
+        use core_nostd::gcode::CycleKind;
+        if b.single.is_some() {
+            return Some("single");
+        }
+        b.cycle.map(|c| match c.kind {
+            CycleKind::Finish => "finishing",
+            CycleKind::PeckFace | CycleKind::PeckGroove => "grooving",
+            _ => "roughing",
+        })
+    }
 }
 
 /// One motion block the device ran, exactly.
@@ -143,6 +180,12 @@ struct Tally {
     line: usize,
     /// Counting the events to this one, the line whose request issued it.
     find: Option<(u64, Option<usize>)>,
+    /// Time of the runs ended and the dwells so far, µs.
+    clock: u64,
+    /// Each linear block run: its end in impulses (X on the radius, Z),
+    /// when it started and when it ended (its last step event, or its
+    /// run's end), µs from the start.
+    ends: Vec<([i64; 2], u64, u64)>,
 }
 
 /// A machine file's lathe following the events of a run.
@@ -197,6 +240,12 @@ impl Io for Tally {
         self.out.extend_from_slice(line);
     }
     fn block_start(&mut self, block: &LinearBlock) {
+        let t = block.to();
+        // From rest, when its run starts; else when the block before
+        // issued its last event.
+        let at = self.ends.last().map_or(self.clock, |e| e.2.max(self.clock));
+        self.ends
+            .push(([i64::from(t.x.0), i64::from(t.z.0)], at, at));
         self.keep(Happening::Block(*block));
     }
     fn run_start(&mut self) {
@@ -217,6 +266,9 @@ impl Io for Tally {
     }
     fn step(&mut self, event: StepEvent, tick: u64, _: &DriveTiming) {
         self.events += 1;
+        if let Some(e) = self.ends.last_mut() {
+            e.2 = self.clock + tick;
+        }
         if let Some(w) = self.watch.as_mut() {
             w.step(self.events, event, tick);
         }
@@ -232,10 +284,16 @@ impl Io for Tally {
     }
     fn run_end(&mut self, ticks: u64) {
         self.run_ticks += ticks;
+        // The run's last block ends with it, at rest.
+        if let Some(e) = self.ends.last_mut() {
+            e.2 = e.2.max(self.clock + ticks);
+        }
+        self.clock += ticks;
         self.keep(Happening::RunEnd(ticks));
     }
     fn dwell(&mut self, us: u64) {
         self.dwell_us += us;
+        self.clock += us;
         self.keep(Happening::Dwell(us));
     }
     fn program_stop(&mut self, code: u16) {
@@ -785,6 +843,9 @@ fn run_inner(
         true
     };
     let mut stopped_at = None;
+    // The last cycle block (its line and kind), and whether a single cycle
+    // is in force (a block of only X, Z repeats it).
+    let (mut cycle_at, mut single) = (None, false);
     let mut units = Units::Mm;
     let mut tool = None;
     let mut at = [0i64; 2];
@@ -819,6 +880,9 @@ fn run_inner(
             report.refused_at.push(seq);
             continue;
         }
+        // Whether this block may end a profile the device is reading (a
+        // two-block cycle's roughing runs with it).
+        let profile = dev.session().reading_profile();
         let reply = request(&mut dev, &mut io, line);
         if !reply.starts_with("OK") {
             report.refused_at.push(seq);
@@ -831,7 +895,22 @@ fn run_inner(
         }
         // What the device read: the tool word and the unit.
         let mut this_block = motion_block;
+        let mut this_cycle = None;
         if let Ok(b) = parse(line, options.dialect, units) {
+            let kind = CycleRun::kind_of(&b);
+            if let Some(k) = kind {
+                cycle_at = Some((i + 1, k));
+                single = k == "single";
+                this_cycle = cycle_at;
+            } else if profile {
+                this_cycle = cycle_at;
+            } else if single && b.motion.is_none() && !b.cancel_cycle {
+                if b.x.is_some() || b.z.is_some() {
+                    this_cycle = Some((i + 1, "single"));
+                }
+            } else {
+                single = false;
+            }
             if b.x.is_some() || b.z.is_some() {
                 this_block = (i + 1, seq);
             }
@@ -865,7 +944,9 @@ fn run_inner(
         // A request that ran many blocks (a turning cycle's roughing, a
         // G70's profile): its moves from its DATA lines, one per block.
         let data = data_moves(&io.out, !options.radius, at);
-        if data.len() != moves.len() {
+        let first = report.path.len();
+        let many = data.len() != moves.len();
+        if many {
             moves = data;
         }
         for m in &moves {
@@ -933,6 +1014,14 @@ fn run_inner(
             report.trace.push(block);
             at = m.to;
         }
+        if let (true, Some((line, kind))) = (many, this_cycle) {
+            report.cycles.push(CycleRun {
+                line,
+                kind,
+                moves: first..report.path.len(),
+                us: None,
+            });
+        }
         motion_block = this_block;
         if element {
             // As the device keeps them (a move that waits for its corner
@@ -984,6 +1073,7 @@ fn run_inner(
         }
         None => None,
     };
+    cycle_times(&mut report, &io.ends, timeline.price);
     report.motion_us = io.run_ticks;
     report.dwell_us = io.dwell_us;
     report.events = io.events;
@@ -997,6 +1087,65 @@ fn run_inner(
         machine_run,
         io.find.and_then(|(_, found)| found),
     )
+}
+
+/// Each cycle's time: the step events' linear blocks matched in order to
+/// the moves of [`Report::path`] (a line is one block; an arc's chords
+/// end with one on its end; a move shorter than an impulse runs none).
+/// Left unknown if the two do not match.
+fn cycle_times(report: &mut Report, ends: &[([i64; 2], u64, u64)], price: [i64; 2]) {
+    if report.cycles.is_empty() || price.contains(&0) {
+        return;
+    }
+    let q = |p: [i64; 2]| [div_round(p[0], price[0]), div_round(p[1], price[1])];
+    // When each move's first linear block started and its last step event
+    // came, µs (a move that runs none: when the move before ended).
+    let mut spans = Vec::with_capacity(report.path.len());
+    let (mut k, mut at, mut t) = (0usize, [0i64; 2], 0u64);
+    for m in &report.path {
+        let end = q(m.to);
+        let mut span = [t, t];
+        if m.centre.is_some() || end != at {
+            let mut first = true;
+            loop {
+                let Some(&(to, start, last)) = ends.get(k) else {
+                    return;
+                };
+                k += 1;
+                if first {
+                    (span[0], first) = (start, false);
+                }
+                span[1] = last;
+                if to == end {
+                    break;
+                }
+            }
+        }
+        (at, t) = (end, span[1]);
+        spans.push(span);
+    }
+    if k != ends.len() {
+        // Blocks not among the moves: not known which is which.
+        return;
+    }
+    for c in &mut report.cycles {
+        if let (Some(first), Some(last)) = (
+            spans.get(c.moves.start),
+            c.moves.end.checked_sub(1).and_then(|i| spans.get(i)),
+        ) {
+            c.us = Some(last[1] - first[0]);
+        }
+    }
+}
+
+/// `a / b` rounded half away from zero (`b > 0`).
+pub(crate) fn div_round(a: i64, b: i64) -> i64 {
+    let q = (2 * a.unsigned_abs() + b.unsigned_abs()) / (2 * b.unsigned_abs());
+    if a < 0 {
+        -(q as i64)
+    } else {
+        q as i64
+    }
 }
 
 /// Microseconds as `m:ss.sss`.
@@ -1018,6 +1167,54 @@ mod tests {
     /// A DNC file's DC2 before the first `%` and DC4 after the last are
     /// the tape's leader and trailer: not sent, named, and every other line
     /// keeps its number (a refusal after them is placed where it is).
+    /// A cycle's time is the time its moves take written out as blocks:
+    /// the roughing of a `G71` and a `G73`, and the `G70` after each, run
+    /// between two dwells (the axes at rest), against the program with
+    /// their traced moves in their place, less the program without them.
+    #[test]
+    fn a_cycles_time_is_its_moves_time() {
+        let head = "G21 G18 G40 G98\nS800 M03\nG00 X30. Z2.\nG04 P0.2\n";
+        let tail = "G04 P0.2\nG00 X60. Z20.\nM30\n";
+        for (cycle, feed, kind) in [
+            (
+                "G71 U1.5 R0.5\nG71 P10 Q40 U0.4 W0.1 F200.\nN10 G00 X20.\n\
+                 N20 G01 Z-10. F100.\nN30 X26. Z-15.\nN40 Z-25.\n",
+                200,
+                "roughing",
+            ),
+            (
+                "G73 U2. W1. R3\nG73 P84 Q87 U0.4 W0.1 F150.\nN84 G00 X16. Z1.\n\
+                 N85 G01 Z0 F80.\nN86 G03 X20. Z-2. R2.\nN87 G01 Z-8.\n",
+                150,
+                "roughing",
+            ),
+            (
+                "G71 U1.5 R0.5\nG71 P10 Q40 U0.4 W0.1 F200.\nN10 G00 X20.\n\
+                 N20 G01 Z-10. F100.\nN30 X26. Z-15.\nN40 Z-25.\nG04 P0.2\nG70 P10 Q40\n",
+                100,
+                "finishing",
+            ),
+        ] {
+            let r = run(&format!("{head}{cycle}{tail}"), FANUC);
+            assert!(r.refused.is_empty(), "{:?}", r.refused);
+            let c = r.cycles.last().expect("a cycle ran");
+            assert_eq!(c.kind, kind);
+            let moves = &r.trace[c.moves.clone()];
+            assert!(moves.len() > 4, "{moves:?}");
+            let written: String = moves.iter().map(|m| format!("{m}\n")).collect();
+            let with = run(&format!("{head}F{feed}.\n{written}{tail}"), FANUC);
+            let without = run(&format!("{head}{tail}"), FANUC);
+            assert!(with.refused.is_empty(), "{:?}", with.refused);
+            assert_eq!(
+                with.trace[with.trace.len() - moves.len() - 1..with.trace.len() - 1],
+                *moves
+            );
+            let us = c.us.expect("the cycle's time is known");
+            assert_eq!(us, with.motion_us - without.motion_us, "{kind}: {moves:?}");
+            assert!(us > 1_000_000, "{us}");
+        }
+    }
+
     #[test]
     fn a_tapes_leader_and_trailer_are_named_and_not_read() {
         let text = "\u{12}%\nG21 G18 G98\nG00 X20. Z2.\nG01 Z-30. F300. Q5\nM30\n%\u{14}\n";

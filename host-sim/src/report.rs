@@ -30,7 +30,7 @@ use crate::plot::{
     self, bold, clipped, decimals, font, k, ki, label, multiples, nice_step, Axis, Canvas,
     PlotError, Rect, CENTRE, DASH, MARGIN, PANEL, STEPS, TIP, WIDTH, X_LABELS, Y_LABELS,
 };
-use crate::program::{self, minutes, Happening, Report, Timeline, Traced};
+use crate::program::{self, div_round, minutes, Happening, Report, Timeline, Traced};
 use plotters::prelude::*;
 use plotters_backend::text_anchor::{HPos, Pos, VPos};
 use std::fmt::Write as _;
@@ -86,16 +86,6 @@ struct Element {
     feed: Option<f64>,
     /// The end in impulses (X on the radius, Z).
     end: [i64; 2],
-}
-
-/// `a / b` rounded half away from zero (`b > 0`).
-fn div_round(a: i64, b: i64) -> i64 {
-    let q = (2 * a.unsigned_abs() + b.unsigned_abs()) / (2 * b.unsigned_abs());
-    if a < 0 {
-        -(q as i64)
-    } else {
-        q as i64
-    }
 }
 
 fn elements(path: &[Traced], feeds: &[Option<f64>], price: [i64; 2]) -> Vec<Element> {
@@ -727,6 +717,20 @@ pub fn page(inputs: &Inputs) -> Result<String, PlotError> {
         h.push_str("<table>\n<tr><th>Line</th><th>Tool word</th></tr>\n");
         for (line, t) in &r.tools {
             let _ = writeln!(h, "<tr><td class=\"n\">{line}</td><td>{}</td></tr>", esc(t));
+        }
+        h.push_str("</table>\n");
+    }
+    if !r.cycles.is_empty() {
+        h.push_str("<h2>Canned cycles</h2>\n<table>\n<tr><th>Line</th><th>Cycle</th><th>Moves</th><th>Time (m:ss.sss)</th></tr>\n");
+        for c in &r.cycles {
+            let _ = writeln!(
+                h,
+                "<tr><td class=\"n\">{}</td><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td></tr>",
+                c.line,
+                c.kind,
+                c.moves.len(),
+                c.us.map_or("not known".to_string(), minutes)
+            );
         }
         h.push_str("</table>\n");
     }

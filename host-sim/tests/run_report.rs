@@ -71,3 +71,68 @@ fn run_writes_the_page_beside_its_text_report() {
     );
     let _ = std::fs::remove_dir_all(program.parent().unwrap());
 }
+
+/// A program with canned cycles: the text report's `cycles:` line names
+/// each kind with its count and lines, and the page lists every cycle
+/// with its time; the times of a kind add up to the line's.
+#[test]
+fn run_reports_the_time_of_each_canned_cycle() {
+    let program = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/fanuc-cycles.nc");
+    // Its own page: the other test removes its directory when done.
+    let page =
+        std::env::temp_dir().join(format!("host-sim-run-cycles-{}.html", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("run")
+        .arg(program)
+        .arg("--report")
+        .arg(&page)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("cycles: "))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let ms = |t: &str| -> u64 {
+        let (m, s) = t.split_once(':').unwrap();
+        let (s, f) = s.split_once('.').unwrap();
+        (m.parse::<u64>().unwrap() * 60 + s.parse::<u64>().unwrap()) * 1000
+            + f.parse::<u64>().unwrap()
+    };
+    let html = std::fs::read_to_string(&page).unwrap();
+    let rows: Vec<(usize, String, u64)> = html
+        .lines()
+        .filter(|l| l.contains("</td><td>") && l.matches("<td").count() == 4)
+        .filter_map(|l| {
+            let cells: Vec<&str> = l
+                .split("<td")
+                .skip(1)
+                .map(|c| c.split('>').nth(1).unwrap().split('<').next().unwrap())
+                .collect();
+            Some((cells[0].parse().ok()?, cells[1].to_string(), ms(cells[3])))
+        })
+        .collect();
+    for (kind, lines) in [
+        ("single", "(4, lines 8, 9, 21, 22)"),
+        ("roughing", "(2, lines 13, 26)"),
+        ("finishing", "(2, lines 18, 31)"),
+    ] {
+        let at = line
+            .find(&format!("{kind} "))
+            .unwrap_or_else(|| panic!("{kind}: {line}"));
+        let rest = &line[at + kind.len() + 1..];
+        let (time, after) = rest.split_once(' ').unwrap();
+        assert!(after.starts_with(lines), "{kind}: {line}");
+        let mine: Vec<&(usize, String, u64)> = rows.iter().filter(|r| r.1 == kind).collect();
+        let n: usize = lines[1..].split(',').next().unwrap().parse().unwrap();
+        assert_eq!(mine.len(), n, "{kind}: {rows:?}");
+        let sum: u64 = mine.iter().map(|r| r.2).sum();
+        // Each row rounded up to the millisecond, as the line's total.
+        assert!(
+            sum >= ms(time) && sum <= ms(time) + mine.len() as u64,
+            "{kind}: {sum} {time}"
+        );
+    }
+    let _ = std::fs::remove_file(&page);
+}
