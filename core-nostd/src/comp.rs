@@ -557,6 +557,10 @@ pub enum CompError {
     /// A chamfer (`,C`) where block `.0` or `.1` is an arc: a chamfer joins
     /// two lines (`,R` rounds arcs too).
     ChamferArc(Option<u32>, Option<u32>),
+    /// After block `.0`'s right-angle chamfer or round (`G01 Z… I…`), block
+    /// `.1` is not a `G01` along the other axis alone in the direction of
+    /// the word's sign.
+    RoundSquare(Option<u32>, Option<u32>),
 }
 
 /// The compensation state between blocks.
@@ -580,6 +584,9 @@ struct Rounding {
     e: Element,
     chamfer: bool,
     size: i64,
+    /// A right angle's (`G01 Z… I…`): the next move's axis (0 X, 1 Z)
+    /// and whether it goes towards plus.
+    square: Option<(u8, bool)>,
 }
 
 /// The contour engine: modal compensation and corner mode, at most one
@@ -670,6 +677,22 @@ impl Contour {
                 Some(e2) if feeds(&e2) && comp.is_none() => e2,
                 _ => return Err(CompError::RoundNext(w.e.n, n)),
             };
+            if let Some((axis, plus)) = w.square {
+                // Along that axis alone, that way, in a line.
+                let d = [e2.to[0] - w.e.to[0], e2.to[1] - w.e.to[1]];
+                let (along, across) = if axis == 0 {
+                    (d[0], d[1])
+                } else {
+                    (d[1], d[0])
+                };
+                if !matches!(e2.shape, Shape::Line { .. })
+                    || across != 0
+                    || (along > 0) != plus
+                    || along == 0
+                {
+                    return Err(CompError::RoundSquare(w.e.n, n));
+                }
+            }
             let (first, joint, rest) = round_corner(&w, &e2)?;
             for e in first.into_iter().chain([joint]) {
                 let _ = elements.push((e, true));
@@ -683,11 +706,22 @@ impl Contour {
             }
             (None, None) => {}
             (Some(r), Some(e)) if feeds(&e) && comp.is_none() => {
-                let (chamfer, size) = match r {
-                    CornerRound::Chamfer(c) => (true, c.as_angstrom()),
-                    CornerRound::Round(r) => (false, r.as_angstrom()),
+                let (chamfer, size, square) = match r {
+                    CornerRound::Chamfer(c) => (true, c.as_angstrom(), None),
+                    CornerRound::Round(r) => (false, r.as_angstrom(), None),
+                    CornerRound::Square {
+                        size,
+                        chamfer,
+                        next,
+                        plus,
+                    } => (chamfer, size.as_angstrom(), Some((next, plus))),
                 };
-                next_round = Some(Rounding { e, chamfer, size });
+                next_round = Some(Rounding {
+                    e,
+                    chamfer,
+                    size,
+                    square,
+                });
             }
             (Some(_), _) => return Err(CompError::RoundHere(n)),
         }

@@ -476,6 +476,21 @@ pub enum CornerRound {
     Chamfer(Length),
     /// `,R`: an arc of this radius tangent to both moves.
     Round(Length),
+    /// Fanuc's and Haas' chamfer or round of a right angle, on a `G01`
+    /// along one axis: `Z… I±i` or `X… K±k` (a chamfer of `i`, `k`),
+    /// `Z… R±r` or `X… R±r` (a round of `r`). The next move must be a
+    /// `G01` along the other axis alone, in the direction of the word's
+    /// sign.
+    Square {
+        /// The chamfer's leg or the round's radius (above 0).
+        size: Length,
+        /// A chamfer (`I`, `K`), or a round (`R`).
+        chamfer: bool,
+        /// The axis of the next move: 0 X, 1 Z.
+        next: u8,
+        /// Whether the next move goes towards plus.
+        plus: bool,
+    },
 }
 
 /// The single cycles of G-code system A: one pass in, along, out and back.

@@ -126,8 +126,13 @@ fn core_corner(e1: Element, e2: Element, c: CornerRound) -> Result<Points, CompE
 fn ref_corner(e1: &Element, e2: &Element, c: CornerRound) -> Result<Points, RefCornerRefusal> {
     let size = |l: Length| l.as_angstrom() as f64 / A;
     let rc = match c {
-        CornerRound::Chamfer(l) => RefCorner::Chamfer(size(l)),
-        CornerRound::Round(l) => RefCorner::Round(size(l)),
+        CornerRound::Chamfer(l)
+        | CornerRound::Square {
+            size: l,
+            chamfer: true,
+            ..
+        } => RefCorner::Chamfer(size(l)),
+        CornerRound::Round(l) | CornerRound::Square { size: l, .. } => RefCorner::Round(size(l)),
     };
     let (first, joint, rest) = corner(as_ref(e1), as_ref(e2), rc)?;
     let end = |e: &RefElement| match *e {
@@ -201,6 +206,7 @@ fn random_corners_cover_every_outcome() {
                 CornerRound::Chamfer(_) => "chamfer",
                 CornerRound::Round(_) if arcs => "round with an arc",
                 CornerRound::Round(_) => "round of lines",
+                CornerRound::Square { .. } => "right angle",
             },
             (Err(e), Err(r)) if same_refusal(e, r) => match r {
                 RefCornerRefusal::NoCorner => "no corner",

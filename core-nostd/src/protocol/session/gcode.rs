@@ -264,6 +264,8 @@ impl Session {
         }
         let has_end = words.0.is_some() || words.1.is_some();
         let arc_words = b.i.is_some() || b.k.is_some() || b.r.is_some();
+        // Fanuc's `G01 Z… I…`: a right angle's chamfer or round.
+        let mut square = None;
         // 5. Plane (G17–G19) and motion mode (G00–G03): the element.
         if modal.plane != Plane::Zx {
             let arc = matches!(modal.motion, Motion::ArcCw | Motion::ArcCcw)
@@ -287,7 +289,11 @@ impl Session {
             _ if special.is_some() => None,
             Motion::Rapid | Motion::Linear => {
                 if arc_words {
-                    return Err(Refusal::Missing("I, K and R need G02 or G03"));
+                    square = Some(square_corner(
+                        &b,
+                        modal.motion,
+                        self.offsets.reading.dialect,
+                    )?);
                 }
                 has_end.then_some(Shape::Line {
                     rapid: modal.motion == Motion::Rapid,
@@ -442,7 +448,8 @@ impl Session {
                 self.nose(&offsets, &sel)
             }
         });
-        if b.round.is_some()
+        let round = square.or(b.round);
+        if round.is_some()
             && (b.stop.is_some() || b.gear.is_some() || b.machine_m.is_some() || b.dwell.is_some())
         {
             return Err(Refusal::Missing(
@@ -451,7 +458,7 @@ impl Session {
         }
         let (contour, moves) = self
             .contour
-            .rounded(&tool, b.compensation, b.corner, element, b.round, b.n)
+            .rounded(&tool, b.compensation, b.corner, element, round, b.n)
             .map_err(Refusal::Contour)?;
         // The blocks in machine coordinates: the tip's path plus the offsets.
         let mut moves = moves;
@@ -727,4 +734,59 @@ impl Session {
         self.machine.set_spindle(outputs.rpm);
         self.aux = aux;
     }
+}
+
+/// Fanuc's and Haas' right-angle chamfer or round on a `G01` along one
+/// axis: `Z… I±i`, `X… K±k` (a chamfer), `Z… R±r`, `X… R±r` (a round),
+/// the sign the way of the next move along the other axis.
+fn square_corner(
+    b: &crate::gcode::Block,
+    motion: Motion,
+    dialect: crate::gcode::Dialect,
+) -> Result<crate::gcode::CornerRound, Refusal<'static>> {
+    let arc = Refusal::Missing("I, K and R need G02 or G03");
+    if dialect != crate::gcode::Dialect::Fanuc || motion != Motion::Linear {
+        return Err(arc);
+    }
+    let form = Refusal::Missing(
+        "a right angle's chamfer or round: G01 Z with I or R, G01 X with K or R, one word",
+    );
+    if b.round.is_some() {
+        return Err(Refusal::Missing(
+            "one corner a block: ,C or ,R, or I, K or R",
+        ));
+    }
+    // The axis of the next move, and the word.
+    let (next, word, chamfer) = match (b.x.is_some(), b.z.is_some(), b.i, b.k, b.r) {
+        (false, true, Some(i), None, None) => (0, i, true),
+        (true, false, None, Some(k), None) => (1, k, true),
+        (false, true, None, None, Some(r)) => (0, r, false),
+        (true, false, None, None, Some(r)) => (1, r, false),
+        _ => return Err(form),
+    };
+    let size = if word.as_angstrom() < 0 {
+        word.neg()
+    } else {
+        word
+    };
+    if size == Length::ZERO {
+        return Err(Refusal::Value(
+            if chamfer {
+                if next == 0 {
+                    "I"
+                } else {
+                    "K"
+                }
+            } else {
+                "R"
+            },
+            "a chamfer or round above 0",
+        ));
+    }
+    Ok(crate::gcode::CornerRound::Square {
+        size,
+        chamfer,
+        next,
+        plus: word.as_angstrom() > 0,
+    })
 }

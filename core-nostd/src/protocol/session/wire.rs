@@ -589,6 +589,15 @@ pub(super) fn send_contour_refusal<I: Io>(io: &mut I, e: CompError) {
                 this(b)
             ),
         ),
+        CompError::RoundSquare(a, b) => send_error(
+            io,
+            E::Geometry,
+            format_args!(
+                "{}: after the I, K or R of {} (a right angle's chamfer or round), a G01 along the other axis alone, the way of the word's sign",
+                this(b),
+                last(a)
+            ),
+        ),
         CompError::ChamferArc(a, b) => send_error(
             io,
             E::Geometry,

@@ -350,6 +350,89 @@ fn a_corner_waits_for_its_next_move_and_refusals_change_nothing() {
     );
 }
 
+/// Fanuc's and Haas' right-angle corner on a `G01` along one axis:
+/// `Z… I±i` and `X… K±k` chamfer, `Z… R±r` and `X… R±r` round, exactly as
+/// `,C` and `,R` of the same size; the next move must go along the other
+/// axis alone the way of the word's sign, else it is refused with nothing
+/// moved and the corner waits on; other forms are refused by name.
+#[test]
+fn a_right_angles_chamfer_and_round_are_i_k_and_r_on_a_one_axis_g01() {
+    let head = ["G21 G18 G98", "G00 X20. Z2."];
+    for (square, comma, next) in [
+        ("G01 Z-10. I2. F100.", "G01 Z-10. F100. ,C2.", "X30."),
+        ("G01 Z-10. I-1.5 F100.", "G01 Z-10. F100. ,C1.5", "X10."),
+        ("G01 X30. K-1. F100.", "G01 X30. F100. ,C1.", "Z-8."),
+        ("G01 X30. K2. F100.", "G01 X30. F100. ,C2.", "Z8."),
+        ("G01 Z-10. R3. F100.", "G01 Z-10. F100. ,R3.", "X30."),
+        ("G01 X30. R-2. F100.", "G01 X30. F100. ,R2.", "Z-8."),
+        ("G01 W-12. R-1. F100.", "G01 W-12. F100. ,R1.", "U-6."),
+    ] {
+        let run = |corner: &str| {
+            let mut program = std::vec::Vec::from(head);
+            program.extend([corner, next]);
+            let (mut dev, r) = fanuc_program(&program);
+            (data(&r), ask1(&mut dev, "POS"))
+        };
+        let (a, a_pos) = run(square);
+        let (b, b_pos) = run(comma);
+        assert_eq!(a, b, "{square}");
+        assert_eq!(a.len(), 4, "{a:?}");
+        assert_eq!(a_pos, b_pos);
+    }
+    // The next move the other way, along both axes, along the same axis,
+    // an arc, or a rapid: refused, nothing moved; then the right one runs.
+    let wrong = "ERR GEOMETRY N20: after the I, K or R of N10 (a right angle's chamfer or round), a G01 along the other axis alone, the way of the word's sign";
+    let mut dev = super::cycles::refusals_change_nothing(
+        "N10 G01 Z-10. I2. F100.",
+        &[
+            ("N20 X-10.", wrong),
+            ("N20 X30. Z-12.", wrong),
+            ("N20 Z-20.", wrong),
+            ("N20 G02 X10. Z-15. R5.", wrong),
+            (
+                "N20 G00 X30.",
+                "ERR GEOMETRY N20: the ,C/,R of N10 needs a G01-G03 move next, no G40-G42",
+            ),
+        ],
+    );
+    let r = ask(&mut dev, b"N20 X30.\n");
+    assert_eq!(
+        r[..3],
+        [
+            "DATA G01 X0.0000 Z-8.0000",
+            "DATA G01 X4.0000 Z-10.0000",
+            "DATA G01 X30.0000 Z-10.0000"
+        ],
+        "{r:?}"
+    );
+    // Forms refused by name, nothing moved.
+    let form = "ERR SYNTAX a right angle's chamfer or round: G01 Z with I or R, G01 X with K or R, one word";
+    let _ = super::cycles::refusals_change_nothing(
+        "G21 G18 G98",
+        &[
+            ("G01 X30. Z-12. I1. F100.", form),
+            ("G01 X30. I1. F100.", form),
+            ("G01 Z-12. K1. F100.", form),
+            ("G01 Z-12. I1. K1. F100.", form),
+            ("G01 Z-12. I1. R1. F100.", form),
+            (
+                "G01 Z-12. R0 F100.",
+                "ERR VALUE R a chamfer or round above 0",
+            ),
+            ("G00 Z-12. I1.", "ERR SYNTAX I, K and R need G02 or G03"),
+            (
+                "G01 Z-12. I1. F100. ,C1.",
+                "ERR SYNTAX one corner a block: ,C or ,R, or I, K or R",
+            ),
+        ],
+    );
+    // The ISO dialect has no such corner.
+    let mut dev = Device::new();
+    assert!(
+        ask1(&mut dev, "G01 Z-12. I1. F100.").starts_with("ERR SYNTAX I, K and R need G02 or G03")
+    );
+}
+
 /// Fanuc's retract `G00 G40 X… Z… T0`: the block that ends compensation
 /// takes up the new tool offset on its own move, the lead-out; the element
 /// it finishes and its corner keep the offset and the nose they were
