@@ -422,6 +422,11 @@ pub struct Framing {
     /// The line (index from 0) whose text before its `%` is the tape's
     /// leader, and that text as [`control_names`] shows it.
     pub leader: Option<(usize, String)>,
+    /// Lines before the first `%` line holding nothing but control
+    /// characters (a reader's DC2 on a line of its own): the first and the
+    /// last (indices from 0), and their characters as [`control_names`]
+    /// shows them.
+    pub leading: Option<(usize, usize, String)>,
     /// The closing `%`'s line when control characters follow it there,
     /// and those as [`control_names`] shows them.
     pub tail: Option<(usize, String)>,
@@ -441,9 +446,13 @@ impl Framing {
         let at = |m: &Option<(usize, String)>, i: usize| m.as_ref().is_some_and(|(l, _)| *l == i);
         let mut out = String::with_capacity(text.len());
         for (i, line) in text.lines().enumerate() {
+            let leading = self
+                .leading
+                .as_ref()
+                .is_some_and(|(a, b, _)| (*a..=*b).contains(&i));
             if at(&self.leader, i) || at(&self.tail, i) {
                 out.push('%');
-            } else if !self.trailer.is_some_and(|(a, b)| (a..=b).contains(&i)) {
+            } else if !leading && !self.trailer.is_some_and(|(a, b)| (a..=b).contains(&i)) {
                 out.push_str(line);
             }
             out.push('\n');
@@ -454,6 +463,12 @@ impl Framing {
     /// What `check` and `run` say of it, each with its line (from 1).
     pub fn notes(&self) -> Vec<(usize, String)> {
         let mut out = Vec::new();
+        if let Some((l, _, what)) = &self.leading {
+            out.push((
+                l + 1,
+                format!("the tape's leader before % is not read: {what}"),
+            ));
+        }
         if let Some((l, what)) = &self.leader {
             out.push((
                 l + 1,
@@ -500,6 +515,28 @@ pub fn framing(text: &str) -> Framing {
         if let Some((before, after)) = lines[first].split_once('%') {
             if before.chars().any(|c| c.is_control() && c != '\t') && control_only(after) {
                 f.leader = Some((first, control_names(before)));
+            }
+        }
+    }
+    // Lines of control characters alone before the first `%` line.
+    let percent = |l: &str| {
+        l.trim_start_matches([' ', '\t'])
+            .strip_prefix('%')
+            .is_some_and(control_only)
+    };
+    if let (Some(first), Some(p)) = (first, lines.iter().position(|l| percent(l))) {
+        let before: Vec<usize> = (first..p).filter(|&i| !blank(lines[i])).collect();
+        let controls = |l: &str| l.chars().any(|c| c.is_control() && c != '\t' && c != '\r');
+        if let (Some(&a), Some(&b)) = (before.first(), before.last()) {
+            if before
+                .iter()
+                .all(|&i| control_only(lines[i]) && controls(lines[i]))
+            {
+                let names: Vec<String> = before
+                    .iter()
+                    .map(|&i| control_names(lines[i].trim_matches([' ', '\t', '\r'])))
+                    .collect();
+                f.leading = Some((a, b, names.join(" ")));
             }
         }
     }
@@ -1238,6 +1275,30 @@ mod tests {
         // A printer's escape sequence before DC2 is leader too.
         let esc = framing("\u{1b}&HE:\u{12}%\n:0100\nG00 X1.\n%\n");
         assert_eq!(esc.leader, Some((0, "ESC &HE: DC2".to_string())));
+        // The reader's DC2 on a line of its own, blank lines around it.
+        let text = "\n\u{12}\r\n\n%\nG00 X20. Z2.\nM30\n%\n";
+        let own = framing(text);
+        assert_eq!(own.leading, Some((1, 1, "DC2".to_string())));
+        assert_eq!(own.leader, None);
+        assert_eq!(
+            own.notes(),
+            vec![(2, "the tape's leader before % is not read: DC2".to_string())]
+        );
+        let lines = program_lines(text, Dialect::Fanuc).unwrap();
+        assert!(
+            lines.iter().all(|(_, l)| !l.contains('\u{12}')),
+            "{lines:?}"
+        );
+        let report = run(text, FANUC);
+        assert!(report.refused.is_empty(), "{:?}", report.refused);
+        // The two `%` lines and the two blocks.
+        assert_eq!(report.blocks, 4);
+        // Not when a printable line stands before the `%` too.
+        let mixed = framing("\u{12}\nO100\n%\nG00 X1.\n%\n");
+        assert_eq!(mixed.leading, None);
+        assert!(!run("\u{12}\nO100\n%\nG00 X1.\n%\n", FANUC)
+            .refused
+            .is_empty());
     }
 
     /// Lines after the closing `%` are not run, and are named; a file
