@@ -1146,6 +1146,12 @@ fn block(c: &mut Cur, deleted: bool) -> Result<Block, ExpandError> {
                 ))
             }
             Some(l) if l.is_ascii_alphabetic() => b.words.push(word(c)?),
+            Some(b'[') if b.words.is_empty() && b.assigns.is_empty() => {
+                return Err(c.err(
+                    c.pos,
+                    "unexpected '[': an expression follows an address letter (X[1+2]); a line that opens with '[' (a simulator's [BILLET) is not G-code",
+                ))
+            }
             _ => return Err(c.err(c.pos, format!("unexpected {}", c.show()))),
         }
     }
@@ -3188,6 +3194,13 @@ mod tests {
         );
         refused("G01 X[FOO[1]]\n", ISO, 1, 7, "unknown function FOO");
         refused("G01 X[1 +]\n", ISO, 1, 10, "unexpected ']'");
+        refused(
+            "G21\n[BILLET X53.97 Z113\n",
+            FANUC,
+            2,
+            1,
+            "unexpected '[': an expression follows an address letter (X[1+2]); a line that opens with '[' (a simulator's [BILLET) is not G-code",
+        );
         refused("G01 X#\n", ISO, 1, 6, "# must be followed by");
         refused("G01 X[1] (open\n", ISO, 1, 10, "comment not closed");
         refused("#1 2\n", ISO, 1, 4, "expected =");
