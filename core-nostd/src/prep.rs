@@ -1082,4 +1082,124 @@ mod tests {
             assert!(rx.is_empty());
         }
     }
+
+    /// Liveness of hold and resume, as a sender drives them: the blocks
+    /// handed over eagerly, or only when the prep has prepared the last
+    /// one (a late thread mode: the stepper stands between two blocks at
+    /// speed); a hold after any entry, a cycle start at once (while it
+    /// brakes: changes nothing) and again every 40 entries, as a sender
+    /// repeats it. Every run ends with every step of the path issued in
+    /// order and the axes at rest at its end; none waits forever; and no
+    /// step is due before the step interrupt's clock, which a pause at
+    /// rest moves on: a block that comes after a hold ended its run at
+    /// rest starts a run of its own, its ticks counting from then.
+    #[test]
+    fn a_hold_after_any_entry_and_a_repeated_resume_always_finish_the_path() {
+        // Cycle start; with the axes at rest (held, everything prepared
+        // issued), a second of the operator's time first.
+        fn resume(prep: &mut Prep, tx: &mut ReadyTx<'_>, clock: &mut u64) {
+            if prep.motion() == AxesState::Held && tx.is_empty() {
+                *clock += 1_000_000;
+            }
+            let _ = prep.resume(tx);
+        }
+        let items = run(&[0, -3_000, -3_500, -9_000, -9_100, -20_000], None);
+        let (want, alone) = pulled(&items);
+        let path: Vec<u8> = pulled_steps(&want).iter().map(|s| s.0).collect();
+        let entries = want.len() as u32;
+        for late in [false, true] {
+            for hold_at in (0..entries + 3).step_by(5) {
+                let q = ReadyQueue::new();
+                let (mut tx, mut rx) = q.split().unwrap();
+                let mut prep = Prep::new();
+                let mut next = items.iter().cloned().peekable();
+                let mut taken: Vec<Ready> = Vec::new();
+                let mut rounds = 0u32;
+                let mut since_resume = 0u32;
+                let mut held = false;
+                let (mut clock, mut origin) = (0u64, 0u64);
+                loop {
+                    rounds += 1;
+                    assert!(
+                        rounds < 100_000,
+                        "stuck: late {late}, hold at {hold_at}, {} taken, {:?}",
+                        taken.len(),
+                        prep.motion()
+                    );
+                    // Thread mode: a run's start and its first block at
+                    // once; the rest as room allows, or when hungry.
+                    while let Some(i) = next.peek() {
+                        if late && prep.stepper.in_run() && !prep.hungry() {
+                            break;
+                        }
+                        if prep.push(i.clone()).is_err() {
+                            break;
+                        }
+                        next.next();
+                        if late {
+                            break;
+                        }
+                    }
+                    prep.fill(&mut tx);
+                    match rx.dequeue() {
+                        Some(r) => {
+                            // The step interrupt's clock: a run starts
+                            // now, a step waits for its tick and is never
+                            // late.
+                            match r {
+                                Ready::RunStart => origin = clock,
+                                Ready::Step { tick, .. } => {
+                                    let due = origin + u64::from(tick);
+                                    assert!(
+                                        due >= clock,
+                                        "late {late}, hold at {hold_at}: a step {} late",
+                                        clock - due
+                                    );
+                                    clock = due;
+                                }
+                                _ => {}
+                            }
+                            taken.push(r);
+                            since_resume += 1;
+                        }
+                        None if next.peek().is_none() && prep.is_idle() => break,
+                        None => since_resume += 40,
+                    }
+                    if !held && taken.len() as u32 >= hold_at {
+                        held = true;
+                        prep.hold();
+                        // Cycle start at once: while braking, nothing.
+                        resume(&mut prep, &mut tx, &mut clock);
+                        since_resume = 0;
+                    }
+                    if held && since_resume >= 40 {
+                        since_resume = 0;
+                        resume(&mut prep, &mut tx, &mut clock);
+                    }
+                }
+                let bits: Vec<u8> = steps(&taken).iter().map(|s| s.0).collect();
+                assert_eq!(bits, path, "late {late}, hold at {hold_at}");
+                // Blocks and steps only inside a run, and a run's ticks
+                // in order from its start.
+                let mut open: Option<u32> = None;
+                for (k, r) in taken.iter().enumerate() {
+                    let at = std::format!("late {late}, hold at {hold_at}, entry {k}");
+                    match *r {
+                        Ready::RunStart => open = Some(0),
+                        Ready::RunEnd => open = None,
+                        Ready::Block { .. } => {
+                            assert!(open.is_some(), "{at}: a block outside a run")
+                        }
+                        Ready::Step { tick, .. } => {
+                            let last = open.expect("a step inside a run");
+                            assert!(tick >= last, "{at}: tick {tick} before {last}");
+                            open = Some(tick);
+                        }
+                    }
+                }
+                assert_eq!(prep.motion(), AxesState::Idle);
+                assert_eq!(prep.stepper.issued(), alone.issued());
+            }
+        }
+    }
 }

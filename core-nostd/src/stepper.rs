@@ -195,6 +195,11 @@ impl<const R: usize> Stepper<R> {
         !self.ring.is_full()
     }
 
+    /// Whether a run is open: started and not ended.
+    pub fn in_run(&self) -> bool {
+        self.in_run
+    }
+
     /// Items waiting behind the one being issued.
     pub fn waiting(&self) -> usize {
         self.ring.len()
@@ -283,6 +288,18 @@ impl<const R: usize> Stepper<R> {
                     match self.ring.pop_front()? {
                         Item::RunStart => {
                             (self.in_run, self.end, self.exit2) = (true, 0, 0);
+                            return Some(Pulled::RunStart);
+                        }
+                        Item::Block(s) if !self.in_run => {
+                            // A hold at rest ended the run before this
+                            // block came, and a resume found nothing to
+                            // take up: the block starts a run of its own,
+                            // timed again from rest at its start (its
+                            // planned ticks count from a start that has
+                            // passed).
+                            let _ = self.ring.push_front(Item::Block(s));
+                            (self.in_run, self.end, self.exit2) = (true, 0, 0);
+                            self.retime = true;
                             return Some(Pulled::RunStart);
                         }
                         Item::Block(s) => return Some(self.block(s)),

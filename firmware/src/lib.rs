@@ -203,6 +203,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {
 
     fn pause(&mut self) {
         supervisor::beat();
+        self.motion.watch_step();
         self.answer_status();
     }
 
@@ -266,6 +267,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P
                 Err(back) => item = back,
             }
             // Full: status lines meanwhile, then sleep until there is room.
+            self.motion.watch_step();
             self.answer_status();
             let motion = &mut self.motion;
             motion::sleep_unless(|| motion::wanted() || motion.has_room());
@@ -275,6 +277,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Background for Controller<P
 
     fn drain(&mut self) {
         while !self.motion.drained() {
+            self.motion.watch_step();
             self.answer_status();
             let motion = &mut self.motion;
             motion::sleep_unless(|| motion::wanted() || motion.drained());

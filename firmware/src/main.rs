@@ -166,6 +166,7 @@ mod app {
                     let idle = io.idle();
                     io.storage.save_if_due(device, idle);
                     let Controller { bytes, motion, .. } = &mut io;
+                    motion.watch_step();
                     motion::sleep_unless(|| {
                         bytes.pending()
                             || motion::wanted()

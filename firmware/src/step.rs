@@ -61,6 +61,11 @@ const REFILL: u32 = 64;
 /// this (QEMU's) is armed again instead.
 const SPIN_MAX: i32 = 64;
 
+/// A step armed for this many ticks past its tick, with no alarm or
+/// interrupt pending, was lost (under QEMU: [`StepIsr::overdue`]).
+#[cfg(feature = "qemu")]
+const OVERDUE: i32 = 50_000;
+
 /// The ready queue between the prep (producer) and the step interrupt.
 pub static READY: ReadyQueue = ReadyQueue::new();
 
@@ -381,6 +386,57 @@ impl StepIsr {
     /// TIM2's count at the step armed for, if one is.
     pub fn due(&self) -> Option<u32> {
         self.armed.then_some(self.due)
+    }
+
+    /// Under QEMU, from thread mode: a step armed for whose tick passed
+    /// more than [`OVERDUE`] ticks ago while neither its alarm nor the
+    /// interrupt is pending, that is an alarm the emulated timer lost. It
+    /// is told on the host's log with the timer's registers and issued
+    /// now (late, and counted so).
+    ///
+    /// And entries waiting while the step interrupt is idle and not
+    /// pended, beyond a run's start that waits for its steps (a resume
+    /// puts it before the prep has any): a wake-up lost. Told and woken.
+    #[cfg(feature = "qemu")]
+    pub fn overdue(&mut self, now: u32) -> bool {
+        use stm32f4::stm32f405::Interrupt;
+        if !self.armed && is_idle() && !cortex_m::peripheral::NVIC::is_pending(Interrupt::TIM5) {
+            let waiting = self.rx.len();
+            if waiting > 1 || (waiting == 1 && self.rx.peek() != Some(Ready::RunStart)) {
+                let mut line: heapless::String<96> = heapless::String::new();
+                let _ = core::fmt::write(
+                    &mut line,
+                    format_args!("step: wake-up lost: {waiting} entries at {now}\n"),
+                );
+                crate::log::host_print(&line);
+                wake();
+                return true;
+            }
+        }
+        if !self.armed || (now.wrapping_sub(self.due) as i32) <= OVERDUE {
+            return false;
+        }
+        // SAFETY: reads of SysTick's and the SCB's registers.
+        let (csr, cvr, rvr, icsr) = unsafe {
+            let st = &*cortex_m::peripheral::SYST::PTR;
+            let scb = &*cortex_m::peripheral::SCB::PTR;
+            (st.csr.read(), st.cvr.read(), st.rvr.read(), scb.icsr.read())
+        };
+        let pending = cortex_m::peripheral::NVIC::is_pending(Interrupt::TIM5);
+        if pending || icsr & (1 << 26) != 0 {
+            return false;
+        }
+        let mut line: heapless::String<160> = heapless::String::new();
+        let _ = core::fmt::write(
+            &mut line,
+            format_args!(
+                "step: alarm lost: due {} now {} csr {csr:#x} cvr {cvr} rvr {rvr} icsr {icsr:#x}\n",
+                self.due, now
+            ),
+        );
+        crate::log::host_print(&line);
+        cortex_m::peripheral::NVIC::pend(Interrupt::TIM5);
+        true
     }
 
     /// Steps issued after their tick since power-on, and the most late

@@ -54,6 +54,30 @@ impl Link {
     }
 }
 
+/// A failed test on the firmware shows what QEMU and the firmware wrote
+/// beside the link: the firmware's notes (`step: …`) and QEMU's own
+/// messages, the text lines of the log.
+impl Drop for Link {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            return;
+        }
+        if let Some(qemu) = &self._qemu {
+            let log = qemu.log();
+            let text: Vec<String> = log
+                .split(|&b| b == b'\n')
+                .filter(|l| !l.is_empty() && l.iter().all(|b| (0x20..0x7f).contains(b)))
+                .map(|l| String::from_utf8_lossy(l).into_owned())
+                .collect();
+            let from = text.len().saturating_sub(40);
+            eprintln!(
+                "QEMU's log, its last text lines:\n{}",
+                text[from..].join("\n")
+            );
+        }
+    }
+}
+
 /// `serve --pty --grbl`: a fresh simulated board speaking grbl 1.1 on a
 /// new pty, its motion in real time.
 fn serve() -> Link {
