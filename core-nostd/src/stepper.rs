@@ -285,21 +285,19 @@ impl<const R: usize> Stepper<R> {
                     if matches!(self.hold, Hold::Held(_)) {
                         return None;
                     }
+                    if !self.in_run && matches!(self.ring.front(), Some(Item::Block(_))) {
+                        // A hold at rest ended the run before this block
+                        // came, and a resume found nothing to take up:
+                        // the block starts a run of its own, timed again
+                        // from rest (its planned ticks count from a start
+                        // that has passed).
+                        (self.in_run, self.end, self.exit2) = (true, 0, 0);
+                        self.retime = true;
+                        return Some(Pulled::RunStart);
+                    }
                     match self.ring.pop_front()? {
                         Item::RunStart => {
                             (self.in_run, self.end, self.exit2) = (true, 0, 0);
-                            return Some(Pulled::RunStart);
-                        }
-                        Item::Block(s) if !self.in_run => {
-                            // A hold at rest ended the run before this
-                            // block came, and a resume found nothing to
-                            // take up: the block starts a run of its own,
-                            // timed again from rest at its start (its
-                            // planned ticks count from a start that has
-                            // passed).
-                            let _ = self.ring.push_front(Item::Block(s));
-                            (self.in_run, self.end, self.exit2) = (true, 0, 0);
-                            self.retime = true;
                             return Some(Pulled::RunStart);
                         }
                         Item::Block(s) => return Some(self.block(s)),

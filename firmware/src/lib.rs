@@ -180,12 +180,7 @@ impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Controller<P, S> {
 /// line's (the line's own format is the protocol's): `timing: LATE= WORST=`.
 #[cfg(feature = "qemu")]
 fn report_lateness(late: u32, worst: u32) {
-    let mut line: heapless::String<64> = heapless::String::new();
-    let _ = core::fmt::write(
-        &mut line,
-        format_args!("timing: LATE={late} WORST={worst}\n"),
-    );
-    log::host_print(&line);
+    log::host_print(format_args!("timing: LATE={late} WORST={worst}\n"));
 }
 
 impl<P: Mutex<T = PrepStage>, S: Mutex<T = StepIsr>> Io for Controller<P, S> {

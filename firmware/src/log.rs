@@ -65,10 +65,13 @@ pub fn init() {
     sink::init();
 }
 
-/// Writes plain text to the host's standard output (QEMU semihosting).
+/// Writes a line of text to the host's standard output (QEMU
+/// semihosting), formatted here: at most 256 bytes of it.
 #[cfg(feature = "qemu")]
-pub fn host_print(text: &str) {
-    sink::write(text.as_bytes());
+pub fn host_print(args: core::fmt::Arguments) {
+    let mut line: heapless::String<256> = heapless::String::new();
+    let _ = core::fmt::write(&mut line, args);
+    sink::write(line.as_bytes());
 }
 
 #[cfg(feature = "qemu")]

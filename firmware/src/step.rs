@@ -399,21 +399,26 @@ impl StepIsr {
     /// puts it before the prep has any): a wake-up lost. Told and woken.
     #[cfg(feature = "qemu")]
     pub fn overdue(&mut self, now: u32) -> bool {
+        use cortex_m::peripheral::NVIC;
         use stm32f4::stm32f405::Interrupt;
-        if !self.armed && is_idle() && !cortex_m::peripheral::NVIC::is_pending(Interrupt::TIM5) {
-            let waiting = self.rx.len();
-            if waiting > 1 || (waiting == 1 && self.rx.peek() != Some(Ready::RunStart)) {
-                let mut line: heapless::String<96> = heapless::String::new();
-                let _ = core::fmt::write(
-                    &mut line,
-                    format_args!("step: wake-up lost: {waiting} entries at {now}\n"),
-                );
-                crate::log::host_print(&line);
-                wake();
-                return true;
-            }
+        if NVIC::is_pending(Interrupt::TIM5) {
+            return false;
         }
-        if !self.armed || (now.wrapping_sub(self.due) as i32) <= OVERDUE {
+        if !self.armed {
+            let waiting = self.rx.len();
+            if !is_idle()
+                || waiting == 0
+                || (waiting == 1 && self.rx.peek() == Some(Ready::RunStart))
+            {
+                return false;
+            }
+            crate::log::host_print(format_args!(
+                "step: wake-up lost: {waiting} entries at {now}\n"
+            ));
+            wake();
+            return true;
+        }
+        if (now.wrapping_sub(self.due) as i32) <= OVERDUE {
             return false;
         }
         // SAFETY: reads of SysTick's and the SCB's registers.
@@ -422,20 +427,15 @@ impl StepIsr {
             let scb = &*cortex_m::peripheral::SCB::PTR;
             (st.csr.read(), st.cvr.read(), st.rvr.read(), scb.icsr.read())
         };
-        let pending = cortex_m::peripheral::NVIC::is_pending(Interrupt::TIM5);
-        if pending || icsr & (1 << 26) != 0 {
+        // SysTick (the alarm) pending: it comes.
+        if icsr & (1 << 26) != 0 {
             return false;
         }
-        let mut line: heapless::String<160> = heapless::String::new();
-        let _ = core::fmt::write(
-            &mut line,
-            format_args!(
-                "step: alarm lost: due {} now {} csr {csr:#x} cvr {cvr} rvr {rvr} icsr {icsr:#x}\n",
-                self.due, now
-            ),
-        );
-        crate::log::host_print(&line);
-        cortex_m::peripheral::NVIC::pend(Interrupt::TIM5);
+        crate::log::host_print(format_args!(
+            "step: alarm lost: due {} now {now} csr {csr:#x} cvr {cvr} rvr {rvr} icsr {icsr:#x}\n",
+            self.due
+        ));
+        NVIC::pend(Interrupt::TIM5);
         true
     }
 
@@ -480,16 +480,11 @@ pub mod stall {
         let at = STALLED_AT.load(Ordering::Acquire);
         // SAFETY: a read of GPIOC's output data register.
         let odr = unsafe { (*stm32f4::stm32f405::GPIOC::ptr()).odr().read().bits() };
-        let mut line: heapless::String<160> = heapless::String::new();
-        let _ = core::fmt::write(
-            &mut line,
-            format_args!(
-                "supervisor: {why:?}; stalled at {at} us, outputs low at {now} us: {} us after; STEP lines {}\n",
-                now.wrapping_sub(at),
-                if odr & 0b101 == 0 { "low" } else { "HIGH" }
-            ),
-        );
-        crate::log::host_print(&line);
+        crate::log::host_print(format_args!(
+            "supervisor: {why:?}; stalled at {at} us, outputs low at {now} us: {} us after; STEP lines {}\n",
+            now.wrapping_sub(at),
+            if odr & 0b101 == 0 { "low" } else { "HIGH" }
+        ));
         cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
     }
 }

@@ -29,7 +29,7 @@ impl Line {
         let _ = l.0.write_fmt(args);
         let _ = l.0.push('\n');
         #[cfg(feature = "qemu")]
-        firmware::log::host_print(&l.0);
+        firmware::log::host_print(format_args!("{}", l.0));
     }
 }
 
